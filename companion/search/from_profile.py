@@ -1,0 +1,57 @@
+"""Build the search policy a mission profile describes."""
+
+from __future__ import annotations
+
+from companion.search.distributions import Brownian, Levy, Sampler, Uniform
+from companion.search.levels import DecayIndex, Level, PolicyConfig
+from mdm_profiles import MissionProfile
+from mdm_profiles.schema import DistributionParams, LevelSpec
+
+
+def sampler(name: str, params: DistributionParams) -> Sampler:
+    """The direction sampler for LS, BS or US with the profile's parameters."""
+    if name == "LS":
+        return Levy(index=params.levy_index, scale=params.levy_scale)
+    if name == "BS":
+        return Brownian(sigma=params.brownian_sigma)
+    if name == "US":
+        return Uniform(low=params.uniform_low, high=params.uniform_high)
+    raise ValueError(f"unknown distribution {name!r}; allowed: LS, BS, US")
+
+
+def _level(spec: LevelSpec, radius: float, params: DistributionParams) -> Level:
+    index = None
+    if spec.index is not None:
+        index = DecayIndex(
+            gamma=spec.index.gamma,
+            index_max=spec.index.index_max,
+            index_min=spec.index.index_min,
+            kappa=spec.index.kappa,
+        )
+    return Level(
+        sampler=sampler(spec.distribution, params),
+        step=spec.step,
+        sensor_radius=radius,
+        index=index,
+        step_law=spec.step_law,
+        step_index=params.levy_index,
+    )
+
+
+def policy_config(profile: MissionProfile) -> PolicyConfig:
+    """PolicyConfig of a profile: MDM uses sensor k on level k, SSS only the confirmation sensor."""
+    spec = profile.policy
+    radii = [s.radius for s in profile.sensors]
+    if spec.kind == "sss":
+        radii = radii[-1:]
+    levels = tuple(
+        _level(lv, r, spec.distributions) for lv, r in zip(spec.levels, radii, strict=True)
+    )
+    return PolicyConfig(
+        levels=levels,
+        area=(profile.area.north, profile.area.east),
+        out_of_area=spec.out_of_area,
+        waypoint_origin=spec.waypoint_origin,
+        confine_to_detection=spec.confine_to_detection,
+        memory_radius=spec.memory_radius,
+    )

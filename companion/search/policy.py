@@ -1,0 +1,252 @@
+"""The MDM search policy (section III), batched over vehicles. A live vehicle is a batch of one.
+
+The policy is pure: it is handed the time, positions and sensor contacts, and the numpy Generator
+to draw from; it keeps no clock and does no I/O. One ``step`` call applies, for each vehicle:
+
+1. contacts of the active sensor that are not a target it confirmed itself (its memory):
+   on a detection level -> next level, the point of detection becomes the anchor;
+   on the confirmation level -> remember the targets, back to level 1;
+2. the decaying index of levels >= 2 (C_I, D^k_I) below its bound -> back to level 1;
+3. a new waypoint P_{q+1} = P_q + delta_k D(S_t) when the level changed or the waypoint was
+   reached.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from companion.search.distributions import directions, symmetric_stable
+from companion.search.levels import PolicyConfig
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+IntArray = NDArray[np.intp]
+_REDRAWS = 16
+
+
+@dataclass
+class PolicyState:
+    """What each vehicle's policy remembers between steps (arrays over vehicles)."""
+
+    level: IntArray
+    """Current level, 0-based (level 1 of the paper is 0)."""
+    waypoint: FloatArray
+    """Current waypoint (n, 2)."""
+    anchor: FloatArray
+    """Point of the last detection (n, 2)."""
+    entered: FloatArray
+    """Time the current level was entered (n,)."""
+    memory: FloatArray
+    """Positions of targets this vehicle confirmed itself (n, K, 2); rows past memory_count unused."""
+    memory_count: IntArray
+    """How many memory rows are in use (n,)."""
+
+    @property
+    def size(self) -> int:
+        return len(self.level)
+
+
+@dataclass
+class Observation:
+    """What a batch of vehicles observed since their last step."""
+
+    time: FloatArray
+    """Vehicle time, seconds (n,)."""
+    position: FloatArray
+    """Positions (n, 2), metres (north, east)."""
+    reached: BoolArray
+    """True where the current waypoint was reached (n,)."""
+    contacts: BoolArray
+    """Targets the active sensor reports (n, m)."""
+    contact_positions: FloatArray
+    """Position estimates of those targets (n, m, 2)."""
+
+
+@dataclass
+class StepOutcome:
+    """What changed in a step (arrays over the stepped vehicles)."""
+
+    detected: BoolArray
+    confirmed: BoolArray
+    """True where at least one new target was confirmed."""
+    new_confirmations: BoolArray
+    """(n, m): the contacts that were confirmed as new targets."""
+    fell_back: BoolArray
+    """True where the decaying index ended a level."""
+    new_waypoint: BoolArray
+
+
+class SearchPolicy:
+    """MDM for n >= 2 levels; with one level, the single-sensor search (US, BS, LS)."""
+
+    def __init__(self, config: PolicyConfig) -> None:
+        self.config = config
+        self._lifetimes = np.array(
+            [np.inf if lv.index is None else lv.index.lifetime for lv in config.levels]
+        )
+        self._radii = np.array([lv.sensor_radius for lv in config.levels])
+        self._area = np.array(config.area, dtype=float)
+
+    @property
+    def n_levels(self) -> int:
+        return len(self.config.levels)
+
+    def sensor_radius(self, state: PolicyState) -> FloatArray:
+        """Radius of the sensor each vehicle has switched on."""
+        return np.asarray(self._radii[state.level])
+
+    def uses_confirmation_sensor(self, state: PolicyState) -> BoolArray:
+        """True where the active sensor is the confirmation sensor (the last level)."""
+        return np.asarray(state.level == self.n_levels - 1)
+
+    def deadline(self, state: PolicyState) -> FloatArray:
+        """Time at which each vehicle's decaying index falls below its bound (inf on level 1)."""
+        return np.asarray(state.entered + self._lifetimes[state.level])
+
+    def index_value(self, state: PolicyState, time: FloatArray) -> FloatArray:
+        """C_I (or D^k_I) of each vehicle at the given time; NaN on level 1."""
+        out = np.full(state.size, np.nan)
+        for k, level in enumerate(self.config.levels):
+            if level.index is None:
+                continue
+            on = state.level == k
+            out[on] = level.index.value(time[on] - state.entered[on])
+        return out
+
+    def start(
+        self, position: FloatArray, time: FloatArray, rng: np.random.Generator
+    ) -> PolicyState:
+        """Fresh state for vehicles at the given positions, with a first level-1 waypoint."""
+        n = len(position)
+        state = PolicyState(
+            level=np.zeros(n, dtype=np.intp),
+            waypoint=np.array(position, dtype=float),
+            anchor=np.array(position, dtype=float),
+            entered=np.array(time, dtype=float),
+            memory=np.zeros((n, 4, 2)),
+            memory_count=np.zeros(n, dtype=np.intp),
+        )
+        everyone = np.arange(n)
+        state.waypoint[:] = self._next_waypoints(state, everyone, state.waypoint, rng)
+        return state
+
+    def remember(self, state: PolicyState, lanes: IntArray, positions: FloatArray) -> None:
+        """Add one confirmed target position per given lane to that lane's memory."""
+        needed = int(state.memory_count[lanes].max(initial=0)) + 1
+        if needed > state.memory.shape[1]:
+            grow = max(needed, 2 * state.memory.shape[1]) - state.memory.shape[1]
+            state.memory = np.concatenate([state.memory, np.zeros((state.size, grow, 2))], axis=1)
+        state.memory[lanes, state.memory_count[lanes]] = positions
+        state.memory_count[lanes] += 1
+
+    def known(self, state: PolicyState, lanes: IntArray, positions: FloatArray) -> BoolArray:
+        """(len(lanes), m): True where a position lies within memory_radius of a remembered target."""
+        memory = state.memory[lanes]
+        used = np.arange(memory.shape[1])[None, :] < state.memory_count[lanes][:, None]
+        gap = positions[:, :, None, :] - memory[:, None, :, :]
+        close = np.einsum("nmkd,nmkd->nmk", gap, gap) <= self.config.memory_radius**2
+        return np.asarray(np.any(close & used[:, None, :], axis=2))
+
+    def step(
+        self,
+        state: PolicyState,
+        lanes: IntArray,
+        obs: Observation,
+        rng: np.random.Generator,
+    ) -> StepOutcome:
+        """Apply one observation to the vehicles ``lanes`` of ``state`` (in place)."""
+        last = self.n_levels - 1
+        level = state.level[lanes]
+        new = obs.contacts & ~self.known(state, lanes, obs.contact_positions)
+        has = new.any(axis=1)
+
+        detected = has & (level < last)
+        confirmed = has & (level == last)
+        new_confirmations = new & confirmed[:, None]
+        for j in range(new.shape[1]):
+            # One memory row per newly confirmed target (several may be seen at once).
+            rows = np.flatnonzero(new_confirmations[:, j])
+            if rows.size:
+                self.remember(state, lanes[rows], obs.contact_positions[rows, j])
+
+        next_level = np.where(detected, level + 1, level)
+        next_level = np.where(confirmed, 0, next_level)
+        in_level = obs.time - state.entered[lanes]
+        expired = (next_level == level) & (level > 0) & (in_level >= self._lifetimes[level])
+        next_level = np.where(expired, 0, next_level)
+
+        changed = next_level != level
+        state.level[lanes] = next_level
+        state.entered[lanes] = np.where(changed, obs.time, state.entered[lanes])
+        anchor = state.anchor[lanes]
+        anchor[detected] = obs.position[detected]
+        state.anchor[lanes] = anchor
+
+        redraw = changed | obs.reached
+        chosen = lanes[redraw]
+        if chosen.size:
+            state.waypoint[chosen] = self._next_waypoints(state, chosen, obs.position[redraw], rng)
+        return StepOutcome(detected, confirmed, new_confirmations, expired, redraw)
+
+    def _next_waypoints(
+        self, state: PolicyState, lanes: IntArray, position: FloatArray, rng: np.random.Generator
+    ) -> FloatArray:
+        out = np.empty((len(lanes), 2))
+        level = state.level[lanes]
+        for k in range(self.n_levels):
+            rows = np.flatnonzero(level == k)
+            if rows.size == 0:
+                continue
+            origin = position[rows]
+            if k > 0 and self.config.waypoint_origin == "anchor":
+                origin = state.anchor[lanes[rows]]
+            out[rows] = self._draw(k, origin, state.anchor[lanes[rows]], rng)
+        return out
+
+    def _draw(
+        self, k: int, origin: FloatArray, anchor: FloatArray, rng: np.random.Generator
+    ) -> FloatArray:
+        cfg = self.config.levels[k]
+        n = len(origin)
+        points = np.empty((n, 2))
+        pending = np.arange(n)
+        for attempt in range(_REDRAWS + 1):
+            step = np.full(len(pending), cfg.step)
+            if cfg.step_law == "levy":
+                size = np.abs(symmetric_stable(rng, cfg.step_index, 1.0, (len(pending),)))
+                step = cfg.step * np.minimum(size, cfg.step_cap)
+            candidate = origin[pending] + step[:, None] * directions(cfg.sampler, rng, len(pending))
+            if k > 0 and self.config.confine_to_detection:
+                candidate = _fold_into_disc(candidate, anchor[pending], self._radii[k - 1])
+            inside = np.all((candidate >= 0) & (candidate <= self._area), axis=1)
+            redraw = self.config.out_of_area == "redraw" and attempt < _REDRAWS
+            if redraw:
+                points[pending[inside]] = candidate[inside]
+                pending = pending[~inside]
+                if pending.size == 0:
+                    break
+                continue
+            rule = "clip" if self.config.out_of_area != "reflect" else "reflect"
+            points[pending] = _fold_into_area(candidate, self._area, rule)
+            break
+        return points
+
+
+def _fold_into_area(points: FloatArray, size: FloatArray, rule: str) -> FloatArray:
+    if rule == "clip":
+        return np.clip(points, 0.0, size)
+    period = 2.0 * size
+    folded = np.mod(points, period)
+    return np.where(folded > size, period - folded, folded)
+
+
+def _fold_into_disc(points: FloatArray, centre: FloatArray, radius: float) -> FloatArray:
+    """Mirror points that lie outside the disc back across its rim (radially)."""
+    offset = points - centre
+    dist = np.linalg.norm(offset, axis=1, keepdims=True)
+    folded = np.abs(2 * radius - dist) % (2 * radius)
+    scale = np.where(dist > radius, folded / np.where(dist > 0, dist, 1.0), 1.0)
+    return centre + offset * scale

@@ -1,0 +1,74 @@
+"""Load and validate mission profiles from YAML; errors name the file, the field and what is allowed."""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+import yaml
+from pydantic import ValidationError
+
+from mdm_profiles.schema import MissionProfile
+
+
+class ProfileError(ValueError):
+    """A profile that cannot be used, with every problem listed as file: field: message."""
+
+
+def _describe(source: str, error: ValidationError) -> str:
+    lines = [f"{source}: invalid mission profile ({error.error_count()} problem(s))"]
+    for item in error.errors():
+        field = ".".join(str(p) for p in item["loc"]) or "(top level)"
+        msg = item["msg"]
+        if item["type"] == "extra_forbidden":
+            msg = "unknown key (not part of the profile schema)"
+        ctx = item.get("ctx") or {}
+        if "expected" in ctx:
+            msg += f"; allowed: {ctx['expected']}"
+        given = item.get("input")
+        if item["type"] != "missing" and not isinstance(given, dict | list):
+            msg += f" (got {given!r})"
+        lines.append(f"  {source}: {field}: {msg}")
+    return "\n".join(lines)
+
+
+def parse_profile(text: str, source: str) -> MissionProfile:
+    """Validate YAML text; ``source`` names it in errors."""
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ProfileError(f"{source}: not valid YAML: {exc}") from exc
+    if not isinstance(data, dict):
+        raise ProfileError(f"{source}: a profile is a YAML mapping, got {type(data).__name__}")
+    try:
+        return MissionProfile.model_validate(data)
+    except ValidationError as exc:
+        raise ProfileError(_describe(source, exc)) from None
+
+
+def load_profile(path: str | Path) -> MissionProfile:
+    """Load a profile from a file path, or a built-in profile by name (e.g. 'paper-fixed')."""
+    p = Path(path)
+    if not p.exists():
+        names = builtin_profiles()
+        if str(path) in names:
+            return builtin_profile(str(path))
+        raise ProfileError(f"{path}: no such file, and not a built-in profile ({', '.join(names)})")
+    return parse_profile(p.read_text(encoding="utf-8"), str(p))
+
+
+def _builtin_dir() -> Path:
+    return Path(str(resources.files("mdm_profiles") / "builtin"))
+
+
+def builtin_profiles() -> list[str]:
+    """Names of the profiles shipped with the package (mission_profiles/ in the repository)."""
+    return sorted(p.stem for p in _builtin_dir().glob("*.yaml"))
+
+
+def builtin_profile(name: str) -> MissionProfile:
+    """A shipped profile by name."""
+    path = _builtin_dir() / f"{name}.yaml"
+    if not path.exists():
+        raise ProfileError(f"{name}: not a built-in profile ({', '.join(builtin_profiles())})")
+    return parse_profile(path.read_text(encoding="utf-8"), f"mission_profiles/{name}.yaml")

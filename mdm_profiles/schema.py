@@ -1,0 +1,170 @@
+"""The mission profile schema (pydantic). Lengths in metres, times in seconds, frames (north, east)."""
+
+from __future__ import annotations
+
+from itertools import pairwise
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Area(_Strict):
+    north: float = Field(gt=0, description="Extent along north (the paper's L), m.")
+    east: float = Field(gt=0, description="Extent along east (the paper's W), m.")
+
+
+class Origin(_Strict):
+    """WGS84 position of the area's (0, 0) corner; only the link layer converts with it."""
+
+    lat: float = Field(ge=-90, le=90)
+    lon: float = Field(ge=-180, le=180)
+    alt: float = Field(default=0.0, description="Altitude AMSL of the origin, m.")
+
+
+class TargetEntry(_Strict):
+    north: float
+    east: float
+    appear: float = Field(default=0.0, ge=0, description="Time the target appears, s.")
+    false_target: bool = Field(
+        default=False, description="A false target: detection fires, never confirmation."
+    )
+
+
+class RandomWalkSpec(_Strict):
+    """Dynamic targets: X(k+1) = X(k) + R(low, high) * speed * sample_time (eq. 2)."""
+
+    speed: float = Field(default=5.0, gt=0)
+    low: float = -0.2
+    high: float = 1.0
+    sample_time: float = Field(default=0.1, gt=0)
+    shared_axes: bool = False
+    boundary: Literal["reflect", "clamp", "bounce", "free"] = "reflect"
+    grid_dt: float = Field(
+        default=10.0, gt=0, description="Node spacing of stored target paths, s."
+    )
+
+    @model_validator(mode="after")
+    def _bounds(self) -> RandomWalkSpec:
+        if not self.high > self.low:
+            raise ValueError(f"high ({self.high}) must be greater than low ({self.low})")
+        return self
+
+
+class SensorSpec(_Strict):
+    name: str
+    radius: float = Field(gt=0, description="Sensing radius r_k, m.")
+
+
+class FleetSpec(_Strict):
+    vehicles: int = Field(default=12, ge=1, le=1000)
+    speed: float = Field(default=20.0, gt=0, description="||V_U||, m/s.")
+    tau: float = Field(default=0.33, gt=0, description="Velocity-loop time constant, s.")
+    start: Literal["periphery_random", "periphery_even"] = "periphery_random"
+    altitude: float = Field(default=30.0, gt=0, description="Altitude of vehicle 1 above home, m.")
+    altitude_step: float = Field(
+        default=5.0, ge=0, description="Vertical separation, m (Assumption III)."
+    )
+    acceptance_radius: float = Field(
+        default=5.0, gt=0, description="A waypoint counts as reached within this, m."
+    )
+
+
+class DecayIndexSpec(_Strict):
+    gamma: float = 0.1
+    index_max: float = 0.95
+    index_min: float = 0.2
+    kappa: float = Field(default=150.0, gt=0)
+
+    @model_validator(mode="after")
+    def _order(self) -> DecayIndexSpec:
+        if not 0 < self.gamma < self.index_min < self.index_max:
+            raise ValueError("needs 0 < gamma < index_min < index_max")
+        if self.gamma + self.index_max - self.index_min <= self.index_min:
+            raise ValueError("gamma + index_max - index_min must exceed index_min")
+        return self
+
+
+class LevelSpec(_Strict):
+    distribution: Literal["LS", "BS", "US"]
+    step: float = Field(gt=0, description="Step length delta_k, m.")
+    index: DecayIndexSpec | None = Field(default=None, description="C_I / D_I; levels >= 2 only.")
+    step_law: Literal["fixed", "levy"] = "fixed"
+
+
+class DistributionParams(_Strict):
+    levy_index: float = Field(default=1.0, gt=0, le=2, description="LS lambda.")
+    levy_scale: float = Field(default=1.0, gt=0, description="LS alpha.")
+    brownian_sigma: float = Field(default=1.0, gt=0, description="BS sigma.")
+    uniform_low: float = Field(default=-1.0, description="US v_l.")
+    uniform_high: float = Field(default=1.0, description="US v_u.")
+
+    @model_validator(mode="after")
+    def _uniform(self) -> DistributionParams:
+        if not self.uniform_high > self.uniform_low:
+            raise ValueError("uniform_high must be greater than uniform_low")
+        return self
+
+
+class PolicySpec(_Strict):
+    kind: Literal["mdm", "sss"] = "mdm"
+    levels: list[LevelSpec] = Field(min_length=1)
+    distributions: DistributionParams = DistributionParams()
+    out_of_area: Literal["reflect", "clip", "redraw"] = "reflect"
+    waypoint_origin: Literal["position", "anchor"] = "position"
+    confine_to_detection: bool = True
+    memory_radius: float = Field(default=400.0, ge=0)
+
+
+class MissionSpec(_Strict):
+    duration: float = Field(default=1000.0, gt=0, description="Fixed duration for T_nc, s.")
+    ts_cap: float = Field(default=40000.0, gt=0, description="T_S of runs that never finish, s.")
+
+
+class MissionProfile(_Strict):
+    """A whole mission: world, fleet, sensors, policy and timing."""
+
+    name: str
+    description: str = ""
+    area: Area
+    origin: Origin = Origin(lat=47.397742, lon=8.545594, alt=488.0)
+    targets: list[TargetEntry] = Field(min_length=1)
+    target_motion: RandomWalkSpec | None = None
+    fleet: FleetSpec = FleetSpec()
+    sensors: list[SensorSpec] = Field(
+        min_length=1, description="Detection sensors, then confirmation."
+    )
+    policy: PolicySpec
+    mission: MissionSpec = MissionSpec()
+
+    @model_validator(mode="after")
+    def _consistent(self) -> MissionProfile:
+        levels = self.policy.levels
+        if self.policy.kind == "sss" and len(levels) != 1:
+            raise ValueError("policy.kind 'sss' takes exactly one level (the confirmation sensor)")
+        if self.policy.kind == "mdm" and len(levels) != len(self.sensors):
+            raise ValueError(
+                f"policy.kind 'mdm' needs one level per sensor: {len(levels)} levels, "
+                f"{len(self.sensors)} sensors"
+            )
+        if levels[0].index is not None:
+            raise ValueError("policy.levels[0] (level 1) takes no index: it never times out")
+        for k, level in enumerate(levels[1:], start=1):
+            if level.index is None:
+                raise ValueError(f"policy.levels[{k}] needs an index (C_I or D_I)")
+        radii = [s.radius for s in self.sensors]
+        if any(a <= b for a, b in pairwise(radii)):
+            raise ValueError(f"sensors must be ordered by decreasing radius, got {radii}")
+        for t in self.targets:
+            if not (0 <= t.north <= self.area.north and 0 <= t.east <= self.area.east):
+                raise ValueError(f"target at ({t.north}, {t.east}) lies outside the area")
+        if all(t.false_target for t in self.targets):
+            raise ValueError("at least one target must be real")
+        return self
+
+    def with_policy(self, policy: PolicySpec) -> MissionProfile:
+        """The same mission flown with another policy."""
+        return self.model_copy(update={"policy": policy})
