@@ -55,3 +55,10 @@ def policy_config(profile: MissionProfile) -> PolicyConfig:
         confine_to_detection=spec.confine_to_detection,
         memory_radius=spec.memory_radius,
     )
+
+
+def sensor_for_level(profile: MissionProfile, level: int) -> int:
+    """Index into profile.sensors of the sensor switched on at ``level`` (0-based)."""
+    if profile.policy.kind == "sss":
+        return len(profile.sensors) - 1
+    return level

@@ -1,0 +1,1 @@
+"""Monte-Carlo engine: batched missions, the paper's metrics, tables and reports."""
