@@ -4,15 +4,34 @@ from __future__ import annotations
 
 from importlib import resources
 from pathlib import Path
+from typing import get_args
 
 import yaml
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
 from mdm_profiles.schema import MissionProfile
 
 
 class ProfileError(ValueError):
     """A profile that cannot be used, with every problem listed as file: field: message."""
+
+
+def _model_at(loc: tuple[int | str, ...]) -> type[BaseModel] | None:
+    """The schema model that holds the field at ``loc`` (list indices and Optional skipped)."""
+    model: type[BaseModel] = MissionProfile
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        field = model.model_fields.get(part)
+        if field is None:
+            return None
+        candidates = [field.annotation, *get_args(field.annotation)]
+        candidates += [arg for c in candidates for arg in get_args(c)]
+        nested = [c for c in candidates if isinstance(c, type) and issubclass(c, BaseModel)]
+        if not nested:
+            return None
+        model = nested[0]
+    return model
 
 
 def _describe(source: str, error: ValidationError) -> str:
@@ -22,6 +41,9 @@ def _describe(source: str, error: ValidationError) -> str:
         msg = item["msg"]
         if item["type"] == "extra_forbidden":
             msg = "unknown key (not part of the profile schema)"
+            parent = _model_at(tuple(item["loc"][:-1]))
+            if parent is not None:
+                msg += f"; allowed: {', '.join(parent.model_fields)}"
         ctx = item.get("ctx") or {}
         if "expected" in ctx:
             msg += f"; allowed: {ctx['expected']}"

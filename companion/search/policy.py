@@ -174,8 +174,9 @@ class SearchPolicy:
 
         next_level = np.where(detected, level + 1, level)
         next_level = np.where(confirmed, 0, next_level)
-        in_level = obs.time - state.entered[lanes]
-        expired = (next_level == level) & (level > 0) & (in_level >= self._lifetimes[level])
+        # Same sum as deadline(): a step at exactly deadline() must fall back (no rounding gap).
+        deadline = state.entered[lanes] + self._lifetimes[level]
+        expired = (next_level == level) & (level > 0) & (obs.time >= deadline)
         next_level = np.where(expired, 0, next_level)
 
         changed = next_level != level
@@ -247,6 +248,8 @@ def _fold_into_disc(points: FloatArray, centre: FloatArray, radius: float) -> Fl
     """Mirror points that lie outside the disc back across its rim (radially)."""
     offset = points - centre
     dist = np.linalg.norm(offset, axis=1, keepdims=True)
-    folded = np.abs(2 * radius - dist) % (2 * radius)
+    # Triangle wave of the distance: mirror at the rim, again at the centre, and so on.
+    folded = np.mod(dist, 2 * radius)
+    folded = np.where(folded > radius, 2 * radius - folded, folded)
     scale = np.where(dist > radius, folded / np.where(dist > 0, dist, 1.0), 1.0)
     return centre + offset * scale
