@@ -1,0 +1,42 @@
+"""ArduPilot Copter: custom_mode is the mode number; GUIDED is 4."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from companion.autopilots.base import Autopilot, FlightMode, ModeCommand
+
+_MODES: dict[FlightMode, int] = {
+    FlightMode.GUIDED: 4,
+    FlightMode.HOLD: 17,  # BRAKE
+    FlightMode.RTL: 6,
+    FlightMode.LAND: 9,
+}
+_NAMES: dict[int, str] = {
+    0: "STABILIZE",
+    2: "ALT_HOLD",
+    3: "AUTO",
+    4: "GUIDED",
+    5: "LOITER",
+    6: "RTL",
+    9: "LAND",
+    16: "POSHOLD",
+    17: "BRAKE",
+}
+
+
+class ArduCopter(Autopilot):
+    """ArduPilot Copter (MAV_AUTOPILOT_ARDUPILOTMEGA = 3)."""
+
+    name: ClassVar[str] = "ardupilot"
+    mav_autopilot: ClassVar[int] = 3
+    takeoff_by_command: ClassVar[bool] = True
+
+    def custom_mode(self, mode: FlightMode) -> int:
+        return _MODES[mode]
+
+    def mode_command(self, mode: FlightMode, *, armed: bool) -> ModeCommand:
+        return ModeCommand(1.0 + (128.0 if armed else 0.0), float(_MODES[mode]))
+
+    def mode_name(self, custom_mode: int) -> str:
+        return _NAMES.get(custom_mode, f"MODE{custom_mode}")

@@ -1,0 +1,61 @@
+"""What differs between autopilots (modes, mode commands, takeoff), behind one small base class."""
+
+from __future__ import annotations
+
+import enum
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import ClassVar
+
+
+class FlightMode(enum.Enum):
+    """The modes the companion asks for; each autopilot maps them to its own custom modes."""
+
+    GUIDED = "guided"
+    """Companion in control: PX4 OFFBOARD, ArduPilot GUIDED."""
+    HOLD = "hold"
+    RTL = "rtl"
+    LAND = "land"
+
+
+@dataclass(frozen=True)
+class ModeCommand:
+    """Parameters 1-3 of MAV_CMD_DO_SET_MODE (176) that select a mode."""
+
+    base_mode: float
+    """MAV_MODE_FLAG_CUSTOM_MODE_ENABLED (1), ORed with SAFETY_ARMED (128) when armed."""
+    custom_main: float
+    """Param 2: the custom mode (ArduPilot) or PX4's main mode."""
+    custom_sub: float = 0.0
+    """Param 3: PX4's sub mode; 0 elsewhere."""
+
+
+class Autopilot(ABC):
+    """One autopilot family: how its modes are encoded and how it takes off."""
+
+    name: ClassVar[str]
+    """Short name used in logs and on the command line."""
+    mav_autopilot: ClassVar[int]
+    """MAV_AUTOPILOT value its HEARTBEAT carries."""
+    takeoff_by_command: ClassVar[bool]
+    """True: takeoff needs MAV_CMD_NAV_TAKEOFF (22) in the guided mode; False: setpoints climb."""
+
+    @abstractmethod
+    def custom_mode(self, mode: FlightMode) -> int:
+        """HEARTBEAT custom_mode the vehicle reports in ``mode``."""
+
+    @abstractmethod
+    def mode_command(self, mode: FlightMode, *, armed: bool) -> ModeCommand:
+        """DO_SET_MODE parameters that select ``mode``."""
+
+    @abstractmethod
+    def mode_name(self, custom_mode: int) -> str:
+        """Readable name of a reported custom mode (for logs)."""
+
+    def is_guided(self, custom_mode: int) -> bool:
+        """True when the vehicle reports the mode in which the companion may command it."""
+        return custom_mode == self.custom_mode(FlightMode.GUIDED)
+
+    def takeoff_params(self, altitude: float) -> tuple[float, ...]:
+        """The seven parameters of MAV_CMD_NAV_TAKEOFF for a climb to ``altitude`` m above home."""
+        return (0.0, 0.0, 0.0, float("nan"), float("nan"), float("nan"), altitude)

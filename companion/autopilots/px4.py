@@ -1,0 +1,47 @@
+"""PX4: custom_mode = main << 16 | sub << 24; OFFBOARD is main mode 6."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from companion.autopilots.base import Autopilot, FlightMode, ModeCommand
+
+_MAIN_SUB: dict[FlightMode, tuple[int, int]] = {
+    FlightMode.GUIDED: (6, 0),
+    FlightMode.HOLD: (4, 3),
+    FlightMode.RTL: (4, 5),
+    FlightMode.LAND: (4, 6),
+}
+_NAMES: dict[tuple[int, int], str] = {
+    (1, 0): "MANUAL",
+    (2, 0): "ALTCTL",
+    (3, 0): "POSCTL",
+    (4, 2): "TAKEOFF",
+    (4, 3): "HOLD",
+    (4, 4): "MISSION",
+    (4, 5): "RTL",
+    (4, 6): "LAND",
+    (5, 0): "ACRO",
+    (6, 0): "OFFBOARD",
+    (7, 0): "STABILIZED",
+}
+
+
+class PX4(Autopilot):
+    """PX4 flight stack (MAV_AUTOPILOT_PX4 = 12)."""
+
+    name: ClassVar[str] = "px4"
+    mav_autopilot: ClassVar[int] = 12
+    takeoff_by_command: ClassVar[bool] = False
+
+    def custom_mode(self, mode: FlightMode) -> int:
+        main, sub = _MAIN_SUB[mode]
+        return main << 16 | sub << 24
+
+    def mode_command(self, mode: FlightMode, *, armed: bool) -> ModeCommand:
+        main, sub = _MAIN_SUB[mode]
+        return ModeCommand(1.0 + (128.0 if armed else 0.0), float(main), float(sub))
+
+    def mode_name(self, custom_mode: int) -> str:
+        key = ((custom_mode >> 16) & 0xFF, (custom_mode >> 24) & 0xFF)
+        return _NAMES.get(key, f"PX4({key[0]},{key[1]})")

@@ -1,0 +1,111 @@
+"""The `companion` command: `run` flies one vehicle, `fleet` runs the emulator and N companions."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+import signal
+import sys
+from pathlib import Path
+
+from companion.autopilots import FlightMode
+from companion.link.factory import BACKENDS, Backend, make_link
+from companion.mission import MissionConfig, VehicleMission
+from companion.telemetry import MissionLog, read_log
+from mdm_profiles import ProfileError, load_profile
+
+log = logging.getLogger("companion")
+DEFAULT_BASE_PORT = 14540
+
+
+def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser("run", help="fly one vehicle's MDM search")
+    p.add_argument("--profile", required=True, help="profile file or built-in name")
+    p.add_argument("--vehicle", type=int, required=True, help="0-based vehicle index")
+    p.add_argument("--connect", help="link URL (default udpin:0.0.0.0:BASE_PORT+I)")
+    p.add_argument("--base-port", type=int, default=DEFAULT_BASE_PORT)
+    p.add_argument("--backend", choices=BACKENDS, default="pymavlink")
+    p.add_argument("--setpoints", choices=("velocity", "position"), default="velocity")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--log-dir", type=Path, default=Path("runs"))
+    p.add_argument("--duration", type=float, help="search time, vehicle s (default: profile)")
+    p.add_argument("--end-action", choices=("rtl", "land"), default="rtl")
+    p.add_argument("--land-wait", type=float, default=600.0, help="vehicle s to wait to land")
+    p.add_argument("--no-tlog", action="store_true", help="do not write the .tlog")
+    p.add_argument("-v", "--verbose", action="store_true")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the `companion` command."""
+    parser = argparse.ArgumentParser(prog="companion", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    _run_parser(sub)
+    from companion.fleet.cli_args import add_fleet_parser
+
+    add_fleet_parser(sub)
+    args = parser.parse_args(argv)
+    logging.basicConfig(
+        level=logging.DEBUG if getattr(args, "verbose", False) else logging.INFO,
+        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+    )
+    try:
+        if args.command == "run":
+            return run_command(args)
+        from companion.fleet.runner import fleet_command
+
+        return fleet_command(args)
+    except ProfileError as exc:
+        print(f"companion: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:
+        print(f"companion: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+def run_command(args: argparse.Namespace) -> int:
+    """`companion run`: one vehicle until its mission ends."""
+    profile = load_profile(args.profile)
+    if not 0 <= args.vehicle < profile.fleet.vehicles:
+        raise ValueError(f"--vehicle {args.vehicle}: profile has {profile.fleet.vehicles} vehicles")
+    config = MissionConfig(
+        vehicle=args.vehicle,
+        profile=profile,
+        setpoints=args.setpoints,
+        seed=args.seed,
+        log_dir=args.log_dir,
+        duration=args.duration,
+        end_action=FlightMode(args.end_action),
+        land_wait=args.land_wait,
+    )
+    url = args.connect or f"udpin:0.0.0.0:{args.base_port + args.vehicle}"
+    reason = asyncio.run(_fly(config, url, args.backend, tlog=not args.no_tlog))
+    print(f"vehicle {args.vehicle}: mission ended ({reason})")
+    return 0
+
+
+async def _fly(config: MissionConfig, url: str, backend: Backend, *, tlog: bool) -> str:
+    from companion.fence_from_profile import fence_for
+
+    recovered = read_log(config.mission_log_path())
+    if recovered.confirmed:
+        log.info("resuming with %d confirmed target(s) from %s", len(recovered.confirmed),
+                 config.mission_log_path())  # fmt: skip
+    link = make_link(
+        backend,
+        url=url,
+        target_system=config.system_id,
+        tlog=config.tlog_path() if tlog else None,
+    )
+    sink = MissionLog(config.mission_log_path())
+    mission = VehicleMission(config, link, sink, recovered=recovered,
+                             fence=fence_for(config.profile))  # fmt: skip
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, mission.request_end, "operator")
+    try:
+        return await mission.run()
+    finally:
+        sink.close()

@@ -1,0 +1,1 @@
+"""`companion fleet`: the emulator and N companion processes on this machine, with a summary."""

@@ -1,0 +1,65 @@
+"""What a link reports about its vehicle, the same for every backend (frames: local NED, metres).
+
+``time`` is always vehicle time in seconds (MAVLink time_boot_ms / time_usec), never wall time.
+``received`` is the host's perf_counter when the message arrived, for latency measurement only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, slots=True)
+class Heartbeat:
+    """A HEARTBEAT from the vehicle's autopilot component."""
+
+    autopilot: int
+    custom_mode: int
+    armed: bool
+    system_status: int
+
+
+@dataclass(frozen=True, slots=True)
+class LocalPosition:
+    """Position and velocity in the local NED frame (origin = the profile origin)."""
+
+    time: float
+    north: float
+    east: float
+    down: float
+    vn: float
+    ve: float
+    vd: float
+    received: float
+
+
+@dataclass(frozen=True, slots=True)
+class SystemStatus:
+    """Health and battery (SYS_STATUS)."""
+
+    battery_remaining: int
+    """Percent, -1 when the vehicle does not know."""
+    healthy: bool
+    """Every present and enabled sensor reports healthy (incl. GPS and the pre-arm check)."""
+
+
+@dataclass(frozen=True, slots=True)
+class SensorContact:
+    """One contact of a sensor: DEBUG_VECT 'DET' (detection) or 'CNF' (confirmation)."""
+
+    kind: str
+    time: float
+    north: float
+    east: float
+    strength: float
+
+
+@dataclass(frozen=True, slots=True)
+class SensorSignal:
+    """The strongest signal of the active sensor (NAMED_VALUE_FLOAT 'SENS_SIG')."""
+
+    time: float
+    value: float
+
+
+LinkEvent = Heartbeat | LocalPosition | SystemStatus | SensorContact | SensorSignal

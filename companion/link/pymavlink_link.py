@@ -1,0 +1,328 @@
+"""The default backend: pymavlink's MAVLink 2 codec on asyncio sockets (UDP in/out, TCP)."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import struct
+import time
+from pathlib import Path
+from typing import Any
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from companion.autopilots import Autopilot, FlightMode, UnknownAutopilotError, autopilot_for
+from companion.guidance import Setpoint
+from companion.link.address import Address, parse_address
+from companion.link.base import LinkError, SetpointKind, VehicleLink
+from companion.link.geo import LocalFrame
+from companion.link.messages import (
+    Heartbeat,
+    LinkEvent,
+    LocalPosition,
+    SensorContact,
+    SensorSignal,
+    SystemStatus,
+)
+from companion.link.tlog import TelemetryLog
+
+log = logging.getLogger(__name__)
+
+VELOCITY_MASK = 3527
+"""SET_POSITION_TARGET_LOCAL_NED type_mask: vx, vy, vz only (ArduPilot and PX4 accept it)."""
+POSITION_MASK = 3576
+"""type_mask: x, y, z only."""
+_NOT_AUTOPILOT_TYPES = {6, 18, 26, 27}  # GCS, onboard controller, gimbal, ADS-B
+_HEALTH_BITS = 0x20 | 0x10000000  # GPS, pre-arm check
+_PARAM_INT32 = 6
+
+
+class _Protocol(asyncio.DatagramProtocol, asyncio.Protocol):
+    def __init__(self, link: PymavlinkLink) -> None:
+        self.link = link
+
+    def datagram_received(self, data: bytes, addr: tuple[str | Any, int]) -> None:
+        self.link._receive(data, addr)
+
+    def data_received(self, data: bytes) -> None:
+        self.link._receive(data, None)
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        if exc is not None:
+            log.warning("connection lost: %s", exc)
+
+
+class PymavlinkLink(VehicleLink):
+    """A vehicle over pymavlink.
+
+    Args:
+        url: ``udpin:0.0.0.0:14540`` (vehicle sends first), ``udpout:HOST:PORT`` or ``tcp:HOST:PORT``.
+        target_system: the vehicle's system id; messages of other systems are ignored.
+        system_id / component_id: the companion's own ids (onboard computer 191).
+        tlog: path of the .tlog to append to, or None.
+        frame: None to read LOCAL_POSITION_NED as is; a LocalFrame to derive the local position
+            from GLOBAL_POSITION_INT around the profile origin (real vehicles, whose local origin
+            is their own EKF origin).
+        command_timeout / command_tries: transport retries of COMMAND_LONG and PARAM_SET (wall s).
+    """
+
+    def __init__(
+        self,
+        *,
+        url: str,
+        target_system: int,
+        system_id: int = 245,
+        component_id: int = 191,
+        tlog: Path | None = None,
+        frame: LocalFrame | None = None,
+        command_timeout: float = 1.0,
+        command_tries: int = 5,
+    ) -> None:
+        self.address: Address = parse_address(url)
+        self.target_system = target_system
+        self.events = asyncio.Queue()
+        self.autopilot: Autopilot | None = None
+        self._mav = mavlink2.MAVLink(None, srcSystem=system_id, srcComponent=component_id)
+        self._mav.robust_parsing = True
+        self._tlog_path = tlog
+        self._tlog: TelemetryLog | None = None
+        self._frame = frame
+        self._timeout = command_timeout
+        self._tries = command_tries
+        self._transport: asyncio.BaseTransport | None = None
+        self._remote: tuple[str, int] | None = None
+        self._acks: dict[int, asyncio.Future[int]] = {}
+        self._params: dict[str, asyncio.Future[float]] = {}
+        self._time_ms = 0
+        self._armed = False
+        self.bad_packets = 0
+
+    async def open(self) -> None:
+        loop = asyncio.get_running_loop()
+        a = self.address
+        if self._tlog_path is not None and self._tlog is None:
+            self._tlog = TelemetryLog(self._tlog_path)
+        try:
+            if a.scheme == "udpin":
+                self._transport, _ = await loop.create_datagram_endpoint(
+                    lambda: _Protocol(self), local_addr=(a.host, a.port)
+                )
+            elif a.scheme == "udpout":
+                self._remote = (a.host, a.port)
+                self._transport, _ = await loop.create_datagram_endpoint(
+                    lambda: _Protocol(self), remote_addr=(a.host, a.port)
+                )
+            else:
+                self._transport, _ = await loop.create_connection(
+                    lambda: _Protocol(self), a.host, a.port
+                )
+        except OSError as exc:
+            raise LinkError(f"cannot open {a.url()}: {exc}") from exc
+        log.info("link open on %s for system %d", a.url(), self.target_system)
+
+    async def close(self) -> None:
+        if self._transport is not None:
+            self._transport.close()
+            self._transport = None
+        if self.address.scheme == "udpin":
+            self._remote = None
+        if self._tlog is not None:
+            self._tlog.close()
+            self._tlog = None
+
+    # -- receiving -------------------------------------------------------------------------
+
+    def _receive(self, data: bytes, addr: tuple[str | Any, int] | None) -> None:
+        received = time.perf_counter()
+        try:
+            messages = self._mav.parse_buffer(data)
+        except Exception as exc:  # a broken packet must never take the companion down
+            self.bad_packets += 1
+            log.debug("unparsable packet from %s: %s", addr, exc)
+            return
+        for msg in messages or ():
+            if msg.get_type() == "BAD_DATA":
+                self.bad_packets += 1
+                continue
+            if msg.get_srcSystem() != self.target_system:
+                continue
+            if addr is not None and self.address.scheme == "udpin":
+                self._remote = (str(addr[0]), int(addr[1]))
+            if self._tlog is not None:
+                self._tlog.write(msg.get_msgbuf())
+            try:
+                event = self._translate(msg, received)
+            except (UnknownAutopilotError, ValueError) as exc:
+                log.warning("ignored %s: %s", msg.get_type(), exc)
+                continue
+            if event is not None:
+                self.events.put_nowait(event)
+
+    def _translate(self, msg: Any, received: float) -> LinkEvent | None:
+        kind = msg.get_type()
+        if kind == "LOCAL_POSITION_NED":
+            self._time_ms = msg.time_boot_ms
+            if self._frame is not None:
+                return None
+            return LocalPosition(
+                msg.time_boot_ms / 1000.0, msg.x, msg.y, msg.z, msg.vx, msg.vy, msg.vz, received
+            )
+        if kind == "GLOBAL_POSITION_INT" and self._frame is not None:
+            self._time_ms = msg.time_boot_ms
+            n, e, d = self._frame.to_local(msg.lat * 1e-7, msg.lon * 1e-7, msg.alt * 1e-3)
+            v = (msg.vx / 100.0, msg.vy / 100.0, msg.vz / 100.0)
+            return LocalPosition(msg.time_boot_ms / 1000.0, n, e, d, *v, received)
+        if kind == "DEBUG_VECT":
+            name = _text(msg.name)
+            if name in ("DET", "CNF"):
+                return SensorContact(name, msg.time_usec / 1e6, msg.x, msg.y, msg.z)
+            return None
+        if kind == "NAMED_VALUE_FLOAT":
+            if _text(msg.name) == "SENS_SIG":
+                return SensorSignal(msg.time_boot_ms / 1000.0, msg.value)
+            return None
+        if kind == "HEARTBEAT":
+            if msg.get_srcComponent() != 1 or msg.type in _NOT_AUTOPILOT_TYPES:
+                return None
+            if self.autopilot is None or self.autopilot.mav_autopilot != msg.autopilot:
+                self.autopilot = autopilot_for(msg.autopilot)
+                log.info("system %d is %s", self.target_system, self.autopilot.name)
+            self._armed = bool(msg.base_mode & 128)
+            return Heartbeat(msg.autopilot, msg.custom_mode, self._armed, msg.system_status)
+        if kind == "SYS_STATUS":
+            need = msg.onboard_control_sensors_present & _HEALTH_BITS
+            healthy = (msg.onboard_control_sensors_health & need) == need
+            return SystemStatus(msg.battery_remaining, healthy)
+        if kind == "COMMAND_ACK":
+            future = self._acks.get(msg.command)
+            if future is not None and not future.done() and msg.result != 5:  # 5 IN_PROGRESS
+                future.set_result(msg.result)
+            return None
+        if kind == "PARAM_VALUE":
+            name = _text(msg.param_id)
+            pending = self._params.get(name)
+            if pending is not None and not pending.done():
+                pending.set_result(self._param_value(msg.param_value, msg.param_type))
+            return None
+        return None
+
+    # -- sending ---------------------------------------------------------------------------
+
+    def _send(self, msg: Any) -> None:
+        transport = self._transport
+        if transport is None:
+            return
+        buf = msg.pack(self._mav)
+        self._mav.seq = (self._mav.seq + 1) % 256
+        if isinstance(transport, asyncio.DatagramTransport):
+            if self.address.scheme == "udpin":
+                if self._remote is None:
+                    return  # the vehicle has not spoken yet
+                transport.sendto(buf, self._remote)
+            else:
+                transport.sendto(buf)
+        elif isinstance(transport, asyncio.WriteTransport):
+            transport.write(buf)
+        if self._tlog is not None:
+            self._tlog.write(buf)
+
+    def send_heartbeat(self) -> None:
+        self._send(self._mav.heartbeat_encode(18, 8, 0, 0, 4))
+
+    def send_setpoint(self, setpoint: Setpoint, kind: SetpointKind) -> None:
+        if self._frame is not None and kind == "position":
+            lat, lon, alt = self._frame.to_geodetic(setpoint.north, setpoint.east, setpoint.down)
+            self._send(
+                self._mav.set_position_target_global_int_encode(
+                    self._time_ms, self.target_system, 1, 5, POSITION_MASK,
+                    round(lat * 1e7), round(lon * 1e7), alt, 0, 0, 0, 0, 0, 0, 0, 0,
+                )
+            )  # fmt: skip
+            return
+        mask = VELOCITY_MASK if kind == "velocity" else POSITION_MASK
+        sp = setpoint
+        self._send(
+            self._mav.set_position_target_local_ned_encode(
+                self._time_ms, self.target_system, 1, 1, mask,
+                sp.north, sp.east, sp.down, sp.vn, sp.ve, sp.vd, 0, 0, 0, 0, 0,
+            )
+        )  # fmt: skip
+
+    async def command(self, command: int, *params: float) -> bool:
+        """COMMAND_LONG with retries until a final COMMAND_ACK; True if ACCEPTED."""
+        full = list(params) + [0.0] * (7 - len(params))
+        future: asyncio.Future[int] = asyncio.get_running_loop().create_future()
+        self._acks[command] = future
+        try:
+            for attempt in range(self._tries):
+                self._send(
+                    self._mav.command_long_encode(self.target_system, 1, command, attempt, *full)
+                )
+                try:
+                    result = await asyncio.wait_for(asyncio.shield(future), self._timeout)
+                except TimeoutError:
+                    continue
+                if result != 0:
+                    log.warning("command %d refused with result %d", command, result)
+                return result == 0
+            log.warning("command %d: no COMMAND_ACK after %d tries", command, self._tries)
+            return False
+        finally:
+            self._acks.pop(command, None)
+
+    async def set_mode(self, mode: FlightMode) -> bool:
+        if self.autopilot is None:
+            raise LinkError("set_mode before the first HEARTBEAT")
+        cmd = self.autopilot.mode_command(mode, armed=self._armed)
+        return await self.command(176, cmd.base_mode, cmd.custom_main, cmd.custom_sub)
+
+    async def arm(self) -> bool:
+        return await self.command(400, 1.0)
+
+    async def takeoff(self, altitude: float) -> bool:
+        if self.autopilot is None:
+            raise LinkError("takeoff before the first HEARTBEAT")
+        return await self.command(22, *self.autopilot.takeoff_params(altitude))
+
+    async def set_sensor(self, index: int) -> bool:
+        return await self.set_param_int("MDM_SENSOR", index)
+
+    async def set_param_int(self, name: str, value: int) -> bool:
+        """PARAM_SET of an INT32 parameter, retried until PARAM_VALUE echoes the value."""
+        encoded = float(value)
+        if self.autopilot is not None and self.autopilot.name == "px4":
+            encoded = struct.unpack("<f", struct.pack("<i", value))[0]  # PX4: bytewise
+        for _ in range(self._tries):
+            future: asyncio.Future[float] = asyncio.get_running_loop().create_future()
+            self._params[name] = future
+            self._send(
+                self._mav.param_set_encode(
+                    self.target_system, 1, name.encode(), encoded, _PARAM_INT32
+                )
+            )
+            try:
+                echoed = await asyncio.wait_for(future, self._timeout)
+            except TimeoutError:
+                continue
+            finally:
+                self._params.pop(name, None)
+            if echoed == value:
+                return True
+        log.warning("parameter %s=%d not confirmed by the vehicle", name, value)
+        return False
+
+    def _param_value(self, value: float, param_type: int) -> float:
+        if (
+            param_type == _PARAM_INT32
+            and self.autopilot is not None
+            and self.autopilot.name == "px4"
+        ):
+            return float(struct.unpack("<i", struct.pack("<f", value))[0])
+        return value if math.isfinite(value) else math.nan
+
+
+def _text(raw: str | bytes) -> str:
+    if isinstance(raw, bytes):
+        raw = raw.decode("ascii", "replace")
+    return raw.rstrip("\x00")

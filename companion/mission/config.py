@@ -1,0 +1,62 @@
+"""Configuration of one vehicle's mission (frozen; built by the CLI from a profile and flags)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from companion.autopilots import FlightMode
+from companion.link.base import SetpointKind
+from mdm_profiles import MissionProfile
+
+
+@dataclass(frozen=True)
+class MissionConfig:
+    """Everything one companion needs besides its link."""
+
+    vehicle: int
+    """0-based index; system id is vehicle + 1."""
+    profile: MissionProfile
+    setpoints: SetpointKind = "velocity"
+    """Velocity setpoints by pursuit guidance, or the waypoint as a position setpoint."""
+    seed: int = 0
+    """Base seed; the vehicle's Generator is seeded with (seed, vehicle)."""
+    log_dir: Path = Path("runs")
+    """Where mission-<i>.jsonl and vehicle-<i>.tlog go."""
+    duration: float | None = None
+    """Search time in vehicle seconds; None = profile.mission.duration."""
+    end_action: FlightMode = FlightMode.RTL
+    """RTL or LAND at the end of the mission."""
+    battery_min: float = 20.0
+    """End the mission below this remaining battery, percent."""
+    link_timeout: float = 3.0
+    """Wall seconds without HEARTBEAT before the link counts as lost (vehicle time stops with
+    the link, so this one timer cannot be in vehicle time)."""
+    heartbeat_period: float = 1.0
+    """Companion HEARTBEAT period, wall seconds."""
+    land_wait: float = 600.0
+    """Vehicle seconds to wait for touchdown after the end action; 0 = exit at once."""
+    climb_timeout: float = 120.0
+    """Vehicle seconds allowed to reach the search altitude before the mission is aborted."""
+    stop_when_all_found: bool = True
+    """End when this vehicle has confirmed as many targets as the profile declares real."""
+
+    @property
+    def system_id(self) -> int:
+        return self.vehicle + 1
+
+    @property
+    def altitude(self) -> float:
+        """This vehicle's altitude above home (Assumption III: vertical separation)."""
+        fleet = self.profile.fleet
+        return fleet.altitude + self.vehicle * fleet.altitude_step
+
+    @property
+    def search_duration(self) -> float:
+        return self.duration if self.duration is not None else self.profile.mission.duration
+
+    def mission_log_path(self) -> Path:
+        return self.log_dir / f"mission-{self.vehicle}.jsonl"
+
+    def tlog_path(self) -> Path:
+        return self.log_dir / f"vehicle-{self.vehicle}.tlog"

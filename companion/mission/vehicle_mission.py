@@ -1,0 +1,414 @@
+"""One vehicle's mission: lifecycle, decision loop and link supervision as named tasks."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import random
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from companion import guidance
+from companion.autopilots import FlightMode
+from companion.geofence import Geofence
+from companion.guidance import GuidanceConfig, Setpoint
+from companion.link.base import VehicleLink
+from companion.link.messages import (
+    Heartbeat,
+    LinkEvent,
+    LocalPosition,
+    SensorContact,
+    SensorSignal,
+    SystemStatus,
+)
+from companion.mission.clock import VehicleClock
+from companion.mission.config import MissionConfig
+from companion.mission.phase import Phase
+from companion.mission.search_core import SearchCore
+from companion.sensors.mavlink_source import MavlinkSensorSource
+from companion.telemetry.mission_log import EventSink, Recovered
+
+log = logging.getLogger(__name__)
+_COMMANDING = (Phase.PREPARE, Phase.CLIMB, Phase.SEARCH)
+
+
+class VehicleMission:
+    """Flies one vehicle's MDM search over ``link``; events go to ``sink``.
+
+    Tasks (one TaskGroup): ``decide`` (events in, policy, setpoints and the companion
+    HEARTBEAT out: if it dies, the heartbeat stops), ``lifecycle`` (connect, mode, arm,
+    takeoff, search, end), ``supervise`` (link loss -> stop commanding, reconnect with
+    backoff), ``sensor-switch`` (MDM_SENSOR parameter).
+    """
+
+    def __init__(
+        self,
+        config: MissionConfig,
+        link: VehicleLink,
+        sink: EventSink,
+        *,
+        recovered: Recovered | None = None,
+        fence: Geofence | None = None,
+    ) -> None:
+        profile = config.profile
+        self.config = config
+        self.link = link
+        self.sink = sink
+        self.recovered = recovered or Recovered()
+        self.clock = VehicleClock(floor=self.recovered.last_time)
+        self.core = SearchCore(profile, config.seed, config.vehicle)
+        self.sensors = MavlinkSensorSource(link, len(profile.sensors))
+        self.fence = fence or Geofence.rectangle(profile.area.north, profile.area.east)
+        self.guide = GuidanceConfig(
+            speed=profile.fleet.speed,
+            altitude=config.altitude,
+            acceptance_radius=profile.fleet.acceptance_radius,
+        )
+        self.phase = Phase.CONNECT
+        self.heartbeat: Heartbeat | None = None
+        self.position: LocalPosition | None = None
+        self.status: SystemStatus | None = None
+        self.end_reason: str | None = None
+        self.search_start = self.recovered.search_start
+        self.latencies: list[float] = []
+        self.real_targets = sum(not t.false_target for t in profile.targets)
+        self._last_heartbeat_wall = 0.0
+        self._period = 0.1
+        self._last_tick = -np.inf
+        self._changed = asyncio.Event()
+        self._own_mode_change = False
+        self._guided_seen = False
+        self._climbing_by_command = False
+
+    # -- public ----------------------------------------------------------------------------
+
+    async def run(self) -> str:
+        """Fly the mission; returns why it ended."""
+        await self.link.open()
+        self.emit("start", vehicle=self.config.vehicle, profile=self.config.profile.name,
+                  seed=self.config.seed, resumed=len(self.recovered.confirmed),
+                  altitude=self.config.altitude)  # fmt: skip
+        try:
+            async with asyncio.TaskGroup() as tg:
+                loops = [
+                    tg.create_task(self._decide(), name=f"v{self.config.vehicle}-decide"),
+                    tg.create_task(self._supervise(), name=f"v{self.config.vehicle}-supervise"),
+                    tg.create_task(self.sensors.run_switcher(), name=f"v{self.config.vehicle}-sensor"),
+                ]  # fmt: skip
+                life = tg.create_task(self._lifecycle(), name=f"v{self.config.vehicle}-lifecycle")
+                life.add_done_callback(lambda _: [t.cancel() for t in loops])
+        finally:
+            self._emit_latency()
+            await self.link.close()
+        return self.end_reason or "stopped"
+
+    def request_end(self, reason: str) -> None:
+        """Operator stop (signal): end the search and fly the end action."""
+        if self.end_reason is None:
+            self.end_reason = reason
+            self._changed.set()
+
+    def emit(self, event: str, **fields: object) -> None:
+        self.sink.emit(self.clock.now, event, **fields)
+
+    # -- decision loop ---------------------------------------------------------------------
+
+    async def _decide(self) -> None:
+        events = self.link.events
+        period = self.config.heartbeat_period
+        next_beat = 0.0
+        while True:
+            now = time.perf_counter()
+            if now >= next_beat:
+                self.link.send_heartbeat()
+                next_beat = now + period
+            try:
+                event = events.get_nowait()
+            except asyncio.QueueEmpty:
+                try:
+                    async with asyncio.timeout(next_beat - now):
+                        event = await events.get()
+                except TimeoutError:
+                    continue
+            self._handle(event)
+
+    def _handle(self, event: LinkEvent) -> None:
+        if isinstance(event, LocalPosition):
+            self._on_position(event)
+        elif isinstance(event, SensorContact | SensorSignal):
+            self.sensors.accept(event)
+        elif isinstance(event, Heartbeat):
+            self._on_heartbeat(event)
+        elif isinstance(event, SystemStatus):
+            self.status = event
+            if (
+                0 <= event.battery_remaining < self.config.battery_min
+                and self.phase is Phase.SEARCH
+            ):
+                self.request_end(f"battery {event.battery_remaining}%")
+        self._changed.set()
+
+    def _on_heartbeat(self, hb: Heartbeat) -> None:
+        self._last_heartbeat_wall = time.perf_counter()
+        previous = self.heartbeat
+        self.heartbeat = hb
+        ap = self.link.autopilot
+        if ap is None:
+            return
+        guided = ap.is_guided(hb.custom_mode)
+        if previous is None or previous.custom_mode != hb.custom_mode:
+            self.emit("mode", mode=ap.mode_name(hb.custom_mode), guided=guided)
+        if guided:
+            self._guided_seen = True
+            if self.phase is Phase.PAUSED:
+                log.info("vehicle %d back in the guided mode: resuming", self.config.vehicle)
+                self._set_phase(Phase.SEARCH if self.core.started else Phase.PREPARE)
+        elif self._guided_seen and self.phase in _COMMANDING and not self._own_mode_change:
+            log.warning("vehicle %d: mode changed to %s by someone else; not commanding",
+                        self.config.vehicle, ap.mode_name(hb.custom_mode))  # fmt: skip
+            self._set_phase(Phase.PAUSED)
+
+    def _on_position(self, pos: LocalPosition) -> None:
+        prev = self.position
+        t = self.clock.update(pos.time)
+        if prev is not None and pos.time > prev.time:
+            self._period += 0.2 * (min(pos.time - prev.time, 1.0) - self._period)
+        self.position = pos
+        if t - self._last_tick >= 10.0:
+            self._last_tick = t
+            self.emit("tick", phase=self.phase.value, level=self.core.level,
+                      north=round(pos.north, 1), east=round(pos.east, 1),
+                      alt=round(-pos.down, 1), found=self.core.confirmed_count)  # fmt: skip
+        if self.phase is Phase.SEARCH:
+            self._search_step(t, pos)
+        elif self.phase in (Phase.PREPARE, Phase.CLIMB) and not self._climbing_by_command:
+            here = np.array([pos.north, pos.east])
+            self._send(guidance.pursuit(here, pos.down, here, self.guide, self.fence, 1.0), pos)
+
+    def _search_step(self, t: float, pos: LocalPosition) -> None:
+        here = np.array([pos.north, pos.east])
+        contacts = self.sensors.take()
+        reached = guidance.reached(here, self.core.waypoint, self.guide.acceptance_radius)
+        if self.core.needs_step(t, reached, contacts):
+            d = self.core.step(t, here, reached, contacts)
+            if d.detected:
+                self.emit("detection", north=round(pos.north, 1), east=round(pos.east, 1),
+                          level=d.level)  # fmt: skip
+            for north, east in d.confirmed:
+                self.emit("confirmation", north=north, east=east, level=d.previous_level,
+                          found=self.core.confirmed_count)  # fmt: skip
+            if d.fell_back:
+                self.emit("fallback", level=d.level)
+            if d.level != d.previous_level:
+                self.emit("level", level=d.level, sensor=self.core.sensor())
+                self.sensors.select(self.core.sensor(), t)
+        if self.search_start is not None and t - self.search_start >= self.config.search_duration:
+            self.request_end("mission time")
+        elif self.config.stop_when_all_found and self.core.confirmed_count >= self.real_targets:
+            self.request_end("all targets")
+        if self.end_reason is not None:
+            return
+        if self.config.setpoints == "position":
+            wp = self.fence.clamp(self.core.waypoint)
+            sp = Setpoint(float(wp[0]), float(wp[1]), -self.guide.altitude, 0.0, 0.0, 0.0)
+        else:
+            sp = guidance.pursuit(here, pos.down, self.core.waypoint, self.guide, self.fence,
+                                  self._period)  # fmt: skip
+        self._send(sp, pos)
+
+    def _send(self, sp: Setpoint, pos: LocalPosition) -> None:
+        self.link.send_setpoint(sp, self.config.setpoints)
+        if len(self.latencies) < 200_000:
+            self.latencies.append(time.perf_counter() - pos.received)
+
+    # -- lifecycle -------------------------------------------------------------------------
+
+    async def _lifecycle(self) -> None:
+        while self.end_reason is None:
+            await self._until(lambda: self.heartbeat is not None and self.position is not None)
+            if self.end_reason is not None:
+                break
+            if self.phase is Phase.PAUSED or self.phase is Phase.LINK_LOST:
+                await self._until(lambda: self.phase not in (Phase.PAUSED, Phase.LINK_LOST))
+                continue
+            if not self._airborne_guided() and not await self._prepare():
+                await self._sleep_vehicle(1.0)
+                continue
+            self._start_search()
+            await self._until(lambda: self.phase is not Phase.SEARCH)
+        await self._finish()
+
+    def _airborne_guided(self) -> bool:
+        hb, pos, ap = self.heartbeat, self.position, self.link.autopilot
+        if hb is None or pos is None or ap is None:
+            return False
+        near = -pos.down > 0.8 * self.config.altitude
+        return hb.armed and ap.is_guided(hb.custom_mode) and near
+
+    async def _prepare(self) -> bool:
+        """Stream setpoints, switch to the guided mode, arm, take off. False to retry."""
+        self._set_phase(Phase.PREPARE)
+        await self._until(lambda: self.status is None or self.status.healthy, 30.0)
+        await self._sleep_vehicle(1.0)  # setpoints flowing before the mode switch (PX4)
+        ap = self.link.autopilot
+        if ap is None or not self._in(Phase.PREPARE):
+            return False
+        if not await self._ensure_guided():
+            return False
+        hb = self.heartbeat
+        if hb is not None and not hb.armed and not await self.link.arm():
+            log.warning("vehicle %d refused to arm", self.config.vehicle)
+            return False
+        await self._until(lambda: self.heartbeat is not None and self.heartbeat.armed, 10.0)
+        self._set_phase(Phase.CLIMB)
+        pos = self.position
+        on_ground = pos is not None and -pos.down < 0.5 * self.config.altitude
+        if ap.takeoff_by_command and on_ground:
+            self._climbing_by_command = True
+            if not await self.link.takeoff(self.config.altitude):
+                self._climbing_by_command = False
+                return False
+        try:
+            ok = await self._until(
+                lambda: (
+                    self.position is not None and -self.position.down > 0.95 * self.config.altitude
+                ),
+                self.config.climb_timeout,
+            )
+        finally:
+            self._climbing_by_command = False
+        if not ok or not self._in(Phase.CLIMB):
+            if not ok:
+                self.request_end("climb timeout")
+            return False
+        return True
+
+    async def _ensure_guided(self) -> bool:
+        ap = self.link.autopilot
+        assert ap is not None
+        for _ in range(3):
+            hb = self.heartbeat
+            if hb is not None and ap.is_guided(hb.custom_mode):
+                return True
+            if await self.link.set_mode(FlightMode.GUIDED) and await self._until(
+                lambda: self.heartbeat is not None and ap.is_guided(self.heartbeat.custom_mode),
+                5.0,
+            ):
+                return True
+        return False
+
+    def _start_search(self) -> None:
+        pos = self.position
+        assert pos is not None
+        here = np.array([pos.north, pos.east])
+        t = self.clock.now
+        if self.search_start is None:
+            self.search_start = t
+        if not self.core.started:
+            self.core.start(here, t, self.recovered.confirmed)
+        self._set_phase(Phase.SEARCH, search_start=self.search_start)
+        self.emit("level", level=self.core.level, sensor=self.core.sensor())
+        self.sensors.select(self.core.sensor(), t)
+
+    async def _finish(self) -> None:
+        paused = self.phase in (Phase.PAUSED, Phase.LINK_LOST)
+        self._set_phase(Phase.RETURN)
+        self.emit("end", reason=self.end_reason, found=self.core.confirmed_count)
+        self.sensors.select(-1, self.clock.now)
+        if paused or self.heartbeat is None or not self.heartbeat.armed:
+            self._set_phase(Phase.DONE)
+            return  # never fight the pilot; nothing to bring back on the ground
+        self._own_mode_change = True
+        if not await self.link.set_mode(self.config.end_action):
+            log.error("vehicle %d refused %s", self.config.vehicle, self.config.end_action.value)
+        if self.config.land_wait > 0:
+            await self._until(
+                lambda: self.heartbeat is not None and not self.heartbeat.armed,
+                self.config.land_wait,
+            )
+        self._set_phase(Phase.DONE)
+
+    # -- link supervision ------------------------------------------------------------------
+
+    async def _supervise(self) -> None:
+        backoff = 0.5
+        while True:
+            await asyncio.sleep(0.25)
+            if self.heartbeat is None or self.phase is Phase.DONE:
+                continue
+            silent = time.perf_counter() - self._last_heartbeat_wall
+            if silent <= self.config.link_timeout:
+                backoff = 0.5
+                continue
+            resume = self.phase
+            if resume is not Phase.LINK_LOST:
+                log.warning("vehicle %d: no heartbeat for %.1f s; stop commanding",
+                            self.config.vehicle, silent)  # fmt: skip
+                self._set_phase(Phase.LINK_LOST)
+                self.emit("link", state="lost", silent=round(silent, 1))
+            await self.link.close()
+            await asyncio.sleep(backoff * (1 + random.random()))  # jittered backoff
+            backoff = min(backoff * 2, 8.0)
+            try:
+                await self.link.open()
+            except OSError as exc:
+                log.warning("reconnect failed: %s", exc)
+                continue
+            deadline = time.perf_counter() + 2.0 * self.config.link_timeout
+            while time.perf_counter() < deadline:
+                await asyncio.sleep(0.1)
+                if time.perf_counter() - self._last_heartbeat_wall < 1.0:
+                    self.emit("link", state="restored")
+                    self._after_link_restored(resume)
+                    break
+
+    def _after_link_restored(self, before: Phase) -> None:
+        hb, ap = self.heartbeat, self.link.autopilot
+        if before is Phase.PAUSED or hb is None or ap is None:
+            self._set_phase(Phase.PAUSED if before is Phase.PAUSED else Phase.PREPARE)
+            return
+        if ap.is_guided(hb.custom_mode) or not hb.armed or self._hold_mode(hb):
+            # Still ours, a rebooted vehicle on the ground, or the autopilot's own link-loss
+            # HOLD: the lifecycle re-enters the guided mode (taking off again if needed).
+            self._set_phase(Phase.PREPARE)
+        else:
+            self._set_phase(Phase.PAUSED)  # a pilot has it
+
+    def _hold_mode(self, hb: Heartbeat) -> bool:
+        ap = self.link.autopilot
+        return ap is not None and hb.custom_mode == ap.custom_mode(FlightMode.HOLD)
+
+    # -- helpers ---------------------------------------------------------------------------
+
+    def _in(self, phase: Phase) -> bool:
+        return self.phase is phase
+
+    def _set_phase(self, phase: Phase, **fields: object) -> None:
+        if phase is not self.phase:
+            self.phase = phase
+            self.emit("phase", phase=phase.value, **fields)
+            self._changed.set()
+
+    async def _until(self, predicate: Callable[[], bool], timeout: float | None = None) -> bool:
+        """Wait until ``predicate`` holds or ``timeout`` vehicle seconds pass (or the mission ends)."""
+        start = self.clock.now
+        while not predicate():
+            if self.end_reason is not None and self.phase is not Phase.RETURN:
+                return False
+            if timeout is not None and self.clock.now - start >= timeout:
+                return False
+            self._changed.clear()
+            await self._changed.wait()
+        return True
+
+    async def _sleep_vehicle(self, seconds: float) -> None:
+        start = self.clock.now
+        await self._until(lambda: self.clock.now - start >= seconds)
+
+    def _emit_latency(self) -> None:
+        if self.latencies:
+            ms = np.array(self.latencies) * 1e3
+            self.emit("latency", n=len(ms), p50_ms=round(float(np.percentile(ms, 50)), 4),
+                      p99_ms=round(float(np.percentile(ms, 99)), 4))  # fmt: skip

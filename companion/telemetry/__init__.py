@@ -1,0 +1,5 @@
+"""Telemetry out of the companion: the durable mission log (MQTT comes later behind EventSink)."""
+
+from companion.telemetry.mission_log import EventSink, MissionLog, Recovered, read_log, read_records
+
+__all__ = ["EventSink", "MissionLog", "Recovered", "read_log", "read_records"]
