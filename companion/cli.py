@@ -10,6 +10,9 @@ import sys
 from pathlib import Path
 
 from companion.autopilots import FlightMode
+from companion.fence_from_profile import fence_for
+from companion.fleet.cli_args import add_fleet_parser
+from companion.fleet.runner import fleet_command
 from companion.link.factory import BACKENDS, Backend, make_link
 from companion.mission import MissionConfig, VehicleMission
 from companion.telemetry import MissionLog, read_log
@@ -41,8 +44,6 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="companion", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     _run_parser(sub)
-    from companion.fleet.cli_args import add_fleet_parser
-
     add_fleet_parser(sub)
     args = parser.parse_args(argv)
     logging.basicConfig(
@@ -52,8 +53,6 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "run":
             return run_command(args)
-        from companion.fleet.runner import fleet_command
-
         return fleet_command(args)
     except ProfileError as exc:
         print(f"companion: {exc}", file=sys.stderr)
@@ -87,8 +86,6 @@ def run_command(args: argparse.Namespace) -> int:
 
 
 async def _fly(config: MissionConfig, url: str, backend: Backend, *, tlog: bool) -> str:
-    from companion.fence_from_profile import fence_for
-
     recovered = read_log(config.mission_log_path())
     if recovered.confirmed:
         log.info("resuming with %d confirmed target(s) from %s", len(recovered.confirmed),
@@ -109,3 +106,7 @@ async def _fly(config: MissionConfig, url: str, backend: Backend, *, tlog: bool)
         return await mission.run()
     finally:
         sink.close()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -37,6 +37,11 @@ class VehicleLink(ABC):
     async def close(self) -> None:
         """Release sockets and logs; safe to call twice."""
 
+    async def reconnect(self) -> None:
+        """Drop and re-open the transport after a link loss."""
+        await self.close()
+        await self.open()
+
     @abstractmethod
     def send_heartbeat(self) -> None:
         """One HEARTBEAT of the companion (MAV_TYPE_ONBOARD_CONTROLLER)."""

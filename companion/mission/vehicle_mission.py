@@ -14,7 +14,7 @@ from companion import guidance
 from companion.autopilots import FlightMode
 from companion.geofence import Geofence
 from companion.guidance import GuidanceConfig, Setpoint
-from companion.link.base import VehicleLink
+from companion.link.base import LinkError, VehicleLink
 from companion.link.messages import (
     Heartbeat,
     LinkEvent,
@@ -348,12 +348,11 @@ class VehicleMission:
                             self.config.vehicle, silent)  # fmt: skip
                 self._set_phase(Phase.LINK_LOST)
                 self.emit("link", state="lost", silent=round(silent, 1))
-            await self.link.close()
             await asyncio.sleep(backoff * (1 + random.random()))  # jittered backoff
             backoff = min(backoff * 2, 8.0)
             try:
-                await self.link.open()
-            except OSError as exc:
+                await self.link.reconnect()
+            except (OSError, LinkError) as exc:
                 log.warning("reconnect failed: %s", exc)
                 continue
             deadline = time.perf_counter() + 2.0 * self.config.link_timeout

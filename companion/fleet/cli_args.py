@@ -1,0 +1,28 @@
+"""Command-line options of `companion fleet`."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from companion.link.factory import BACKENDS
+
+
+def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Register `companion fleet`."""
+    p = sub.add_parser(
+        "fleet",
+        help="run the emulator and N companions on this machine; print what they found",
+    )
+    p.add_argument("--profile", default="paper-fixed", help="profile file or built-in name")
+    p.add_argument("--vehicles", type=int, help="number of vehicles (default: profile)")
+    p.add_argument("--speedup", type=float, default=100.0, help="sim seconds per wall second")
+    p.add_argument("--duration", type=float, default=300.0, help="search time, sim s")
+    p.add_argument("--backend", choices=BACKENDS, default="pymavlink")
+    p.add_argument("--persona", choices=("px4", "ardupilot"), default="px4")
+    p.add_argument("--setpoints", choices=("velocity", "position"), default="velocity")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--base-port", type=int, default=14540)
+    p.add_argument("--out", type=Path, help="run directory (default runs/fleet-<time>)")
+    p.add_argument("--json", action="store_true", help="print the results as JSON")
+    p.add_argument("--quiet", action="store_true", help="no live progress lines")

@@ -1,0 +1,159 @@
+"""`companion fleet`: start the emulator and one companion process per vehicle, watch, score."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from companion.fleet.progress import progress_line, read_progress
+from companion.fleet.scoring import FleetResult, score
+from mdm_profiles import MissionProfile, load_profile
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class FleetOptions:
+    """One fleet run on this machine."""
+
+    profile: str
+    out: Path
+    vehicles: int | None = None
+    speedup: float = 100.0
+    duration: float = 300.0
+    backend: str = "pymavlink"
+    persona: str = "px4"
+    setpoints: str = "velocity"
+    seed: int = 1
+    base_port: int = 14540
+    quiet: bool = True
+    wall_limit: float = 900.0
+    """Wall seconds after which the run is stopped (companions get SIGTERM)."""
+
+
+def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
+    """The sim-vehicle command line for this run."""
+    return [
+        sys.executable, "-m", "sim_vehicle_stub",
+        "--profile", o.profile,
+        "--vehicles", str(vehicles),
+        "--speedup", str(o.speedup),
+        "--persona", o.persona,
+        "--base-port", str(o.base_port),
+        "--seed", str(o.seed),
+        "--events", str(o.out / "emulator-events.jsonl"),
+    ]  # fmt: skip
+
+
+def companion_command(o: FleetOptions, vehicle: int) -> list[str]:
+    """The `companion run` command line of one vehicle."""
+    return [
+        sys.executable, "-m", "companion.cli", "run",
+        "--profile", o.profile,
+        "--vehicle", str(vehicle),
+        "--base-port", str(o.base_port),
+        "--backend", o.backend,
+        "--setpoints", o.setpoints,
+        "--seed", str(o.seed),
+        "--log-dir", str(o.out),
+        "--duration", str(o.duration),
+        "--land-wait", "0",
+    ]  # fmt: skip
+
+
+def run_fleet(o: FleetOptions) -> FleetResult:
+    """Fly one fleet mission; returns its scored result (also written to out/results.json)."""
+    profile = load_profile(o.profile)
+    n = o.vehicles or profile.fleet.vehicles
+    o.out.mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    started = time.perf_counter()
+    with (o.out / "emulator.log").open("w") as emu_log:
+        emulator = subprocess.Popen(
+            emulator_command(o, n), stdout=emu_log, stderr=subprocess.STDOUT, env=env
+        )
+        companions: list[subprocess.Popen[bytes]] = []
+        try:
+            for i in range(n):
+                with (o.out / f"companion-{i}.log").open("w") as f:
+                    companions.append(
+                        subprocess.Popen(companion_command(o, i), stdout=f, stderr=subprocess.STDOUT, env=env)
+                    )  # fmt: skip
+            _watch(o, profile, n, companions, started)
+        finally:
+            for p in companions:
+                _stop(p)
+            _stop(emulator)
+    result = score(profile, o.out, n, o.duration)
+    (o.out / "results.json").write_text(json.dumps(result.as_json(), indent=2, default=str))
+    log.info("fleet done in %.1f s wall", time.perf_counter() - started)
+    return result
+
+
+def _watch(
+    o: FleetOptions,
+    profile: MissionProfile,
+    n: int,
+    companions: list[subprocess.Popen[bytes]],
+    started: float,
+) -> None:
+    real = sum(not t.false_target for t in profile.targets)
+    last_print = 0.0
+    while any(p.poll() is None for p in companions):
+        time.sleep(0.5)
+        now = time.perf_counter()
+        if now - started > o.wall_limit:
+            log.warning("wall limit %.0f s reached; stopping the companions", o.wall_limit)
+            break
+        if not o.quiet and now - last_print >= 2.0:
+            last_print = now
+            views = read_progress(o.out, n)
+            found = score(profile, o.out, n, o.duration).tnc
+            print(progress_line(views, found, real), flush=True)
+
+
+def _stop(p: subprocess.Popen[bytes]) -> None:
+    if p.poll() is None:
+        p.send_signal(signal.SIGTERM)
+        try:
+            p.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+
+
+def fleet_command(args: argparse.Namespace) -> int:
+    """`companion fleet`: run, then print a summary (or JSON)."""
+    out = args.out or Path("runs") / time.strftime("fleet-%Y%m%d-%H%M%S")
+    opts = FleetOptions(
+        profile=args.profile, out=out, vehicles=args.vehicles, speedup=args.speedup,
+        duration=args.duration, backend=args.backend, persona=args.persona,
+        setpoints=args.setpoints, seed=args.seed, base_port=args.base_port,
+        quiet=args.quiet or args.json,
+    )  # fmt: skip
+    started = time.perf_counter()
+    result = run_fleet(opts)
+    wall = time.perf_counter() - started
+    if args.json:
+        print(json.dumps(result.as_json() | {"wall_s": round(wall, 1)}, default=str))
+        return 0
+    real = sum(1 for t in result.first_confirmation if t != float("inf"))
+    print(f"\n{result.profile}: {result.vehicles} vehicles, {result.duration:.0f} sim s "
+          f"in {wall:.1f} s wall")  # fmt: skip
+    print(f"  targets confirmed (T_nc): {result.tnc}; distinct ever: {real}")
+    ts = f"{result.ts:.1f} s" if not result.ts_capped else f"not all (capped {result.ts:.0f} s)"
+    print(f"  time to all targets (T_S): {ts}")
+    print(f"  false confirmations: {result.false_confirmations}")
+    for c in result.confirmations:
+        print(f"    vehicle {c.vehicle} t={c.time:7.1f} s target T{c.target + 1} "
+              f"({c.north:.0f}, {c.east:.0f}) {c.distance:.0f} m off")  # fmt: skip
+    print(f"  results: {out / 'results.json'}")
+    return 0
