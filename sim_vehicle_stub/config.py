@@ -1,0 +1,52 @@
+"""Configuration of one emulator process."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from mdm_profiles import MissionProfile
+
+
+@dataclass(frozen=True)
+class EmulatorConfig:
+    """Everything `sim-vehicle` takes from the command line; defaults match PX4 SITL."""
+
+    profile: MissionProfile
+    vehicles: int | None = None
+    """Number of vehicles; None takes the profile's fleet size."""
+    personas: tuple[str, ...] = ("px4",)
+    """Persona per vehicle, cycled when shorter than the fleet."""
+    host: str = "127.0.0.1"
+    """Where the vehicles send first (the companions' address)."""
+    base_port: int = 14540
+    """Vehicle i sends first to host:base_port+i."""
+    bind_host: str = "127.0.0.1"
+    bind_port_base: int = 14580
+    """Vehicle i's own UDP port is bind_port_base+i; 0 picks free ports."""
+    tcp: bool = False
+    tcp_base: int = 5760
+    """TCP server of vehicle i on tcp_base + 10 i."""
+    gcs: bool = False
+    gcs_port: int = 14550
+    speedup: float | None = 1.0
+    """Sim seconds per wall second; None runs as fast as possible."""
+    sim_step: float = 0.02
+    telemetry_hz: float = 10.0
+    """Rate of position/attitude streams and sensor readings, per sim second."""
+    seed: int = 0
+    events: Path | None = None
+    battery_endurance: float = 7200.0
+    scale_timeouts: bool = True
+    """Multiply failsafe time-out defaults by the speed-up so wall-clock clients keep working."""
+    flood_rate: float = 5000.0
+    """Datagrams per wall second accepted per endpoint; more are dropped unread."""
+    start_positions: tuple[tuple[float, float], ...] | None = None
+    """Override the profile's periphery start points, metres (north, east)."""
+
+    @property
+    def fleet_size(self) -> int:
+        return self.vehicles if self.vehicles is not None else self.profile.fleet.vehicles
+
+    def persona_of(self, index: int) -> str:
+        return self.personas[index % len(self.personas)]

@@ -1,0 +1,248 @@
+"""The emulator: one world, N vehicles, their endpoints and the fixed-step sim loop."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import functools
+import logging
+import time
+from typing import Any
+
+import numpy as np
+
+from sim_vehicle_stub.clock import SimClock
+from sim_vehicle_stub.commands import CommandHandler
+from sim_vehicle_stub.config import EmulatorConfig
+from sim_vehicle_stub.dynamics import LagModel
+from sim_vehicle_stub.encoder import Encoder
+from sim_vehicle_stub.endpoints import GcsEndpoint, TcpServer, TokenBucket, UdpEndpoint
+from sim_vehicle_stub.events import EventLog
+from sim_vehicle_stub.failsafes import check_failsafes
+from sim_vehicle_stub.fleet import Fleet
+from sim_vehicle_stub.geo import GeoFrame
+from sim_vehicle_stub.handlers import MessageHandler
+from sim_vehicle_stub.mavlink import dialect as d
+from sim_vehicle_stub.node import VehicleNode
+from sim_vehicle_stub.personas import ProfileFacts, create_persona
+from sim_vehicle_stub.sensing import Reading, SensorWorld
+from sim_vehicle_stub.telemetry import Telemetry
+from sim_vehicle_stub.vehicle import Vehicle
+from sim_vehicle_stub.world import Scenario
+
+log = logging.getLogger(__name__)
+
+
+def _same(endpoint: UdpEndpoint) -> UdpEndpoint:
+    return endpoint
+
+
+class Emulator:
+    """Hosts every vehicle of a profile; use ``async with Emulator(cfg) as emu`` or :meth:`run`."""
+
+    def __init__(self, config: EmulatorConfig) -> None:
+        self.config = config
+        profile = config.profile
+        n = config.fleet_size
+        rng = np.random.default_rng(config.seed)
+        self.scenario = Scenario.from_profile(profile)
+        if config.start_positions is not None:
+            start = np.array(config.start_positions, dtype=float).reshape(n, 2)
+        else:
+            start = self.scenario.start_positions(1, n, profile.fleet.start, rng)[0]
+        self.clock = SimClock(config.speedup)
+        self.events = EventLog(config.events)
+        self.fleet = Fleet(start, LagModel(profile.fleet.tau), profile.fleet.speed)
+        o = profile.origin
+        self.geo = GeoFrame(o.lat, o.lon, o.alt)
+        self.sensors = SensorWorld(self.scenario, n, rng, self.events)
+        self.telemetry = Telemetry(self.fleet, self.geo, self.clock, int(time.time() * 1e6))
+        scale = config.speedup if (config.scale_timeouts and config.speedup) else 1.0
+        self.nodes: list[VehicleNode] = []
+        for i in range(n):
+            persona = create_persona(config.persona_of(i))
+            facts = ProfileFacts(
+                speed=profile.fleet.speed,
+                tau=profile.fleet.tau,
+                sensor_radii=tuple(s.radius for s in self.scenario.sensors),
+                system_id=i + 1,
+                timeout_scale=max(scale, 1.0),
+                battery_endurance=config.battery_endurance,
+            )
+            vehicle = Vehicle(
+                i, persona, persona.param_table(facts), self.fleet, self.events, self._now
+            )
+            self.nodes.append(VehicleNode(vehicle, Encoder(i + 1)))
+        self.handler = MessageHandler(CommandHandler(self.telemetry, o.alt), self.geo, self._now)
+        self.udp: list[UdpEndpoint] = []
+        self.tcp: list[TcpServer] = []
+        self.gcs: GcsEndpoint | None = None
+        self._task: asyncio.Task[None] | None = None
+        self._stop = asyncio.Event()
+
+    def _now(self) -> float:
+        return self.clock.now
+
+    @property
+    def vehicles(self) -> list[Vehicle]:
+        return [node.vehicle for node in self.nodes]
+
+    # ----- lifecycle
+    async def start(self) -> None:
+        """Open every endpoint and start the sim loop."""
+        cfg = self.config
+        loop = asyncio.get_running_loop()
+        if cfg.gcs:
+            _, gcs = await loop.create_datagram_endpoint(
+                lambda: GcsEndpoint(self.nodes, self._deliver, (cfg.host, cfg.gcs_port)),
+                local_addr=(cfg.bind_host, 0),
+            )
+            self.gcs = gcs
+        for i, node in enumerate(self.nodes):
+            bind = cfg.bind_port_base + i if cfg.bind_port_base else 0
+            remote = (cfg.host, cfg.base_port + i)
+            bucket = TokenBucket(cfg.flood_rate, cfg.flood_rate / 4)
+            ep = UdpEndpoint(node, self._deliver, remote, bucket)
+            await loop.create_datagram_endpoint(
+                functools.partial(_same, ep), local_addr=(cfg.bind_host, bind)
+            )
+            self.udp.append(ep)
+            node.outputs.append(ep.send)
+            if self.gcs is not None:
+                node.outputs.append(self.gcs.send)
+            if cfg.tcp:
+                server = TcpServer(node, self._deliver)
+                await server.start(cfg.bind_host, cfg.tcp_base + 10 * i)
+                self.tcp.append(server)
+        self._task = asyncio.create_task(self._loop(), name="sim-loop")
+        log.info("emulator up: %d vehicles, speedup %s", len(self.nodes), cfg.speedup or "max")
+
+    async def stop(self) -> None:
+        self._stop.set()
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+        for ep in self.udp:
+            if ep.transport is not None:
+                ep.transport.close()
+        for server in self.tcp:
+            server.close()
+        if self.gcs is not None and self.gcs.transport is not None:
+            self.gcs.transport.close()
+        self.events.close()
+
+    async def __aenter__(self) -> Emulator:
+        await self.start()
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.stop()
+
+    async def run(self, duration: float | None = None) -> None:
+        """Run until ``duration`` sim seconds have passed (forever when None) or cancelled."""
+        await self.start()
+        try:
+            while duration is None or self.clock.now < duration:
+                if self._task is not None and self._task.done():
+                    self._task.result()
+                    break
+                await asyncio.sleep(0.05)
+        finally:
+            await self.stop()
+
+    def local_port(self, index: int) -> int:
+        """The UDP port vehicle ``index`` listens on."""
+        tr = self.udp[index].transport
+        assert tr is not None
+        return int(tr.get_extra_info("sockname")[1])
+
+    # ----- receive path
+    def _deliver(self, node: VehicleNode, msgs: list[Any]) -> None:
+        for msg in msgs:
+            try:
+                self.handler.handle(node, msg)
+            except Exception:  # never let one message take the emulator down
+                node.stats.malformed += 1
+                log.exception("vehicle %d: error handling %s", node.vehicle.index, msg.get_type())
+        self._flush_state(node)
+
+    def _flush_state(self, node: VehicleNode) -> None:
+        v = node.vehicle
+        out: list[Any] = []
+        if v.state_changed:
+            v.state_changed = False
+            out.append(self.telemetry.heartbeat(v))
+        for severity, text in v.status:
+            out.append(d.MAVLink_statustext_message(severity, text.encode()))
+        v.status.clear()
+        node.send(out)
+
+    # ----- sim loop
+    async def _loop(self) -> None:
+        cfg = self.config
+        period = 1.0 / cfg.telemetry_hz
+        steps = max(1, round(period / cfg.sim_step))
+        dt = period / steps
+        k = 0
+        while not self._stop.is_set():
+            self.fleet.step(dt)
+            self.clock.advance(dt)
+            k += 1
+            if k == steps:
+                k = 0
+                self._tick(period)
+            await asyncio.sleep(self.clock.wait_time())
+
+    def _tick(self, dt: float) -> None:
+        t = self.clock.now
+        for node in self.nodes:
+            v = node.vehicle
+            v.update()
+            check_failsafes(v, self.scenario.area, dt)
+        active = np.array([int(v.params.get("MDM_SENSOR")) for v in self.vehicles], dtype=np.intp)
+        radius = np.array(
+            [
+                v.params.get(f"MDM_SENS_R{max(s, 0)}")
+                for v, s in zip(self.vehicles, active, strict=True)
+            ]
+        )
+        readings = self.sensors.tick(t, self.fleet.pos, active, radius)
+        builders = self.telemetry.builders
+        for node in self.nodes:
+            v = node.vehicle
+            due = node.schedule.due(t)
+            if v.state_changed and d.MAVLINK_MSG_ID_HEARTBEAT not in due:
+                due.insert(0, d.MAVLINK_MSG_ID_HEARTBEAT)
+            v.state_changed = False
+            out = [builders[m](v) for m in due]
+            reading = readings.get(v.index)
+            if reading is not None:
+                out += self._sensor_messages(reading)
+            for severity, text in v.status:
+                out.append(d.MAVLink_statustext_message(severity, text.encode()))
+            v.status.clear()
+            node.send(out)
+
+    def _sensor_messages(self, r: Reading) -> list[Any]:
+        name = b"CNF" if r.confirms else b"DET"
+        out: list[Any] = [
+            d.MAVLink_named_value_float_message(self.clock.boot_ms, b"SENS_SIG", r.signal)
+        ]
+        usec = self.clock.usec
+        out += [d.MAVLink_debug_vect_message(name, usec, n, e, s) for _, n, e, s in r.contacts]
+        return out
+
+    # ----- introspection
+    def stats(self) -> dict[str, Any]:
+        """Counters of every vehicle's links, the GCS link and the clock."""
+        per = [node.stats.as_dict() for node in self.nodes]
+        totals = {k: sum(p[k] for p in per) for k in per[0]} if per else {}
+        return {
+            "sim_time": self.clock.now,
+            "clock_rebases": self.clock.rebases,
+            "vehicles": per,
+            "totals": totals,
+            "gcs": self.gcs.stats.as_dict() if self.gcs else None,
+            "events": self.events.count,
+        }

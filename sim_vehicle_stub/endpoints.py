@@ -1,0 +1,175 @@
+"""Network endpoints: per-vehicle UDP (PX4 SITL style) and TCP server, and the shared GCS output.
+
+Every endpoint reads in asyncio callbacks as datagrams arrive, so a slow or hostile peer on one
+vehicle's port never delays another vehicle. A token bucket per endpoint drops floods unread.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Callable
+from typing import Any, cast
+
+from sim_vehicle_stub.framing import FrameDecoder, LinkStats
+from sim_vehicle_stub.node import VehicleNode
+
+log = logging.getLogger(__name__)
+
+Address = tuple[str, int]
+Deliver = Callable[[VehicleNode, list[Any]], None]
+
+_MAX_PEERS = 4
+_PEER_TTL = 10.0
+_TCP_BACKLOG_LIMIT = 1 << 20
+
+
+class TokenBucket:
+    """Wall-clock rate limit: ``rate`` per second with bursts of ``burst``."""
+
+    def __init__(self, rate: float, burst: float) -> None:
+        self.rate, self.burst = rate, burst
+        self.tokens = burst
+        self.stamp = time.monotonic()
+
+    def allow(self) -> bool:
+        now = time.monotonic()
+        self.tokens = min(self.burst, self.tokens + (now - self.stamp) * self.rate)
+        self.stamp = now
+        if self.tokens >= 1.0:
+            self.tokens -= 1.0
+            return True
+        return False
+
+
+class _PeerSet:
+    """The configured remote plus recent senders that spoke valid MAVLink (bounded)."""
+
+    def __init__(self, remote: Address | None) -> None:
+        self.remote = remote
+        self.seen: dict[Address, float] = {}
+        self.targets: tuple[Address, ...] = (remote,) if remote else ()
+
+    def saw(self, addr: Address) -> None:
+        now = time.monotonic()
+        fresh = addr not in self.seen
+        self.seen[addr] = now
+        if fresh or len(self.seen) > _MAX_PEERS:
+            live = sorted(self.seen.items(), key=lambda kv: -kv[1])[:_MAX_PEERS]
+            self.seen = {a: s for a, s in live if now - s < _PEER_TTL}
+            extra = [a for a in self.seen if a != self.remote]
+            self.targets = ((self.remote,) if self.remote else ()) + tuple(extra)
+
+
+class UdpEndpoint(asyncio.DatagramProtocol):
+    """One vehicle's UDP socket: sends first to ``remote``, answers whoever talks to it."""
+
+    def __init__(self, node: VehicleNode, deliver: Deliver, remote: Address, flood: TokenBucket):
+        self.node = node
+        self.deliver = deliver
+        self.peers = _PeerSet(remote)
+        self.flood = flood
+        self.decoder = FrameDecoder(node.stats)
+        self.transport: asyncio.DatagramTransport | None = None
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        self.transport = cast(asyncio.DatagramTransport, transport)
+
+    def datagram_received(self, data: bytes, addr: Address) -> None:
+        if not self.flood.allow():
+            self.node.stats.flood_dropped += 1
+            return
+        msgs = self.decoder.feed(data)
+        if msgs:
+            self.peers.saw(addr)
+            self.deliver(self.node, msgs)
+
+    def error_received(self, exc: Exception) -> None:
+        # ICMP port unreachable while no client listens yet: normal for a vehicle sending first.
+        pass
+
+    def send(self, data: bytes) -> None:
+        if self.transport is None or self.transport.is_closing():
+            return
+        for addr in self.peers.targets:
+            self.transport.sendto(data, addr)
+
+
+class TcpServer:
+    """One vehicle's TCP server (ArduPilot SITL style); every client gets the full stream."""
+
+    def __init__(self, node: VehicleNode, deliver: Deliver) -> None:
+        self.node = node
+        self.deliver = deliver
+        self.server: asyncio.Server | None = None
+
+    async def start(self, host: str, port: int) -> None:
+        self.server = await asyncio.start_server(self._client, host, port)
+
+    async def _client(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        decoder = FrameDecoder(self.node.stats, stream=True)
+
+        def send(data: bytes) -> None:
+            if writer.is_closing():
+                return
+            if writer.transport.get_write_buffer_size() < _TCP_BACKLOG_LIMIT:
+                writer.write(data)
+
+        self.node.outputs.append(send)
+        try:
+            while data := await reader.read(4096):
+                msgs = decoder.feed(data)
+                if msgs:
+                    self.deliver(self.node, msgs)
+        except (ConnectionError, OSError):
+            pass
+        finally:
+            self.node.outputs.remove(send)
+            writer.close()
+
+    def close(self) -> None:
+        if self.server is not None:
+            self.server.close()
+
+
+class GcsEndpoint(asyncio.DatagramProtocol):
+    """A ground-station output carrying all vehicles; replies are routed by target_system."""
+
+    def __init__(self, nodes: list[VehicleNode], deliver: Deliver, remote: Address) -> None:
+        self.nodes = nodes
+        self.deliver = deliver
+        self.peers = _PeerSet(remote)
+        self.stats = LinkStats()
+        self.decoder = FrameDecoder(self.stats)
+        self.flood = TokenBucket(20000.0, 5000.0)
+        self.transport: asyncio.DatagramTransport | None = None
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        self.transport = cast(asyncio.DatagramTransport, transport)
+
+    def datagram_received(self, data: bytes, addr: Address) -> None:
+        if not self.flood.allow():
+            self.stats.flood_dropped += 1
+            return
+        msgs = self.decoder.feed(data)
+        if msgs:
+            self.peers.saw(addr)
+        for msg in msgs:
+            target = getattr(msg, "target_system", 0)
+            if target == 0:
+                for node in self.nodes:
+                    self.deliver(node, [msg])
+            elif 1 <= target <= len(self.nodes):
+                self.deliver(self.nodes[target - 1], [msg])
+            else:
+                self.stats.not_for_us += 1
+
+    def error_received(self, exc: Exception) -> None:
+        pass
+
+    def send(self, data: bytes) -> None:
+        if self.transport is None or self.transport.is_closing():
+            return
+        for addr in self.peers.targets:
+            self.transport.sendto(data, addr)

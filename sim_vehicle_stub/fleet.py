@@ -1,0 +1,116 @@
+"""The kinematic state of every vehicle, stepped together with the shared tau-lag dynamics.
+
+Horizontal motion is the paper's loop (``dynamics.lag_step``) with the reference either a
+commanded velocity or pursuit of a target point. Pursuit slows within ``4 tau v`` of the point,
+which makes the closed loop ``tau s^2 + s + k`` with ``k = 1 / (4 tau)`` critically damped, so a
+vehicle settles on a position setpoint without overshoot. Vertical motion uses the same lag.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sim_vehicle_stub.dynamics import LagModel, lag_step, pursuit_reference
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+GROUND_ALT = 0.3
+"""Below this height (m) a vehicle that is not climbing counts as on the ground."""
+
+
+class Fleet:
+    """Arrays of all vehicles' state; index i is vehicle i. Altitude is metres above home, up."""
+
+    def __init__(self, start: FloatArray, model: LagModel, speed: float) -> None:
+        n = len(start)
+        self.model = model
+        self.pos = np.array(start, dtype=float).reshape(n, 2)
+        self.vel = np.zeros((n, 2))
+        self.alt = np.zeros(n)
+        self.vz = np.zeros(n)
+        self.yaw = np.zeros(n)
+        self.h_ref = np.zeros((n, 2))
+        """Last horizontal velocity reference, for attitude."""
+        self.h_use_vel = np.zeros(n, dtype=bool)
+        self.h_target = self.pos.copy()
+        self.h_vel = np.zeros((n, 2))
+        self.v_use_vel = np.zeros(n, dtype=bool)
+        self.v_target = np.zeros(n)
+        self.v_vel = np.zeros(n)
+        self.speed = np.full(n, float(speed))
+        self.climb = np.full(n, 3.0)
+        self.descent = np.full(n, 1.5)
+        self.yaw_cmd = np.full(n, np.nan)
+
+    def __len__(self) -> int:
+        return len(self.pos)
+
+    def on_ground(self) -> BoolArray:
+        return np.asarray((self.alt <= GROUND_ALT) & (self.vz <= 0.05))
+
+    # Commands for one vehicle; the step applies them to all at once.
+    def hold(self, i: int) -> None:
+        """Stop and hold the current position and altitude."""
+        self.h_use_vel[i] = False
+        self.h_target[i] = self.pos[i]
+        self.v_use_vel[i] = False
+        self.v_target[i] = self.alt[i]
+
+    def go_to(self, i: int, north: float, east: float) -> None:
+        self.h_use_vel[i] = False
+        self.h_target[i] = (north, east)
+
+    def fly_velocity(self, i: int, vn: float, ve: float) -> None:
+        self.h_use_vel[i] = True
+        self.h_vel[i] = (vn, ve)
+
+    def climb_to(self, i: int, alt: float) -> None:
+        self.v_use_vel[i] = False
+        self.v_target[i] = alt
+
+    def climb_rate(self, i: int, rate: float) -> None:
+        """Vertical speed, m/s up."""
+        self.v_use_vel[i] = True
+        self.v_vel[i] = rate
+
+    def step(self, dt: float) -> None:
+        """Advance every vehicle by dt sim seconds."""
+        model = self.model
+        k = 1.0 / (4.0 * model.tau)
+        dist = np.linalg.norm(self.h_target - self.pos, axis=-1)
+        pursuit = pursuit_reference(self.pos, self.h_target, np.minimum(self.speed, k * dist))
+        vel_cmd = self.h_vel
+        norm = np.linalg.norm(vel_cmd, axis=-1)
+        scale = np.where(norm > self.speed, self.speed / np.maximum(norm, 1e-9), 1.0)
+        href = np.where(self.h_use_vel[:, None], vel_cmd * scale[:, None], pursuit)
+
+        vref = np.where(self.v_use_vel, self.v_vel, k * (self.v_target - self.alt))
+        vref = np.clip(vref, -self.descent, self.climb)
+        grounded = (self.alt <= GROUND_ALT) & (vref <= 0.0)
+        href[grounded] = 0.0
+        self.h_ref = href
+
+        pos, vel = lag_step(self.pos, self.vel, href, dt, model)
+        alt, vz = lag_step(self.alt[:, None], self.vz[:, None], vref[:, None], dt, model)
+        pos[grounded] = self.pos[grounded]
+        vel[grounded] = 0.0
+        self.pos, self.vel = pos, vel
+        self.alt, self.vz = alt[:, 0], vz[:, 0]
+        below = self.alt < 0.0
+        self.alt[below] = 0.0
+        self.vz[below] = np.maximum(self.vz[below], 0.0)
+
+        moving = np.linalg.norm(self.vel, axis=-1) > 0.5
+        heading = np.arctan2(self.vel[:, 1], self.vel[:, 0])
+        commanded = ~np.isnan(self.yaw_cmd)
+        self.yaw = np.where(commanded, self.yaw_cmd, np.where(moving, heading, self.yaw))
+
+    def attitude(self, g: float = 9.81) -> tuple[FloatArray, FloatArray]:
+        """Roll and pitch (rad) that produce the current lag-loop acceleration."""
+        accel = (self.h_ref - self.vel) / self.model.tau
+        c, s = np.cos(self.yaw), np.sin(self.yaw)
+        forward = accel[:, 0] * c + accel[:, 1] * s
+        right = -accel[:, 0] * s + accel[:, 1] * c
+        return np.arctan(right / g), -np.arctan(forward / g)

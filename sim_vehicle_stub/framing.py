@@ -1,0 +1,136 @@
+"""Split received bytes into MAVLink frames, decode them, and count everything that is dropped.
+
+Each UDP datagram is parsed on its own (a truncated frame never poisons the next datagram); a
+TCP stream keeps at most one partial frame between reads.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from sim_vehicle_stub.mavlink import dialect
+
+_V2, _V1 = 0xFD, 0xFE
+_MAX_FRAMES_PER_READ = 64
+
+
+@dataclass
+class LinkStats:
+    """Counters of one vehicle's links (all endpoints together)."""
+
+    datagrams: int = 0
+    bytes: int = 0
+    messages: int = 0
+    rejected_datagrams: int = 0
+    """Datagrams (or stream reads) in which anything was dropped."""
+    bad_crc: int = 0
+    truncated: int = 0
+    unknown_id: int = 0
+    malformed: int = 0
+    garbage: int = 0
+    """Runs of bytes that do not start a frame."""
+    flood_dropped: int = 0
+    """Datagrams dropped unread because the sender exceeded the rate limit."""
+    not_for_us: int = 0
+    nacks: int = 0
+    """Commands answered with a failure result."""
+
+    @property
+    def dropped(self) -> int:
+        return (
+            self.bad_crc
+            + self.truncated
+            + self.unknown_id
+            + self.malformed
+            + self.garbage
+            + self.flood_dropped
+        )
+
+    def as_dict(self) -> dict[str, int]:
+        return {**asdict(self), "dropped": self.dropped}
+
+
+class FrameDecoder:
+    """Decoder for one endpoint; ``stream`` keeps partial frames across reads (TCP)."""
+
+    def __init__(self, stats: LinkStats, *, stream: bool = False) -> None:
+        self.stats = stats
+        self.stream = stream
+        self._pending = b""
+        self._mav = dialect.MAVLink(None)
+
+    def feed(self, data: bytes) -> list[Any]:
+        """Decoded messages in ``data``; every problem is counted and skipped."""
+        stats = self.stats
+        stats.datagrams += 1
+        stats.bytes += len(data)
+        buf = self._pending + data if self.stream else data
+        self._pending = b""
+        out: list[Any] = []
+        errors = 0
+        i, n = 0, len(buf)
+        while i < n:
+            if len(out) >= _MAX_FRAMES_PER_READ:
+                stats.flood_dropped += 1
+                errors += 1
+                break
+            magic = buf[i]
+            if magic not in (_V1, _V2):
+                j1, j2 = buf.find(b"\xfd", i), buf.find(b"\xfe", i)
+                nxt = min(j for j in (j1, j2, n) if j >= 0)
+                stats.garbage += 1
+                errors += 1
+                i = nxt
+                continue
+            head = 10 if magic == _V2 else 6
+            if n - i < head:
+                total = -1
+            else:
+                plen = buf[i + 1]
+                if magic == _V2:
+                    incompat = buf[i + 2]
+                    if incompat & ~1:
+                        stats.malformed += 1
+                        errors += 1
+                        i += 1
+                        continue
+                    total = 12 + plen + (13 if incompat & 1 else 0)
+                else:
+                    total = 8 + plen
+            if total < 0 or n - i < total:
+                if self.stream and n - i < 300:
+                    self._pending = buf[i:]
+                else:
+                    stats.truncated += 1
+                    errors += 1
+                break
+            msgid = (
+                buf[i + 7] | (buf[i + 8] << 8) | (buf[i + 9] << 16) if magic == _V2 else buf[i + 5]
+            )
+            if msgid not in dialect.mavlink_map:
+                stats.unknown_id += 1
+                errors += 1
+                i += total
+                continue
+            try:
+                msg = self._mav.decode(bytearray(buf[i : i + total]))
+            except dialect.MAVError as exc:
+                if "CRC" in str(exc):
+                    stats.bad_crc += 1
+                else:
+                    stats.malformed += 1
+                errors += 1
+                i += 1
+                continue
+            except Exception:  # pymavlink may raise anything on hostile payloads
+                stats.malformed += 1
+                errors += 1
+                i += 1
+                continue
+            out.append(msg)
+            i += total
+        stats.messages += len(out)
+        if errors:
+            stats.rejected_datagrams += 1
+        return out

@@ -1,0 +1,43 @@
+"""A vehicle as the network sees it: its logic, encoder, stream schedule, counters and outputs."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from sim_vehicle_stub.encoder import Encoder
+from sim_vehicle_stub.framing import LinkStats
+from sim_vehicle_stub.telemetry import StreamSchedule
+from sim_vehicle_stub.vehicle import Vehicle
+
+_MAX_DATAGRAM = 1400
+
+
+@dataclass
+class VehicleNode:
+    """Everything the endpoints and handlers need about one vehicle."""
+
+    vehicle: Vehicle
+    encoder: Encoder
+    schedule: StreamSchedule = field(default_factory=StreamSchedule)
+    stats: LinkStats = field(default_factory=LinkStats)
+    outputs: list[Callable[[bytes], None]] = field(default_factory=list)
+    """Senders of every endpoint that carries this vehicle (UDP, TCP clients, GCS)."""
+
+    def send(self, messages: list[Any]) -> None:
+        """Encode and send messages, bundled into datagrams of at most ~1400 bytes as PX4 does."""
+        if not messages:
+            return
+        chunk = bytearray()
+        for msg in messages:
+            data = self.encoder.pack(msg)
+            if chunk and len(chunk) + len(data) > _MAX_DATAGRAM:
+                self._emit(bytes(chunk))
+                chunk = bytearray()
+            chunk += data
+        self._emit(bytes(chunk))
+
+    def _emit(self, data: bytes) -> None:
+        for out in self.outputs:
+            out(data)

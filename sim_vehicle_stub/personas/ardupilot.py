@@ -1,0 +1,117 @@
+"""ArduPilot Copter persona: autopilot 3, custom mode = mode number, parameters float-cast."""
+
+from __future__ import annotations
+
+import math
+
+from sim_vehicle_stub.params import ParamSpec, ParamTable, ParamType
+from sim_vehicle_stub.personas.base import (
+    Action,
+    Behaviour,
+    ModeSpec,
+    Persona,
+    ProfileFacts,
+    TakeoffRequest,
+    VehicleFacts,
+)
+
+
+class ArduCopterPersona(Persona):
+    """ArduCopter: GUIDED, LOITER, RTL, LAND, BRAKE (STABILIZE on the ground at boot)."""
+
+    name = "ardupilot"
+    autopilot = 3
+    bytewise_ints = False
+    modes = (
+        ModeSpec("STABILIZE", 0, Behaviour.MANUAL),
+        ModeSpec("GUIDED", 4, Behaviour.EXTERNAL),
+        ModeSpec("LOITER", 5, Behaviour.HOLD),
+        ModeSpec("RTL", 6, Behaviour.RTL, armable=False),
+        ModeSpec("LAND", 9, Behaviour.LAND, armable=False),
+        ModeSpec("BRAKE", 17, Behaviour.HOLD, armable=False),
+    )
+    default_mode = "STABILIZE"
+    external_mode = "GUIDED"
+    hold_mode = "BRAKE"
+    rtl_mode = "RTL"
+    land_mode = "LAND"
+    offboard_needs_setpoints = False
+    position_targets_time_out = False
+
+    def param_specs(self, facts: ProfileFacts) -> list[ParamSpec]:
+        s = facts.timeout_scale
+        i8, i32 = ParamType.INT8, ParamType.INT32
+        return [
+            ParamSpec("SYSID_THISMAV", facts.system_id, i8, 1, 255),
+            ParamSpec("SYSID_MYGCS", 255, i8, 1, 255),
+            ParamSpec("GUID_TIMEOUT", 3.0 * s, low=0.1, doc="guided velocity target time-out, s"),
+            ParamSpec("FS_GCS_ENABLE", 0, i8, 0, 7, "GCS loss: 0 off, 1/2/3/6 RTL, 4/5 land"),
+            ParamSpec("FS_GCS_TIMEOUT", 5.0 * s, low=2.0, high=1e6),
+            ParamSpec("FENCE_ENABLE", 1, i8, 0, 1, "search-area fence on"),
+            ParamSpec("FENCE_TYPE", 4, i8, 0, 15),
+            ParamSpec("FENCE_ACTION", 1, i8, 0, 5, "0 report, 1/3/5 RTL, 2 land, 4 brake"),
+            ParamSpec("BATT_CAPACITY", 5200, i32, 0, 1e6, "mAh"),
+            ParamSpec("BATT_LOW_MAH", 800, i32, 0, 1e6, "mAh left that trigger the failsafe"),
+            ParamSpec("BATT_FS_LOW_ACT", 2, i8, 0, 5, "0 none, 1 land, 2 RTL"),
+            ParamSpec("WPNAV_SPEED", facts.speed * 100.0, low=10.0, high=1e5, doc="cm/s"),
+            ParamSpec("WPNAV_SPEED_UP", 250.0, low=10.0, high=1e4, doc="cm/s"),
+            ParamSpec("WPNAV_SPEED_DN", 150.0, low=10.0, high=1e4, doc="cm/s"),
+            ParamSpec("LAND_SPEED", 50.0, low=10.0, high=1e4, doc="cm/s"),
+            ParamSpec("RTL_ALT", 1500.0, low=0.0, high=1e6, doc="cm"),
+        ]
+
+    def mode_from_command(self, p1: float, p2: float, p3: float) -> ModeSpec | None:
+        if not math.isfinite(p2):
+            return None
+        return self.mode_by_custom(int(p2))
+
+    def takeoff(self, p7: float, params: ParamTable, vehicle: VehicleFacts) -> TakeoffRequest | str:
+        if vehicle.mode.behaviour is not Behaviour.EXTERNAL:
+            return "takeoff needs GUIDED"
+        if not vehicle.armed:
+            return "not armed"
+        if not vehicle.landed:
+            return "already flying"
+        if not (math.isfinite(p7) and p7 > 0):
+            return f"takeoff altitude {p7} m is not above home"
+        return TakeoffRequest(p7, None)
+
+    def after_takeoff(self) -> ModeSpec | None:
+        return None
+
+    def setpoint_loss(self, params: ParamTable) -> tuple[float, Action]:
+        return params.get("GUID_TIMEOUT"), Action.HOLD
+
+    def link_loss(self, params: ParamTable) -> tuple[float, Action]:
+        act = int(params.get("FS_GCS_ENABLE"))
+        action = Action.NONE
+        if act in (1, 2, 3, 6):
+            action = Action.RTL
+        elif act in (4, 5):
+            action = Action.LAND
+        return params.get("FS_GCS_TIMEOUT"), action
+
+    def fence_action(self, params: ParamTable) -> Action:
+        if int(params.get("FENCE_ENABLE")) == 0:
+            return Action.NONE
+        act = int(params.get("FENCE_ACTION"))
+        return {1: Action.RTL, 3: Action.RTL, 5: Action.RTL, 2: Action.LAND, 4: Action.HOLD}.get(
+            act, Action.NONE
+        )
+
+    def low_battery(self, params: ParamTable) -> tuple[float, Action]:
+        capacity = params.get("BATT_CAPACITY")
+        threshold = params.get("BATT_LOW_MAH") / capacity if capacity > 0 else 0.0
+        act = int(params.get("BATT_FS_LOW_ACT"))
+        return threshold, {1: Action.LAND, 2: Action.RTL}.get(act, Action.NONE)
+
+    def speeds(self, params: ParamTable) -> tuple[float, float, float, float]:
+        return (
+            params.get("WPNAV_SPEED") / 100.0,
+            params.get("WPNAV_SPEED_UP") / 100.0,
+            params.get("WPNAV_SPEED_DN") / 100.0,
+            params.get("LAND_SPEED") / 100.0,
+        )
+
+    def rtl_altitude(self, params: ParamTable) -> float:
+        return params.get("RTL_ALT") / 100.0

@@ -1,0 +1,191 @@
+"""What every autopilot persona provides: modes, their encoding, parameters and failsafe choices."""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from enum import Enum
+from typing import ClassVar
+
+from sim_vehicle_stub.params import ParamSpec, ParamTable, ParamType
+
+
+class Behaviour(Enum):
+    """What the vehicle does in a mode, independent of the autopilot's name for it."""
+
+    MANUAL = "manual"
+    """No pilot here: holds position when airborne, idles on the ground."""
+    EXTERNAL = "external"
+    """Follows SET_POSITION_TARGET_* (PX4 OFFBOARD, ArduPilot GUIDED)."""
+    HOLD = "hold"
+    """Stops and holds position and altitude."""
+    TAKEOFF = "takeoff"
+    LAND = "land"
+    RTL = "rtl"
+
+
+class Action(Enum):
+    """A failsafe's reaction, mapped to a mode by the persona."""
+
+    NONE = "none"
+    HOLD = "hold"
+    RTL = "rtl"
+    LAND = "land"
+
+
+@dataclass(frozen=True)
+class ModeSpec:
+    """One flight mode of an autopilot."""
+
+    name: str
+    custom_mode: int
+    """HEARTBEAT.custom_mode as the real autopilot encodes it."""
+    behaviour: Behaviour
+    armable: bool = True
+    """Whether the vehicle may arm in this mode."""
+
+
+@dataclass(frozen=True)
+class TakeoffRequest:
+    """A takeoff the persona accepted: climb to ``altitude`` metres above home."""
+
+    altitude: float
+    mode: ModeSpec | None
+    """Mode to switch to for the climb, or None to climb in the current mode."""
+
+
+@dataclass(frozen=True)
+class VehicleFacts:
+    """What a persona may look at when it judges a command."""
+
+    armed: bool
+    landed: bool
+    mode: ModeSpec
+    home_alt_amsl: float
+    setpoint_age: float
+    """Sim seconds since the last position/velocity setpoint (inf if none)."""
+
+
+@dataclass(frozen=True)
+class ProfileFacts:
+    """The profile values that set parameter defaults."""
+
+    speed: float
+    tau: float
+    sensor_radii: tuple[float, ...]
+    system_id: int
+    timeout_scale: float = 1.0
+    """Multiplier on time-out defaults so wall-clock clients keep working at speed-ups."""
+    battery_endurance: float = 7200.0
+
+
+def common_params(facts: ProfileFacts) -> list[ParamSpec]:
+    """The emulator's own parameters, the same on every persona."""
+    n = len(facts.sensor_radii)
+    specs = [
+        ParamSpec(
+            "MDM_SENSOR", -1, ParamType.INT32, -1, n - 1, "active sensor index, -1 = all off"
+        ),
+        ParamSpec("MDM_FENCE_MARG", 100.0, low=0.0, doc="geofence margin around the area, m"),
+        ParamSpec(
+            "MDM_BAT_ENDUR",
+            facts.battery_endurance,
+            low=1.0,
+            doc="flight time from full battery, sim s",
+        ),
+        ParamSpec("MDM_TAU", facts.tau, low=1e-3, high=100.0, doc="velocity-loop tau, s"),
+    ]
+    specs += [
+        ParamSpec(f"MDM_SENS_R{i}", r, low=1e-3, doc=f"radius of sensor {i}, m")
+        for i, r in enumerate(facts.sensor_radii)
+    ]
+    return specs
+
+
+class Persona(ABC):
+    """An autopilot's outward behaviour. Subclasses fill the class variables and the hooks."""
+
+    name: ClassVar[str]
+    autopilot: ClassVar[int]
+    """MAV_AUTOPILOT value in HEARTBEAT."""
+    bytewise_ints: ClassVar[bool]
+    modes: ClassVar[tuple[ModeSpec, ...]]
+    default_mode: ClassVar[str]
+    external_mode: ClassVar[str]
+    hold_mode: ClassVar[str]
+    rtl_mode: ClassVar[str]
+    land_mode: ClassVar[str]
+    offboard_needs_setpoints: ClassVar[bool]
+    """PX4 refuses OFFBOARD unless setpoints are streaming."""
+    position_targets_time_out: ClassVar[bool]
+    """PX4 times out every setpoint; ArduPilot only velocity targets."""
+
+    def mode(self, name: str) -> ModeSpec:
+        for m in self.modes:
+            if m.name == name:
+                return m
+        raise KeyError(name)
+
+    def mode_by_custom(self, custom_mode: int) -> ModeSpec | None:
+        for m in self.modes:
+            if m.custom_mode == custom_mode:
+                return m
+        return None
+
+    def mode_for(self, action: Action) -> ModeSpec | None:
+        names = {
+            Action.HOLD: self.hold_mode,
+            Action.RTL: self.rtl_mode,
+            Action.LAND: self.land_mode,
+        }
+        return self.mode(names[action]) if action in names else None
+
+    def param_table(self, facts: ProfileFacts) -> ParamTable:
+        return ParamTable(
+            self.param_specs(facts) + common_params(facts), bytewise_ints=self.bytewise_ints
+        )
+
+    @staticmethod
+    def _finite(x: float) -> bool:
+        return math.isfinite(x)
+
+    @abstractmethod
+    def param_specs(self, facts: ProfileFacts) -> list[ParamSpec]:
+        """The persona's own parameters (failsafes, fence, speeds)."""
+
+    @abstractmethod
+    def mode_from_command(self, p1: float, p2: float, p3: float) -> ModeSpec | None:
+        """MAV_CMD_DO_SET_MODE parameters to a mode (None: not a mode of this autopilot)."""
+
+    @abstractmethod
+    def takeoff(self, p7: float, params: ParamTable, vehicle: VehicleFacts) -> TakeoffRequest | str:
+        """Judge MAV_CMD_NAV_TAKEOFF; a string is the reason for refusing it."""
+
+    @abstractmethod
+    def after_takeoff(self) -> ModeSpec | None:
+        """Mode once the takeoff altitude is reached (None: stay in the current mode)."""
+
+    @abstractmethod
+    def setpoint_loss(self, params: ParamTable) -> tuple[float, Action]:
+        """Time-out (sim s) of the setpoint stream in EXTERNAL mode, and the reaction."""
+
+    @abstractmethod
+    def link_loss(self, params: ParamTable) -> tuple[float, Action]:
+        """Time-out (sim s) of the companion/GCS heartbeat and the reaction."""
+
+    @abstractmethod
+    def fence_action(self, params: ParamTable) -> Action:
+        """Reaction to leaving the search area plus margin."""
+
+    @abstractmethod
+    def low_battery(self, params: ParamTable) -> tuple[float, Action]:
+        """Remaining fraction below which the reaction fires."""
+
+    @abstractmethod
+    def speeds(self, params: ParamTable) -> tuple[float, float, float, float]:
+        """Horizontal speed, climb rate, descent rate and landing speed, m/s."""
+
+    @abstractmethod
+    def rtl_altitude(self, params: ParamTable) -> float:
+        """Altitude above home for the return leg, m."""

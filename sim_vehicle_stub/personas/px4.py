@@ -1,0 +1,123 @@
+"""PX4 persona: autopilot 12, custom mode main<<16 | sub<<24, integer parameters bytewise."""
+
+from __future__ import annotations
+
+import math
+
+from sim_vehicle_stub.params import ParamSpec, ParamTable, ParamType
+from sim_vehicle_stub.personas.base import (
+    Action,
+    Behaviour,
+    ModeSpec,
+    Persona,
+    ProfileFacts,
+    TakeoffRequest,
+    VehicleFacts,
+)
+
+
+def px4_mode(main: int, sub: int = 0) -> int:
+    """PX4's custom_mode for a main mode and an AUTO sub mode."""
+    return (main << 16) | (sub << 24)
+
+
+_MAIN_AUTO = 4
+
+
+class Px4Persona(Persona):
+    """PX4 multicopter: OFFBOARD, HOLD, RTL, LAND, TAKEOFF (and POSCTL/MANUAL for completeness)."""
+
+    name = "px4"
+    autopilot = 12
+    bytewise_ints = True
+    modes = (
+        ModeSpec("MANUAL", px4_mode(1), Behaviour.MANUAL),
+        ModeSpec("POSCTL", px4_mode(3), Behaviour.HOLD),
+        ModeSpec("OFFBOARD", px4_mode(6), Behaviour.EXTERNAL),
+        ModeSpec("TAKEOFF", px4_mode(_MAIN_AUTO, 2), Behaviour.TAKEOFF),
+        ModeSpec("HOLD", px4_mode(_MAIN_AUTO, 3), Behaviour.HOLD),
+        ModeSpec("RTL", px4_mode(_MAIN_AUTO, 5), Behaviour.RTL, armable=False),
+        ModeSpec("LAND", px4_mode(_MAIN_AUTO, 6), Behaviour.LAND, armable=False),
+    )
+    default_mode = "HOLD"
+    external_mode = "OFFBOARD"
+    hold_mode = "HOLD"
+    rtl_mode = "RTL"
+    land_mode = "LAND"
+    offboard_needs_setpoints = True
+    position_targets_time_out = True
+
+    def param_specs(self, facts: ProfileFacts) -> list[ParamSpec]:
+        s = facts.timeout_scale
+        i32 = ParamType.INT32
+        return [
+            ParamSpec("MAV_SYS_ID", facts.system_id, i32, 1, 255),
+            ParamSpec("COM_OF_LOSS_T", 1.0 * s, low=0.0, doc="offboard setpoint loss, s"),
+            ParamSpec("COM_OBL_RC_ACT", 5, i32, 0, 7, "offboard loss: 3 RTL, 4 land, else hold"),
+            ParamSpec("COM_DL_LOSS_T", round(10 * s), i32, 5, 1e6, "data link loss, s"),
+            ParamSpec("NAV_DLL_ACT", 0, i32, 0, 6, "link loss: 0 off, 1 hold, 2 RTL, 3 land"),
+            ParamSpec("GF_ACTION", 2, i32, 0, 5, "fence: 0/1 none, 2 hold, 3 RTL, 5 land"),
+            ParamSpec("GF_MAX_HOR_DIST", 0.0, low=0.0, doc="max distance from home, 0 = off"),
+            ParamSpec("BAT_LOW_THR", 0.15, low=0.0, high=1.0),
+            ParamSpec("BAT_CRIT_THR", 0.07, low=0.0, high=1.0),
+            ParamSpec("COM_LOW_BAT_ACT", 3, i32, 0, 3, "0 warn, 2 land, 3 RTL at critical"),
+            ParamSpec("MIS_TAKEOFF_ALT", 2.5, low=0.0, high=1e4),
+            ParamSpec("MPC_XY_VEL_MAX", facts.speed, low=0.1, high=1e3),
+            ParamSpec("MPC_Z_VEL_MAX_UP", 3.0, low=0.1, high=100.0),
+            ParamSpec("MPC_Z_VEL_MAX_DN", 1.5, low=0.1, high=100.0),
+            ParamSpec("MPC_LAND_SPEED", 0.7, low=0.1, high=100.0),
+            ParamSpec("RTL_RETURN_ALT", 60.0, low=0.0, high=1e4),
+        ]
+
+    def mode_from_command(self, p1: float, p2: float, p3: float) -> ModeSpec | None:
+        if not (math.isfinite(p2) and math.isfinite(p3)):
+            return None
+        main, sub = int(p2), int(p3)
+        if main != _MAIN_AUTO:
+            sub = 0
+        return self.mode_by_custom(px4_mode(main, sub))
+
+    def takeoff(self, p7: float, params: ParamTable, vehicle: VehicleFacts) -> TakeoffRequest | str:
+        if not vehicle.armed:
+            return "not armed"
+        # PX4 reads param7 as AMSL; NaN means MIS_TAKEOFF_ALT above home.
+        if math.isfinite(p7):
+            altitude = p7 - vehicle.home_alt_amsl
+        else:
+            altitude = params.get("MIS_TAKEOFF_ALT")
+        if altitude <= 0:
+            return f"takeoff altitude {altitude:.1f} m is not above home"
+        return TakeoffRequest(altitude, self.mode("TAKEOFF"))
+
+    def after_takeoff(self) -> ModeSpec | None:
+        return self.mode("HOLD")
+
+    def setpoint_loss(self, params: ParamTable) -> tuple[float, Action]:
+        act = int(params.get("COM_OBL_RC_ACT"))
+        action = {3: Action.RTL, 4: Action.LAND}.get(act, Action.HOLD)
+        return params.get("COM_OF_LOSS_T"), action
+
+    def link_loss(self, params: ParamTable) -> tuple[float, Action]:
+        act = int(params.get("NAV_DLL_ACT"))
+        action = {1: Action.HOLD, 2: Action.RTL, 3: Action.LAND}.get(act, Action.NONE)
+        return params.get("COM_DL_LOSS_T"), action
+
+    def fence_action(self, params: ParamTable) -> Action:
+        act = int(params.get("GF_ACTION"))
+        return {2: Action.HOLD, 3: Action.RTL, 5: Action.LAND}.get(act, Action.NONE)
+
+    def low_battery(self, params: ParamTable) -> tuple[float, Action]:
+        act = int(params.get("COM_LOW_BAT_ACT"))
+        action = {2: Action.LAND, 3: Action.RTL}.get(act, Action.NONE)
+        return params.get("BAT_CRIT_THR"), action
+
+    def speeds(self, params: ParamTable) -> tuple[float, float, float, float]:
+        return (
+            params.get("MPC_XY_VEL_MAX"),
+            params.get("MPC_Z_VEL_MAX_UP"),
+            params.get("MPC_Z_VEL_MAX_DN"),
+            params.get("MPC_LAND_SPEED"),
+        )
+
+    def rtl_altitude(self, params: ParamTable) -> float:
+        return params.get("RTL_RETURN_ALT")

@@ -1,0 +1,102 @@
+"""The vehicles' active sensors against the world's targets, and the ground-truth events.
+
+Only the sensor a vehicle's companion switched on (parameter MDM_SENSOR) reads; the world's
+``contacts`` decides what it sees. Events go to the event log, never over MAVLink.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sim_vehicle_stub.events import EventLog
+from sim_vehicle_stub.world import Scenario, contacts
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+
+@dataclass(frozen=True)
+class Reading:
+    """What one vehicle's active sensor reports at one tick."""
+
+    sensor: int
+    confirms: bool
+    signal: float
+    """Strongest exp(-d/r) over targets this sensor can see (0 when none is present)."""
+    contacts: list[tuple[int, float, float, float]]
+    """(target index, north, east, strength) of each target within the radius."""
+
+
+class SensorWorld:
+    """Targets of one run of the scenario and every vehicle's contact history."""
+
+    def __init__(
+        self, scenario: Scenario, n_vehicles: int, rng: np.random.Generator, events: EventLog
+    ) -> None:
+        self.scenario = scenario
+        self.tracks = scenario.tracks(1, rng)
+        self.events = events
+        m = scenario.targets.count
+        self.n_sensors = len(scenario.sensors)
+        self._appeared = np.zeros(m, dtype=bool)
+        self._in_range = np.zeros((n_vehicles, m, self.n_sensors), dtype=bool)
+        self._detected = np.zeros((n_vehicles, m), dtype=bool)
+        self._confirmed = np.zeros((n_vehicles, m), dtype=bool)
+
+    def targets_at(self, t: float) -> FloatArray:
+        pos = self.tracks.positions(np.zeros(1, dtype=np.intp), np.array([t]))
+        return np.asarray(pos[0], dtype=np.float64)
+
+    def tick(
+        self, t: float, vehicles: FloatArray, active: IntArray, radius: FloatArray
+    ) -> dict[int, Reading]:
+        """Readings of vehicles whose sensor is on; ``radius`` (n,) is each active radius."""
+        spec = self.scenario.targets
+        present = spec.appear_times <= t
+        targets = self.targets_at(t)
+        for k in np.flatnonzero(present & ~self._appeared):
+            self._appeared[k] = True
+            self.events.write(
+                t, "target_appeared", target=int(k), north=float(targets[k, 0]),
+                east=float(targets[k, 1]), false_target=bool(spec.false_mask[k]),
+            )  # fmt: skip
+        on = np.flatnonzero(active >= 0)
+        if len(on) == 0:
+            return {}
+        last = self.n_sensors - 1
+        confirms = active[on] == last
+        tgt = np.broadcast_to(targets, (len(on), *targets.shape))
+        pres = np.broadcast_to(present, (len(on), len(present)))
+        mask, strength = contacts(radius[on], confirms, vehicles[on], tgt, pres, spec.false_mask)
+        visible = pres & ~(confirms[:, None] & spec.false_mask[None, :])
+        signal = np.where(visible, strength, 0.0).max(axis=1, initial=0.0)
+        out: dict[int, Reading] = {}
+        for row, i in enumerate(on):
+            s = int(active[i])
+            hits = np.flatnonzero(mask[row])
+            self._log_contacts(t, int(i), s, mask[row], targets)
+            out[int(i)] = Reading(
+                s, bool(confirms[row]), float(signal[row]),
+                [(int(k), float(targets[k, 0]), float(targets[k, 1]), float(strength[row, k]))
+                 for k in hits],
+            )  # fmt: skip
+        return out
+
+    def _log_contacts(
+        self, t: float, i: int, s: int, mask: NDArray[np.bool_], targets: FloatArray
+    ) -> None:
+        entered = mask & ~self._in_range[i, :, s]
+        self._in_range[i, :, s] = mask
+        name = self.scenario.sensors[s].name
+        for k in np.flatnonzero(entered):
+            where = {"north": float(targets[k, 0]), "east": float(targets[k, 1])}
+            self.events.write(t, "entered_range", vehicle=i, target=int(k), sensor=name, **where)
+            is_conf = s == self.n_sensors - 1
+            seen = self._confirmed if is_conf else self._detected
+            if not seen[i, k]:
+                seen[i, k] = True
+                self.events.write(t, "confirmed" if is_conf else "detected", vehicle=i,
+                                  target=int(k), sensor=name, **where)  # fmt: skip

@@ -1,0 +1,99 @@
+"""SET_POSITION_TARGET_LOCAL_NED / _GLOBAL_INT to a :class:`Setpoint` in the local frame.
+
+type_mask bits set mean "ignore": 1 x, 2 y, 4 z, 8 vx, 16 vy, 32 vz, 1024 yaw. A message that
+uses neither a horizontal position nor a horizontal velocity nor a vertical target is rejected.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from sim_vehicle_stub.geo import GeoFrame
+from sim_vehicle_stub.vehicle import Setpoint, Vehicle
+
+LOCAL_NED, LOCAL_OFFSET_NED, BODY_NED, BODY_OFFSET_NED = 1, 7, 8, 9
+_GLOBAL_AMSL = (0, 5)
+_GLOBAL_RELATIVE = (3, 6, 10, 11)
+
+
+def _fields(mask: int) -> tuple[bool, bool, bool, bool, bool]:
+    """(xy position, z, xy velocity, vz, yaw) used by a type_mask."""
+    return (mask & 3) == 0, not mask & 4, (mask & 24) == 0, not mask & 32, not mask & 1024
+
+
+def _ok(*values: float) -> bool:
+    return all(math.isfinite(x) for x in values)
+
+
+def local_setpoint(msg: Any, v: Vehicle, t: float) -> Setpoint | None:
+    """The setpoint a LOCAL_NED-family message asks for, or None when it cannot be followed."""
+    frame = int(msg.coordinate_frame)
+    if frame not in (LOCAL_NED, LOCAL_OFFSET_NED, BODY_NED, BODY_OFFSET_NED):
+        return None
+    use_pos, use_z, use_vel, use_vz, use_yaw = _fields(int(msg.type_mask))
+    if not (use_pos or use_z or use_vel or use_vz):
+        return None
+    i, f = v.index, v.fleet
+    body = frame in (BODY_NED, BODY_OFFSET_NED)
+    yaw = float(f.yaw[i])
+    c, s = math.cos(yaw), math.sin(yaw)
+
+    def rotate(x: float, y: float) -> tuple[float, float]:
+        return (x * c - y * s, x * s + y * c) if body else (x, y)
+
+    position = velocity = None
+    alt = climb = None
+    if use_pos:
+        if not _ok(msg.x, msg.y):
+            return None
+        dn, de = rotate(msg.x, msg.y)
+        position = (dn, de) if frame == LOCAL_NED else (f.pos[i, 0] + dn, f.pos[i, 1] + de)
+    if use_z:
+        if not _ok(msg.z):
+            return None
+        alt = -msg.z if frame == LOCAL_NED else float(f.alt[i]) - msg.z
+    if use_vel:
+        if not _ok(msg.vx, msg.vy):
+            return None
+        velocity = rotate(msg.vx, msg.vy)
+    if use_vz:
+        if not _ok(msg.vz):
+            return None
+        climb = -msg.vz
+    yaw_cmd = float(msg.yaw) if use_yaw and _ok(msg.yaw) else None
+    if yaw_cmd is not None and body:
+        yaw_cmd += yaw
+    return Setpoint(t, position, velocity, alt, climb, yaw_cmd)
+
+
+def global_setpoint(msg: Any, geo: GeoFrame, t: float) -> Setpoint | None:
+    """The setpoint a SET_POSITION_TARGET_GLOBAL_INT asks for, or None."""
+    frame = int(msg.coordinate_frame)
+    if frame not in _GLOBAL_AMSL + _GLOBAL_RELATIVE:
+        return None
+    use_pos, use_z, use_vel, use_vz, use_yaw = _fields(int(msg.type_mask))
+    if not (use_pos or use_z or use_vel or use_vz):
+        return None
+    position = velocity = None
+    alt = climb = None
+    if use_pos:
+        lat, lon = msg.lat_int * 1e-7, msg.lon_int * 1e-7
+        if not (-90 <= lat <= 90 and -180 <= lon <= 180):
+            return None
+        north, east, _ = geo.to_local(lat, lon, geo.alt)
+        position = (north, east)
+    if use_z:
+        if not _ok(msg.alt):
+            return None
+        alt = msg.alt - geo.alt if frame in _GLOBAL_AMSL else float(msg.alt)
+    if use_vel:
+        if not _ok(msg.vx, msg.vy):
+            return None
+        velocity = (float(msg.vx), float(msg.vy))
+    if use_vz:
+        if not _ok(msg.vz):
+            return None
+        climb = -float(msg.vz)
+    yaw_cmd = float(msg.yaw) if use_yaw and _ok(msg.yaw) else None
+    return Setpoint(t, position, velocity, alt, climb, yaw_cmd)

@@ -1,0 +1,220 @@
+"""Outgoing messages of a vehicle: what each stream carries and at which sim-time rate."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from sim_vehicle_stub.clock import SimClock
+from sim_vehicle_stub.fleet import Fleet
+from sim_vehicle_stub.geo import GeoFrame
+from sim_vehicle_stub.mavlink import dialect as d
+from sim_vehicle_stub.personas.base import Behaviour
+from sim_vehicle_stub.vehicle import Vehicle
+
+# Sensors reported present, enabled and healthy: gyro, accel, mag, baro, GPS, motors, AHRS,
+# battery and the pre-arm check bit that MAVSDK reads for health.
+SENSOR_BITS = 0x1 | 0x2 | 0x4 | 0x8 | 0x20 | 0x8000 | 0x200000 | 0x2000000 | 0x10000000
+
+DEFAULT_RATES: dict[int, float] = {
+    d.MAVLINK_MSG_ID_HEARTBEAT: 1.0,
+    d.MAVLINK_MSG_ID_SYS_STATUS: 1.0,
+    d.MAVLINK_MSG_ID_SYSTEM_TIME: 1.0,
+    d.MAVLINK_MSG_ID_BATTERY_STATUS: 1.0,
+    d.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 1.0,
+    d.MAVLINK_MSG_ID_GPS_RAW_INT: 1.0,
+    d.MAVLINK_MSG_ID_HOME_POSITION: 0.2,
+    d.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 10.0,
+    d.MAVLINK_MSG_ID_LOCAL_POSITION_NED: 10.0,
+    d.MAVLINK_MSG_ID_ATTITUDE: 10.0,
+}
+"""Hz of sim time; SET_MESSAGE_INTERVAL changes them per vehicle."""
+
+_CAPS = (
+    d.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+    | d.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
+    | d.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
+    | d.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_GLOBAL_INT
+    | d.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
+)
+
+
+@dataclass
+class GeoCache:
+    """WGS84 positions of all vehicles at one sim time (converted once per tick)."""
+
+    t: float = -1.0
+    lat: Any = None
+    lon: Any = None
+    amsl: Any = None
+    roll: Any = None
+    pitch: Any = None
+
+
+class Telemetry:
+    """Builds messages from the shared state; one instance serves every vehicle."""
+
+    def __init__(self, fleet: Fleet, geo: GeoFrame, clock: SimClock, epoch_usec: int) -> None:
+        self.fleet = fleet
+        self.geo = geo
+        self.clock = clock
+        self.epoch_usec = epoch_usec
+        self._geo = GeoCache()
+        home = fleet.pos.copy()
+        hl = geo.to_geodetic(home[:, 0], home[:, 1], np.zeros(len(home)))
+        self._home_geo = tuple(np.atleast_1d(a) for a in hl)
+        self.builders: dict[int, Callable[[Vehicle], Any]] = {
+            d.MAVLINK_MSG_ID_HEARTBEAT: self.heartbeat,
+            d.MAVLINK_MSG_ID_SYS_STATUS: self.sys_status,
+            d.MAVLINK_MSG_ID_SYSTEM_TIME: self.system_time,
+            d.MAVLINK_MSG_ID_BATTERY_STATUS: self.battery_status,
+            d.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: self.extended_sys_state,
+            d.MAVLINK_MSG_ID_GPS_RAW_INT: self.gps_raw_int,
+            d.MAVLINK_MSG_ID_HOME_POSITION: self.home_position,
+            d.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self.global_position_int,
+            d.MAVLINK_MSG_ID_LOCAL_POSITION_NED: self.local_position_ned,
+            d.MAVLINK_MSG_ID_ATTITUDE: self.attitude,
+            d.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
+        }
+
+    def _geodetic(self) -> GeoCache:
+        c = self._geo
+        if c.t != self.clock.now:
+            f = self.fleet
+            c.lat, c.lon, c.amsl = self.geo.to_geodetic(f.pos[:, 0], f.pos[:, 1], f.alt)
+            c.lat, c.lon, c.amsl = (np.atleast_1d(a) for a in (c.lat, c.lon, c.amsl))
+            c.roll, c.pitch = f.attitude()
+            c.t = self.clock.now
+        return c
+
+    def heartbeat(self, v: Vehicle) -> Any:
+        base = d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+        if v.armed:
+            base |= d.MAV_MODE_FLAG_SAFETY_ARMED
+        if v.mode.behaviour is Behaviour.EXTERNAL:
+            base |= d.MAV_MODE_FLAG_GUIDED_ENABLED
+        status = d.MAV_STATE_ACTIVE if v.armed else d.MAV_STATE_STANDBY
+        return d.MAVLink_heartbeat_message(
+            d.MAV_TYPE_QUADROTOR, v.persona.autopilot, base, v.mode.custom_mode, status, 3
+        )
+
+    def sys_status(self, v: Vehicle) -> Any:
+        pct = round(v.battery * 100)
+        return d.MAVLink_sys_status_message(
+            SENSOR_BITS, SENSOR_BITS, SENSOR_BITS, 100, self._voltage_mv(v), 500, pct,
+            0, 0, 0, 0, 0, 0, 0, 0, 0,
+        )  # fmt: skip
+
+    @staticmethod
+    def _voltage_mv(v: Vehicle) -> int:
+        return int(4 * (3500 + 700 * v.battery))
+
+    def system_time(self, v: Vehicle) -> Any:
+        return d.MAVLink_system_time_message(self.epoch_usec + self.clock.usec, self.clock.boot_ms)
+
+    def battery_status(self, v: Vehicle) -> Any:
+        volts = [self._voltage_mv(v)] + [65535] * 9
+        used = int((1.0 - v.battery) * 5200)
+        return d.MAVLink_battery_status_message(
+            0, 0, 1, 32767, volts, 500, used, -1, round(v.battery * 100)
+        )
+
+    def extended_sys_state(self, v: Vehicle) -> Any:
+        i = v.index
+        if v.landed:
+            state = d.MAV_LANDED_STATE_ON_GROUND
+        elif self.fleet.vz[i] < -0.2 and v.mode.behaviour in (Behaviour.LAND, Behaviour.RTL):
+            state = d.MAV_LANDED_STATE_LANDING
+        elif v.takeoff_alt is not None:
+            state = d.MAV_LANDED_STATE_TAKEOFF
+        else:
+            state = d.MAV_LANDED_STATE_IN_AIR
+        return d.MAVLink_extended_sys_state_message(d.MAV_VTOL_STATE_UNDEFINED, state)
+
+    def gps_raw_int(self, v: Vehicle) -> Any:
+        c, i, f = self._geodetic(), v.index, self.fleet
+        speed = float(np.hypot(*f.vel[i]))
+        cog = math.degrees(math.atan2(f.vel[i, 1], f.vel[i, 0])) % 360.0
+        return d.MAVLink_gps_raw_int_message(
+            self.clock.usec, 3, int(c.lat[i] * 1e7), int(c.lon[i] * 1e7), int(c.amsl[i] * 1000),
+            80, 120, int(speed * 100), int(cog * 100), 14,
+        )  # fmt: skip
+
+    def home_position(self, v: Vehicle) -> Any:
+        lat, lon, alt = (a[v.index] for a in self._home_geo)
+        hn, he = v.home
+        return d.MAVLink_home_position_message(
+            int(lat * 1e7), int(lon * 1e7), int(alt * 1000), hn, he, 0.0, [1.0, 0.0, 0.0, 0.0],
+            0.0, 0.0, 0.0, self.clock.usec,
+        )  # fmt: skip
+
+    def global_position_int(self, v: Vehicle) -> Any:
+        c, i, f = self._geodetic(), v.index, self.fleet
+        hdg = int(math.degrees(f.yaw[i]) % 360.0 * 100)
+        return d.MAVLink_global_position_int_message(
+            self.clock.boot_ms, int(c.lat[i] * 1e7), int(c.lon[i] * 1e7), int(c.amsl[i] * 1000),
+            int(f.alt[i] * 1000), int(f.vel[i, 0] * 100), int(f.vel[i, 1] * 100),
+            int(-f.vz[i] * 100), hdg,
+        )  # fmt: skip
+
+    def local_position_ned(self, v: Vehicle) -> Any:
+        i, f = v.index, self.fleet
+        return d.MAVLink_local_position_ned_message(
+            self.clock.boot_ms, f.pos[i, 0], f.pos[i, 1], -f.alt[i], f.vel[i, 0], f.vel[i, 1],
+            -f.vz[i],
+        )  # fmt: skip
+
+    def attitude(self, v: Vehicle) -> Any:
+        c, i = self._geodetic(), v.index
+        roll, pitch = c.roll, c.pitch
+        yaw = math.remainder(float(self.fleet.yaw[i]), 2 * math.pi)
+        return d.MAVLink_attitude_message(
+            self.clock.boot_ms, float(roll[i]), float(pitch[i]), yaw, 0.0, 0.0, 0.0
+        )
+
+    def autopilot_version(self, v: Vehicle) -> Any:
+        caps = _CAPS | (
+            d.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
+            if v.persona.bytewise_ints
+            else d.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST
+        )
+        version = (1 << 24) | (15 << 16) | (0 << 8) | 255
+        return d.MAVLink_autopilot_version_message(
+            caps, version, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8, 0, 0, v.sysid
+        )
+
+
+class StreamSchedule:
+    """Per-vehicle message intervals (sim s) and next due times."""
+
+    def __init__(self) -> None:
+        self.interval = {k: 1.0 / hz for k, hz in DEFAULT_RATES.items()}
+        self.next_due = dict.fromkeys(self.interval, 0.0)
+
+    def set_interval(self, msg_id: int, interval_us: float) -> bool:
+        """SET_MESSAGE_INTERVAL semantics: -1 off, 0 default, else microseconds."""
+        if msg_id not in DEFAULT_RATES and msg_id != d.MAVLINK_MSG_ID_AUTOPILOT_VERSION:
+            return False
+        if interval_us == 0:
+            self.interval[msg_id] = 1.0 / DEFAULT_RATES.get(msg_id, 1.0)
+        elif interval_us < 0:
+            self.interval.pop(msg_id, None)
+            self.next_due.pop(msg_id, None)
+            return True
+        else:
+            self.interval[msg_id] = max(interval_us * 1e-6, 1e-3)
+        self.next_due.setdefault(msg_id, 0.0)
+        return True
+
+    def due(self, t: float) -> list[int]:
+        out = []
+        for k, nxt in self.next_due.items():
+            if t + 1e-9 >= nxt:
+                out.append(k)
+                step = self.interval[k]
+                self.next_due[k] = max(nxt + step, t)
+        return out

@@ -1,0 +1,241 @@
+"""One vehicle's autopilot logic: modes, arming, takeoff, setpoints; the persona decides details."""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim_vehicle_stub.events import EventLog
+from sim_vehicle_stub.fleet import GROUND_ALT, Fleet
+from sim_vehicle_stub.params import ParamTable
+from sim_vehicle_stub.personas.base import (
+    Action,
+    Behaviour,
+    ModeSpec,
+    Persona,
+    TakeoffRequest,
+    VehicleFacts,
+)
+
+log = logging.getLogger(__name__)
+
+# MAV_RESULT values.
+ACCEPTED, TEMPORARILY_REJECTED, DENIED, UNSUPPORTED, FAILED = 0, 1, 2, 3, 4
+
+
+@dataclass
+class Setpoint:
+    """The last SET_POSITION_TARGET_* received, in the local frame (north, east, up)."""
+
+    t: float
+    position: tuple[float, float] | None
+    velocity: tuple[float, float] | None
+    alt: float | None
+    climb: float | None
+    yaw: float | None
+
+
+class Vehicle:
+    """Mode machine of vehicle ``index``; motion is written to the shared :class:`Fleet`."""
+
+    def __init__(
+        self,
+        index: int,
+        persona: Persona,
+        params: ParamTable,
+        fleet: Fleet,
+        events: EventLog,
+        now: Callable[[], float],
+    ) -> None:
+        self.index = index
+        self.sysid = index + 1
+        self.persona = persona
+        self.params = params
+        self.fleet = fleet
+        self.events = events
+        self._now = now
+        self.home = tuple(fleet.pos[index])
+        self.mode: ModeSpec = persona.mode(persona.default_mode)
+        self.armed = False
+        self.setpoint: Setpoint | None = None
+        self.setpoint_lost = False
+        self.takeoff_alt: float | None = None
+        self.rtl_phase = 0
+        self.last_gcs_heartbeat: float | None = None
+        self.link_lost = False
+        self.fence_breached = False
+        self.battery = 1.0
+        self.battery_fired = False
+        self.state_changed = True
+        """Set on any mode/arm change so an extra HEARTBEAT goes out."""
+        self.status: list[tuple[int, str]] = []
+        """STATUSTEXT (severity, text) waiting to be sent."""
+        self.apply_speeds()
+
+    # ----- facts
+    @property
+    def now(self) -> float:
+        return self._now()
+
+    @property
+    def landed(self) -> bool:
+        i = self.index
+        return bool(self.fleet.alt[i] <= GROUND_ALT and self.fleet.vz[i] <= 0.05)
+
+    def facts(self, home_alt_amsl: float) -> VehicleFacts:
+        age = self.now - self.setpoint.t if self.setpoint else math.inf
+        return VehicleFacts(self.armed, self.landed, self.mode, home_alt_amsl, age)
+
+    def apply_speeds(self) -> None:
+        speed, climb, descent, _ = self.persona.speeds(self.params)
+        i = self.index
+        self.fleet.speed[i], self.fleet.climb[i], self.fleet.descent[i] = speed, climb, descent
+
+    def say(self, severity: int, text: str) -> None:
+        self.status.append((severity, text[:50]))
+
+    # ----- modes and arming
+    def set_mode(self, mode: ModeSpec, reason: str = "command") -> int:
+        """Switch to ``mode``; returns a MAV_RESULT."""
+        p = self.persona
+        if mode.behaviour is Behaviour.EXTERNAL and p.offboard_needs_setpoints:
+            timeout, _ = p.setpoint_loss(self.params)
+            if self.setpoint is None or self.now - self.setpoint.t > timeout:
+                self.say(4, f"{mode.name} refused: no setpoints")
+                return DENIED
+        if mode.behaviour in (Behaviour.RTL, Behaviour.LAND) and not self.armed:
+            return DENIED
+        if mode.behaviour is Behaviour.TAKEOFF and not self.armed:
+            return DENIED
+        if mode == self.mode:
+            return ACCEPTED
+        self.mode = mode
+        self.state_changed = True
+        self.events.write(self.now, "mode", vehicle=self.index, mode=mode.name, reason=reason)
+        self._enter(mode)
+        return ACCEPTED
+
+    def _enter(self, mode: ModeSpec) -> None:
+        i, f = self.index, self.fleet
+        b = mode.behaviour
+        self.takeoff_alt = None
+        f.yaw_cmd[i] = np.nan
+        if b is Behaviour.EXTERNAL:
+            f.hold(i)
+            self.setpoint_lost = False
+            if self.setpoint is not None and self.persona.offboard_needs_setpoints:
+                self._apply(self.setpoint)
+        elif b is Behaviour.TAKEOFF:
+            f.hold(i)
+            self.takeoff_alt = (
+                self.params.get("MIS_TAKEOFF_ALT") if "MIS_TAKEOFF_ALT" in self.params else 2.5
+            )
+            f.climb_to(i, self.takeoff_alt)
+        elif b is Behaviour.LAND:
+            f.hold(i)
+            f.climb_rate(i, -self.persona.speeds(self.params)[3])
+        elif b is Behaviour.RTL:
+            f.hold(i)
+            self.rtl_phase = 0
+            f.climb_to(i, max(float(f.alt[i]), self.persona.rtl_altitude(self.params)))
+        else:
+            f.hold(i)
+
+    def arm(self, arm: bool, *, force: bool = False) -> int:
+        if arm == self.armed:
+            return ACCEPTED
+        if arm:
+            if not self.mode.armable or not self.landed:
+                return DENIED
+        elif not (self.landed or force):
+            return DENIED
+        self.armed = arm
+        self.state_changed = True
+        self.battery_fired = False
+        self.events.write(self.now, "armed" if arm else "disarmed", vehicle=self.index)
+        if not arm:
+            self.fleet.hold(self.index)
+        return ACCEPTED
+
+    def takeoff(self, p7: float, home_alt_amsl: float) -> int:
+        req = self.persona.takeoff(p7, self.params, self.facts(home_alt_amsl))
+        if not isinstance(req, TakeoffRequest):
+            self.say(4, f"takeoff refused: {req}")
+            return DENIED
+        if req.mode is not None:
+            result = self.set_mode(req.mode, "takeoff")
+            if result != ACCEPTED:
+                return result
+        self.takeoff_alt = req.altitude
+        self.fleet.hold(self.index)
+        self.fleet.climb_to(self.index, req.altitude)
+        return ACCEPTED
+
+    def failsafe(self, action: Action, why: str) -> None:
+        """Carry out a failsafe reaction (no-op for Action.NONE)."""
+        mode = self.persona.mode_for(action)
+        if mode is None or not self.armed:
+            return
+        self.say(2, f"Failsafe: {why}, {mode.name}")
+        self.events.write(self.now, "failsafe", vehicle=self.index, cause=why, action=mode.name)
+        log.info("vehicle %d failsafe %s -> %s", self.index, why, mode.name)
+        if mode == self.mode:
+            self._enter(mode)
+        else:
+            self.set_mode(mode, why)
+
+    # ----- setpoints
+    def on_setpoint(self, sp: Setpoint) -> None:
+        """A decoded setpoint; PX4 records it in any mode, ArduPilot only in GUIDED."""
+        external = self.mode.behaviour is Behaviour.EXTERNAL
+        if not external and not self.persona.offboard_needs_setpoints:
+            return
+        self.setpoint = sp
+        self.setpoint_lost = False
+        if external and self.armed:
+            self._apply(sp)
+
+    def _apply(self, sp: Setpoint) -> None:
+        i, f = self.index, self.fleet
+        if sp.position is not None:
+            f.go_to(i, *sp.position)
+        elif sp.velocity is not None:
+            f.fly_velocity(i, *sp.velocity)
+        if sp.alt is not None:
+            f.climb_to(i, sp.alt)
+        elif sp.climb is not None:
+            f.climb_rate(i, sp.climb)
+        if sp.yaw is not None:
+            f.yaw_cmd[i] = sp.yaw
+        if sp.alt is not None or sp.climb is not None:
+            self.takeoff_alt = None
+
+    # ----- per tick
+    def update(self) -> None:
+        """Mode phases that end on their own: takeoff reached, RTL legs, touchdown."""
+        i, f = self.index, self.fleet
+        b = self.mode.behaviour
+        if self.takeoff_alt is not None and f.alt[i] >= self.takeoff_alt - 0.3:
+            self.takeoff_alt = None
+            nxt = self.persona.after_takeoff()
+            if nxt is not None and b is Behaviour.TAKEOFF:
+                self.set_mode(nxt, "takeoff complete")
+        if b is Behaviour.RTL:
+            self._rtl_step()
+        touching = self.armed and f.alt[i] <= 0.05
+        if touching and (b is Behaviour.LAND or (b is Behaviour.RTL and self.rtl_phase == 2)):
+            self.arm(False, force=True)
+            self.say(6, "Landed, disarmed")
+
+    def _rtl_step(self) -> None:
+        i, f = self.index, self.fleet
+        if self.rtl_phase == 0 and f.alt[i] >= f.v_target[i] - 0.5:
+            self.rtl_phase = 1
+            f.go_to(i, *self.home)
+        elif self.rtl_phase == 1 and np.hypot(*(f.pos[i] - self.home)) < 1.0:
+            self.rtl_phase = 2
+            f.climb_rate(i, -self.persona.speeds(self.params)[3])
