@@ -1,0 +1,93 @@
+"""A blocking pymavlink session with one vehicle: wait for messages, send commands, collect acks."""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections import defaultdict
+from typing import Any
+
+os.environ.setdefault("MAVLINK20", "1")
+
+from pymavlink import mavutil
+
+
+class Session:
+    """Talks to the vehicle ``sysid`` (learned from its first autopilot heartbeat when None)."""
+
+    def __init__(
+        self, address: str, *, sysid: int | None, source_system: int, timeout: float
+    ) -> None:
+        self.conn: Any = mavutil.mavlink_connection(
+            address, source_system=source_system, source_component=190, autoreconnect=False
+        )
+        self.sysid = sysid
+        self.compid = 1
+        self.timeout = timeout
+        self.heartbeat: Any = None
+        self.seen: dict[str, list[tuple[float, Any]]] = defaultdict(list)
+        """Every message from the vehicle by type, with the wall time it arrived."""
+
+    @property
+    def mav(self) -> Any:
+        return self.conn.mav
+
+    def close(self) -> None:
+        self.conn.close()
+
+    def _from_vehicle(self, msg: Any) -> bool:
+        if msg.get_type() == "BAD_DATA":
+            return False
+        if self.sysid is None:
+            if (
+                msg.get_type() != "HEARTBEAT"
+                or msg.autopilot == mavutil.mavlink.MAV_AUTOPILOT_INVALID
+            ):
+                return False
+            if msg.type in (
+                mavutil.mavlink.MAV_TYPE_GCS,
+                mavutil.mavlink.MAV_TYPE_ONBOARD_CONTROLLER,
+            ):
+                return False
+            self.sysid = msg.get_srcSystem()
+        return bool(msg.get_srcSystem() == self.sysid)
+
+    def recv(self, types: set[str] | None, timeout: float, cond: Any = None) -> Any:
+        """The next message from the vehicle of one of ``types`` satisfying ``cond``, or None."""
+        deadline = time.monotonic() + timeout
+        while (left := deadline - time.monotonic()) > 0:
+            msg = self.conn.recv_match(blocking=True, timeout=min(left, 0.2))
+            if msg is None or not self._from_vehicle(msg):
+                continue
+            kind = msg.get_type()
+            self.seen[kind].append((time.monotonic(), msg))
+            if kind == "HEARTBEAT" and msg.get_srcComponent() == self.compid:
+                self.heartbeat = msg
+            if (types is None or kind in types) and (cond is None or cond(msg)):
+                return msg
+        return None
+
+    def collect(self, seconds: float) -> None:
+        """Read everything for ``seconds``."""
+        self.recv({"__never__"}, seconds)
+
+    def send_heartbeat(self) -> None:
+        self.mav.heartbeat_send(
+            mavutil.mavlink.MAV_TYPE_GCS, mavutil.mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0
+        )
+
+    def command(self, command: int, *params: float, tries: int = 3) -> Any:
+        """Send COMMAND_LONG (retrying) and return its COMMAND_ACK, or None."""
+        p = [*params, *([0.0] * (7 - len(params)))]
+        assert self.sysid is not None
+        for attempt in range(tries):
+            self.mav.command_long_send(self.sysid, self.compid, command, attempt, *p)
+            ack = self.recv({"COMMAND_ACK"}, self.timeout / tries, lambda m: m.command == command)
+            if ack is not None:
+                return ack
+        return None
+
+
+def nan() -> float:
+    return math.nan
