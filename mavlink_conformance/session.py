@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import os
 import time
 from collections import defaultdict
@@ -11,6 +10,8 @@ from typing import Any
 os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink import mavutil
+
+__all__ = ["Session", "mavutil"]
 
 
 class Session:
@@ -87,7 +88,3 @@ class Session:
             if ack is not None:
                 return ack
         return None
-
-
-def nan() -> float:
-    return math.nan
