@@ -6,6 +6,7 @@ import asyncio
 import contextlib
 import functools
 import logging
+import socket
 import time
 from typing import Any
 
@@ -31,10 +32,20 @@ from sim_vehicle_stub.vehicle import Vehicle
 from sim_vehicle_stub.world import Scenario
 
 log = logging.getLogger(__name__)
+_RCVBUF = 1 << 20
 
 
 def _same(endpoint: UdpEndpoint) -> UdpEndpoint:
     return endpoint
+
+
+def _grow_receive_buffer(endpoint: UdpEndpoint) -> None:
+    """A larger kernel buffer so bursts wait for the loop instead of being lost uncounted."""
+    if endpoint.transport is None:
+        return
+    sock = endpoint.transport.get_extra_info("socket")
+    with contextlib.suppress(OSError):
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, _RCVBUF)
 
 
 class Emulator:
@@ -106,6 +117,7 @@ class Emulator:
             await loop.create_datagram_endpoint(
                 functools.partial(_same, ep), local_addr=(cfg.bind_host, bind)
             )
+            _grow_receive_buffer(ep)
             self.udp.append(ep)
             node.outputs.append(ep.send)
             if self.gcs is not None:

@@ -1,0 +1,59 @@
+"""MAVProxy (headless) routes one emulated vehicle to a MAVSDK client, which arms and takes off."""
+
+from __future__ import annotations
+
+import asyncio
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from mavsdk.asyncio import Configuration, Mavsdk
+from mavsdk.asyncio.plugins.action import ActionAsync
+from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
+
+from sim_vehicle_stub.testing import make_config, running_emulator
+
+VEHICLE_PORT = 24820
+CLIENT_PORT = 24830
+
+
+@pytest.mark.timeout(90)
+def test_mavproxy_routes_a_vehicle_to_mavsdk_which_arms_and_takes_off(tmp_path: Path) -> None:
+    mavproxy = Path(sys.executable).parent / "mavproxy.py"
+    cmd = [
+        sys.executable, str(mavproxy), f"--master=udpin:127.0.0.1:{VEHICLE_PORT}", "--daemon",
+        f"--out=udp:127.0.0.1:{CLIENT_PORT}", f"--state-basedir={tmp_path}", "--nowait",
+    ]  # fmt: skip
+
+    async def client() -> float:
+        async with Mavsdk(Configuration.create_manual(245, 190, True)) as mavsdk:
+            await mavsdk.add_any_connection(f"udpin://127.0.0.1:{CLIENT_PORT}")
+            system = await mavsdk.first_autopilot(timeout_s=30)
+            assert system is not None
+            assert await system.get_system_id() == 1
+            tel, act = TelemetryAsync(system), ActionAsync(system)
+            async for health in tel.subscribe_health():
+                if health.is_armable:
+                    break
+            await act.set_takeoff_altitude(6.0)
+            await act.arm()
+            await act.takeoff()
+            async for pos in tel.subscribe_position():
+                if pos.relative_altitude_m > 5.7:
+                    return float(pos.relative_altitude_m)
+        return 0.0
+
+    with running_emulator(make_config(1, VEHICLE_PORT, speedup=5.0)) as emu:
+        proc = subprocess.Popen(
+            cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            cwd=tmp_path,
+        )  # fmt: skip
+        try:
+            altitude = asyncio.run(asyncio.wait_for(client(), 60))
+        finally:
+            proc.terminate()
+            proc.wait(10)
+        assert altitude > 5.7
+        assert emu.vehicles[0].armed
+        assert emu.nodes[0].stats.messages > 0
