@@ -15,6 +15,7 @@ from mavsdk.asyncio.plugins.action import ActionAsync
 from mavsdk.asyncio.plugins.offboard import OffboardAsync, VelocityNedYaw
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
+from sim_vehicle_stub.framing import FrameDecoder, LinkStats
 from sim_vehicle_stub.fuzz import malformed_corpus
 from sim_vehicle_stub.testing import TAU, Client, fitted_tau, make_config, running_emulator
 
@@ -24,8 +25,6 @@ N_FLOOD = 4_000
 
 
 def test_corpus_parser_rejects_every_datagram() -> None:
-    from sim_vehicle_stub.framing import FrameDecoder, LinkStats
-
     stats = LinkStats()
     decoder = FrameDecoder(stats)
     corpus = malformed_corpus(3000, seed=7, target=2)
