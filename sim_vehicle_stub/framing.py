@@ -69,6 +69,7 @@ class FrameDecoder:
         self._pending = b""
         out: list[Any] = []
         errors = 0
+        resync = False  # bytes skipped after a broken frame belong to that frame, not garbage
         i, n = 0, len(buf)
         while i < n:
             if len(out) >= _MAX_FRAMES_PER_READ:
@@ -79,8 +80,9 @@ class FrameDecoder:
             if magic not in (_V1, _V2):
                 j1, j2 = buf.find(b"\xfd", i), buf.find(b"\xfe", i)
                 nxt = min(j for j in (j1, j2, n) if j >= 0)
-                stats.garbage += 1
-                errors += 1
+                if not resync:
+                    stats.garbage += 1
+                    errors += 1
                 i = nxt
                 continue
             head = 10 if magic == _V2 else 6
@@ -93,6 +95,7 @@ class FrameDecoder:
                     if incompat & ~1:
                         stats.malformed += 1
                         errors += 1
+                        resync = True
                         i += 1
                         continue
                     total = 12 + plen + (13 if incompat & 1 else 0)
@@ -121,13 +124,16 @@ class FrameDecoder:
                 else:
                     stats.malformed += 1
                 errors += 1
+                resync = True
                 i += 1
                 continue
             except Exception:  # pymavlink may raise anything on hostile payloads
                 stats.malformed += 1
                 errors += 1
+                resync = True
                 i += 1
                 continue
+            resync = False
             out.append(msg)
             i += total
         stats.messages += len(out)

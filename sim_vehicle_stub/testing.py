@@ -20,6 +20,17 @@ from sim_vehicle_stub.emulator import Emulator
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil
 
+__all__ = [
+    "PROFILE",
+    "TAU",
+    "Client",
+    "fitted_tau",
+    "make_config",
+    "mavutil",
+    "running_emulator",
+    "step_samples",
+]
+
 PROFILE = builtin_profile("paper-fixed")
 TAU = PROFILE.fleet.tau
 

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 import pytest
 
@@ -30,7 +32,7 @@ def _ap_guided_airborne(c: Client, alt: float = 10.0) -> None:
     assert c.pump(5, lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.z < -(alt - 0.3))
 
 
-def _heartbeat_is(mode: int) -> object:
+def _heartbeat_is(mode: int) -> Callable[[Any], bool]:
     return lambda m: m.get_type() == "HEARTBEAT" and m.custom_mode == mode
 
 

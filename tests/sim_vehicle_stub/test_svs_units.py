@@ -1,0 +1,107 @@
+"""Pure parts: parameter encodings, persona mode encodings and the registry, frame counters."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from sim_vehicle_stub.framing import FrameDecoder, LinkStats
+from sim_vehicle_stub.mavlink import dialect as d
+from sim_vehicle_stub.params import bytewise_to_float, float_to_bytewise
+from sim_vehicle_stub.personas import ProfileFacts, create_persona, persona_names
+from sim_vehicle_stub.personas.base import Action
+
+FACTS = ProfileFacts(speed=20.0, tau=0.33, sensor_radii=(2000.0, 400.0), system_id=3)
+
+
+def test_registry_knows_both_personas_and_names_unknown_ones() -> None:
+    assert persona_names() == ["ardupilot", "px4"]
+    with pytest.raises(ValueError, match="px4"):
+        create_persona("inav")
+
+
+@pytest.mark.parametrize(
+    ("name", "custom"),
+    [("OFFBOARD", 0x60000), ("HOLD", 0x3040000), ("RTL", 0x5040000), ("LAND", 0x6040000),
+     ("TAKEOFF", 0x2040000)],
+)  # fmt: skip
+def test_px4_custom_modes_match_px4(name: str, custom: int) -> None:
+    px4 = create_persona("px4")
+    assert px4.autopilot == 12
+    assert px4.mode(name).custom_mode == custom
+    main, sub = (custom >> 16) & 0xFF, custom >> 24
+    assert px4.mode_from_command(1, main, sub) == px4.mode(name)
+
+
+@pytest.mark.parametrize(
+    ("name", "number"), [("GUIDED", 4), ("LOITER", 5), ("RTL", 6), ("LAND", 9), ("BRAKE", 17)]
+)
+def test_ardupilot_custom_modes_match_arducopter(name: str, number: int) -> None:
+    ap = create_persona("ardupilot")
+    assert ap.autopilot == 3
+    assert ap.mode(name).custom_mode == number
+    assert ap.mode_from_command(1, number, 0) == ap.mode(name)
+
+
+def test_px4_integers_travel_bytewise_and_ardupilot_as_floats() -> None:
+    px4 = create_persona("px4").param_table(FACTS)
+    ap = create_persona("ardupilot").param_table(FACTS)
+    assert float_to_bytewise(px4.wire_value("MAV_SYS_ID")) == 3
+    assert ap.wire_value("SYSID_THISMAV") == 3.0
+    # PX4 reads a bytewise INT32, and tolerates a float-cast one when unambiguous.
+    assert px4.decode("MDM_SENSOR", bytewise_to_float(1)) == 1.0
+    assert px4.decode("MDM_SENSOR", 1.0) == 1.0
+    assert px4.decode("MDM_SENSOR", bytewise_to_float(-1)) == -1.0
+    assert ap.decode("MDM_SENSOR", 1.0) == 1.0
+    with pytest.raises(ValueError, match="MDM_SENSOR"):
+        px4.set("MDM_SENSOR", 2.0)  # two sensors: 0 and 1
+    with pytest.raises(ValueError, match="COM_OF_LOSS_T"):
+        px4.set("COM_OF_LOSS_T", math.nan)
+
+
+def test_failsafe_parameters_select_the_real_actions() -> None:
+    px4 = create_persona("px4")
+    table = px4.param_table(FACTS)
+    assert px4.setpoint_loss(table) == (1.0, Action.HOLD)
+    assert px4.link_loss(table) == (10.0, Action.NONE)
+    table.set("NAV_DLL_ACT", 2)
+    assert px4.link_loss(table)[1] is Action.RTL
+    assert px4.fence_action(table) is Action.HOLD
+    ap = create_persona("ardupilot")
+    table = ap.param_table(FACTS)
+    assert ap.setpoint_loss(table) == (3.0, Action.HOLD)
+    assert ap.fence_action(table) is Action.RTL
+    table.set("FS_GCS_ENABLE", 5)
+    assert ap.link_loss(table) == (5.0, Action.LAND)
+    scaled = ap.param_table(ProfileFacts(20.0, 0.33, (2000.0, 400.0), 1, timeout_scale=10.0))
+    assert ap.setpoint_loss(scaled)[0] == 30.0
+
+
+def _frame(msg: object) -> bytes:
+    return bytes(msg.pack(d.MAVLink(None, srcSystem=9, srcComponent=1)))  # type: ignore[attr-defined]
+
+
+def test_decoder_counts_each_kind_of_bad_input_and_keeps_good_frames() -> None:
+    stats = LinkStats()
+    dec = FrameDecoder(stats)
+    hb = _frame(d.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+    assert [m.get_type() for m in dec.feed(hb + hb)] == ["HEARTBEAT", "HEARTBEAT"]
+    assert dec.feed(hb[:-3]) == []
+    assert stats.truncated == 1
+    bad = bytearray(hb)
+    bad[-1] ^= 0xFF
+    assert dec.feed(bytes(bad)) == []
+    assert stats.bad_crc == 1
+    assert [m.get_type() for m in dec.feed(b"junk" + hb)] == ["HEARTBEAT"]
+    assert stats.garbage == 1
+    assert stats.rejected_datagrams == 3
+    assert stats.messages == 3
+
+
+def test_stream_decoder_joins_frames_split_across_reads() -> None:
+    dec = FrameDecoder(LinkStats(), stream=True)
+    hb = _frame(d.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+    assert dec.feed(hb[:5]) == []
+    assert [m.get_type() for m in dec.feed(hb[5:])] == ["HEARTBEAT"]
+    assert dec.stats.dropped == 0
