@@ -1,0 +1,163 @@
+"""Event-driven batched missions: every (run, vehicle) lane flies straight legs between events.
+
+Between two events a vehicle flies a straight line at constant speed (the tau-lag transient of
+a 0.33 s loop shifts a 4 km leg by under 7 m; ``reference.py`` checks the result against dt-stepping
+of the full dynamics). An event is the earliest of: the waypoint is reached, the active sensor's
+disc around an eligible target is entered (solved in closed form by
+``sim_vehicle_stub.world.first_entry_time``), the level's decaying index runs out, a node of the
+dynamic targets' path grid, the run's stop time. The policy (companion.search) is stepped at
+every event with the sensor contacts the world reports, so a lane is exactly what a live vehicle
+would do, only with time jumping from event to event.
+
+Vehicles do not communicate, so lanes of one run only share the targets; the team's result is
+the minimum over its vehicles of each target's first confirmation time.
+
+Randomness: runs are cut into blocks of ``block_runs``; block b draws from
+SeedSequence([seed, b]) alone, so results are identical for any number of workers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from companion.search import Observation, SearchPolicy
+from companion.search.from_profile import policy_config
+from mdm_profiles import MissionProfile
+from sim_vehicle_stub.world import Scenario, first_entry_time
+
+FloatArray = NDArray[np.float64]
+BLOCK_RUNS = 50
+_EPS = 1e-9
+
+
+@dataclass(frozen=True)
+class BlockResult:
+    """First confirmation time of every target by every vehicle, for one block of runs."""
+
+    first_block: int
+    per_vehicle: FloatArray
+    """(runs, vehicles, targets) seconds; inf where that vehicle never confirmed the target."""
+    events: int
+    """Policy steps taken (a measure of work)."""
+    sim_seconds: float
+    """Vehicle-seconds simulated (sum over lanes)."""
+
+
+def block_rngs(seed: int, block: int) -> tuple[np.random.Generator, ...]:
+    """Independent generators for the targets, the start positions and the policy of a block."""
+    children = np.random.SeedSequence([seed, block]).spawn(3)
+    return tuple(np.random.default_rng(c) for c in children)
+
+
+def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
+    """Simulate ``n_runs`` missions of the profile; block index ``block`` fixes the random streams."""
+    scenario = Scenario.from_profile(profile)
+    policy = SearchPolicy(policy_config(profile))
+    rng_targets, rng_start, rng_policy = block_rngs(seed, block)
+    n_vehicles = profile.fleet.vehicles
+    speed = profile.fleet.speed
+    tracks = scenario.tracks(n_runs, rng_targets)
+    start = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
+
+    n = n_runs * n_vehicles
+    run_of = np.repeat(np.arange(n_runs), n_vehicles)
+    position = start.reshape(n, 2).copy()
+    time = np.zeros(n)
+    state = policy.start(position, time, rng_policy)
+
+    targets = scenario.targets
+    m = targets.count
+    real = ~targets.false_mask
+    first = np.full((n, m), np.inf)
+    duration = profile.mission.duration
+    cap = max(profile.mission.ts_cap, duration)
+    stop = np.full(n_runs, cap)
+    active = np.ones(n, dtype=bool)
+    events = 0
+    appear = targets.appear_times
+
+    while True:
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        runs = run_of[idx]
+        x = position[idx]
+        t = time[idx]
+        offset = state.waypoint[idx] - x
+        dist = np.linalg.norm(offset, axis=1)
+        unit = np.where(dist[:, None] > 0, offset / np.where(dist > 0, dist, 1.0)[:, None], 0.0)
+        leg = dist / speed
+        deadline = policy.deadline(state)[idx] - t
+        horizon = np.minimum.reduce([leg, deadline, tracks.next_node_time(t) - t, stop[runs] - t])
+        horizon = np.maximum(horizon, 0.0)
+
+        target_pos = tracks.positions(runs, t)
+        target_vel = tracks.velocities(runs, t)
+        confirms = policy.uses_confirmation_sensor(state)[idx]
+        eligible = ~policy.known(state, idx, target_pos)
+        eligible &= ~(confirms[:, None] & targets.false_mask[None, :])
+        entry = first_entry_time(
+            x,
+            unit * speed,
+            horizon,
+            target_pos,
+            target_vel,
+            policy.sensor_radius(state)[idx],
+            eligible,
+            appear[None, :] - t[:, None],
+        )
+        soonest = entry.min(axis=1)
+        hit = soonest <= horizon
+        step = np.where(hit, soonest, horizon)
+        new_t = t + step
+        # Land exactly on a deadline so the policy sees the index run out (no float creep).
+        on_deadline = ~hit & (horizon == deadline)
+        new_t = np.where(on_deadline, t + deadline, new_t)
+        new_x = np.where(
+            (~hit & (horizon >= leg))[:, None],
+            state.waypoint[idx],
+            x + unit * speed * step[:, None],
+        )
+        reached = ~hit & (horizon >= leg)
+        contacts = hit[:, None] & (entry <= soonest[:, None] + _EPS)
+
+        obs = Observation(
+            time=new_t,
+            position=new_x,
+            reached=reached,
+            contacts=contacts,
+            contact_positions=tracks.positions(runs, new_t),
+        )
+        outcome = policy.step(state, idx, obs, rng_policy)
+        events += 1
+        position[idx] = new_x
+        time[idx] = new_t
+
+        confirmed = outcome.new_confirmations & real[None, :]
+        if confirmed.any():
+            rows, cols = np.nonzero(confirmed)
+            lanes = idx[rows]
+            first[lanes, cols] = np.minimum(first[lanes, cols], new_t[rows])
+            stop = _stop_times(first, run_of, n_runs, n_vehicles, real, duration, cap)
+        active[idx] = new_t < stop[runs] - _EPS
+
+    per_vehicle = first.reshape(n_runs, n_vehicles, m)
+    return BlockResult(block, per_vehicle, events, float(time.sum()))
+
+
+def _stop_times(
+    first: FloatArray,
+    run_of: NDArray[np.intp],
+    n_runs: int,
+    n_vehicles: int,
+    real: NDArray[np.bool_],
+    duration: float,
+    cap: float,
+) -> FloatArray:
+    """Latest time a run still needs: past it no confirmation can change T_nc or T_S."""
+    team = first.reshape(n_runs, n_vehicles, -1).min(axis=1)[:, real]
+    bound = team.max(axis=1)
+    return np.clip(bound, duration, cap)

@@ -1,0 +1,104 @@
+"""Run many missions of a profile: blocks of runs in this process, local workers, or on Dask."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mdm_montecarlo import metrics
+from mdm_montecarlo.engine import BLOCK_RUNS, BlockResult, run_block
+from mdm_profiles import MissionProfile
+
+Progress = Callable[[int], None]
+
+
+@dataclass(frozen=True)
+class MissionResults:
+    """Per-run outcomes of a batch of missions of one profile."""
+
+    profile: MissionProfile
+    seed: int
+    team_times: NDArray[np.float64]
+    """(runs, targets) earliest confirmation of each target by any vehicle; inf if never."""
+    events: int
+    sim_seconds: float
+
+    @property
+    def runs(self) -> int:
+        return len(self.team_times)
+
+    @property
+    def real(self) -> NDArray[np.bool_]:
+        return np.array([not t.false_target for t in self.profile.targets])
+
+    @property
+    def tnc(self) -> NDArray[np.int64]:
+        """T_nc of every run at the profile's mission duration."""
+        return metrics.confirmed_within(self.team_times, self.profile.mission.duration)
+
+    def ts(self) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """T_S of every run (capped at mission.ts_cap) and which runs were capped."""
+        return metrics.time_to_all(self.team_times, self.real, self.profile.mission.ts_cap)
+
+
+def _blocks(runs: int, block_runs: int) -> Iterator[tuple[int, int]]:
+    for b, first in enumerate(range(0, runs, block_runs)):
+        yield b, min(block_runs, runs - first)
+
+
+def run_missions(
+    profile: MissionProfile,
+    *,
+    runs: int,
+    seed: int = 0,
+    workers: int = 1,
+    scheduler: str | None = None,
+    progress: Progress | None = None,
+    block_runs: int = BLOCK_RUNS,
+) -> MissionResults:
+    """Simulate ``runs`` missions. Identical results for any ``workers`` or a Dask ``scheduler``.
+
+    workers: local processes (1 = this process). scheduler: a Dask distributed scheduler address
+    (e.g. 'tcp://127.0.0.1:8786') or a distributed.Client-compatible object's address; when given,
+    blocks are submitted there instead.
+    """
+    if runs < 1:
+        raise ValueError(f"runs must be >= 1, got {runs}")
+    blocks = list(_blocks(runs, block_runs))
+    results: list[BlockResult] = []
+    done = progress or (lambda _n: None)
+    if scheduler is not None:
+        from distributed import Client
+        from distributed import as_completed as dask_completed
+
+        with Client(scheduler) as client:
+            futures = [client.submit(run_block, profile, seed, b, n, pure=False) for b, n in blocks]
+            for fut in dask_completed(futures):
+                block = fut.result()
+                results.append(block)
+                done(block.per_vehicle.shape[0])
+    elif workers > 1:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            futs = [pool.submit(run_block, profile, seed, b, n) for b, n in blocks]
+            for f in as_completed(futs):
+                block = f.result()
+                results.append(block)
+                done(block.per_vehicle.shape[0])
+    else:
+        for b, n in blocks:
+            block = run_block(profile, seed, b, n)
+            results.append(block)
+            done(n)
+    results.sort(key=lambda r: r.first_block)
+    per_vehicle = np.concatenate([r.per_vehicle for r in results], axis=0)
+    return MissionResults(
+        profile=profile,
+        seed=seed,
+        team_times=metrics.team_times(per_vehicle),
+        events=sum(r.events for r in results),
+        sim_seconds=sum(r.sim_seconds for r in results),
+    )
