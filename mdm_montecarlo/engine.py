@@ -160,4 +160,4 @@ def _stop_times(
     """Latest time a run still needs: past it no confirmation can change T_nc or T_S."""
     team = first.reshape(n_runs, n_vehicles, -1).min(axis=1)[:, real]
     bound = team.max(axis=1)
-    return np.clip(bound, duration, cap)
+    return np.asarray(np.clip(bound, duration, cap), dtype=np.float64)

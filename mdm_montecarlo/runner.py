@@ -75,9 +75,9 @@ def run_missions(
         from distributed import Client
         from distributed import as_completed as dask_completed
 
-        with Client(scheduler) as client:
+        with Client(scheduler) as client:  # type: ignore[no-untyped-call]
             futures = [client.submit(run_block, profile, seed, b, n, pure=False) for b, n in blocks]
-            for fut in dask_completed(futures):
+            for fut in dask_completed(futures):  # type: ignore[no-untyped-call]
                 block = fut.result()
                 results.append(block)
                 done(block.per_vehicle.shape[0])

@@ -18,7 +18,7 @@ def test_paper_fixed_profile_gives_ls_then_bs_with_sensor_k_on_level_k() -> None
     assert [lv.step for lv in config.levels] == [4000.0, 2000.0]
     assert config.levels[0].index is None
     assert config.levels[1].index is not None
-    assert config.levels[1].index.kappa == 150.0
+    assert config.levels[1].index.kappa == 180.0
     assert config.area == (20000.0, 20000.0)
     assert [sensor_for_level(profile, k) for k in (0, 1)] == [0, 1]
 
