@@ -45,7 +45,7 @@ class Summary:
     n: int
 
     @classmethod
-    def of(cls, values: FloatArray) -> Summary:
+    def of(cls, values: NDArray[np.generic]) -> Summary:
         values = np.asarray(values, dtype=float)
         n = len(values)
         mean = float(values.mean()) if n else float("nan")

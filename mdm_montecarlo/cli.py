@@ -1,0 +1,178 @@
+"""`mdm-montecarlo`: run one profile, or reproduce the tables of the paper's section IV."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from tqdm import tqdm
+
+from mdm_montecarlo.report import write_report
+from mdm_montecarlo.runner import MissionResults, run_missions
+from mdm_montecarlo.study import TABLES, Case, Row, study_rows
+from mdm_montecarlo.tables import MeasuredRow, format_table, measured_rows
+from mdm_montecarlo.variants import with_method
+from mdm_profiles import ProfileError, load_profile
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--runs",
+        type=int,
+        default=1000,
+        help="Monte-Carlo runs per row (default 1000, as the paper)",
+    )
+    p.add_argument(
+        "--seed", type=int, default=2024, help="master seed (same seed -> identical tables)"
+    )
+    p.add_argument(
+        "--workers", type=int, default=0, help="local worker processes (default: all cores)"
+    )
+    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://10.0.0.5:8786")
+    p.add_argument(
+        "--json", action="store_true", help="print rows as JSON lines instead of a table"
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="mdm-montecarlo", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="one profile and policy: a table row")
+    run.add_argument(
+        "--profile", required=True, help="profile file or built-in name (paper-fixed, ...)"
+    )
+    run.add_argument("--method", help="US, BS, LS or MDM:L1+L2 (default: the profile's policy)")
+    _common(run)
+    rep = sub.add_parser("reproduce", help="every table of section IV beside the paper's numbers")
+    rep.add_argument(
+        "--tables", default=",".join(TABLES), help=f"comma-separated subset of {', '.join(TABLES)}"
+    )
+    rep.add_argument(
+        "--out", default="reports/section-iv", help="report folder (default reports/section-iv)"
+    )
+    _common(rep)
+    return parser
+
+
+def _workers(n: int) -> int:
+    import os
+
+    return n if n > 0 else (os.cpu_count() or 1)
+
+
+def _simulate(
+    cases: list[Case], args: argparse.Namespace, label: str
+) -> dict[Case, MissionResults]:
+    bar = tqdm(
+        total=len(cases) * args.runs,
+        unit="run",
+        desc=label,
+        disable=args.no_progress or args.json,
+        file=sys.stderr,
+    )
+    results = {}
+    for case in cases:
+        bar.set_postfix_str(f"{case.scenario} {case.method} {case.n_uav} UAVs")
+        results[case] = run_missions(
+            case.profile(),
+            runs=args.runs,
+            seed=args.seed,
+            workers=_workers(args.workers),
+            scheduler=args.scheduler,
+            progress=bar.update,
+        )
+    bar.close()
+    return results
+
+
+def _emit(rows: list[MeasuredRow], as_json: bool) -> None:
+    if as_json:
+        for r in rows:
+            print(json.dumps(r.as_dict()))
+    else:
+        print(format_table(rows))
+
+
+def _run(args: argparse.Namespace) -> int:
+    profile = load_profile(args.profile)
+    if args.method:
+        profile = with_method(profile, args.method)
+    start = time.perf_counter()
+    bar = tqdm(
+        total=args.runs,
+        unit="run",
+        desc=profile.name,
+        disable=args.no_progress or args.json,
+        file=sys.stderr,
+    )
+    res = run_missions(
+        profile,
+        runs=args.runs,
+        seed=args.seed,
+        workers=_workers(args.workers),
+        scheduler=args.scheduler,
+        progress=bar.update,
+    )
+    bar.close()
+    pol = profile.policy
+    names = [lv.distribution for lv in pol.levels]
+    method = "MDM:" + "+".join(names) if pol.kind == "mdm" else names[0]
+    scenario = (
+        "dynamic"
+        if profile.target_motion
+        else ("popup" if any(t.appear > 0 for t in profile.targets) else "fixed")
+    )
+    case = Case(
+        scenario,
+        method,
+        pol.levels[0].step / profile.area.north * 100,
+        profile.fleet.vehicles,
+        sum(t.false_target for t in profile.targets),
+    )
+    rows = measured_rows([Row("run", case, None)], {case: res})
+    _emit(rows, args.json)
+    if not args.json:
+        print(
+            f"{res.runs} runs in {time.perf_counter() - start:.1f} s (seed {args.seed})",
+            file=sys.stderr,
+        )
+    return 0
+
+
+def _reproduce(args: argparse.Namespace) -> int:
+    tables = tuple(t.strip() for t in args.tables.split(",") if t.strip())
+    rows = study_rows(tables)
+    cases = list(dict.fromkeys(r.case for r in rows))
+    start = time.perf_counter()
+    results = _simulate(cases, args, "reproduce")
+    wall = time.perf_counter() - start
+    measured = measured_rows(rows, results)
+    header = (
+        f"{args.runs} runs per row, seed {args.seed}, {len(cases)} configurations, "
+        f"{wall:.1f} s wall time. Paper numbers from data/paper_tables.csv."
+    )
+    path = write_report(Path(args.out), rows, measured, results, header)
+    _emit(measured, args.json)
+    if not args.json:
+        print(f"\nreport: {path} ({wall:.1f} s)", file=sys.stderr)
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    if args.runs < 1:
+        print("mdm-montecarlo: --runs must be >= 1", file=sys.stderr)
+        return 2
+    try:
+        return _run(args) if args.command == "run" else _reproduce(args)
+    except (ProfileError, ValueError) as exc:
+        print(f"mdm-montecarlo: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,65 @@
+"""The cases of section IV: which profile and method each table row needs, and the tolerances."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from mdm_montecarlo.paper import PaperRow, paper_rows
+from mdm_montecarlo.variants import with_fleet_size, with_method
+from mdm_profiles import MissionProfile, builtin_profile
+
+TABLES = ("simtable1", "simtable3", "simtable4", "simtable5", "Dsimtable6", "simtablef1", "scaling")
+"""Tables `reproduce` knows. 'scaling' is the 6/12/24-UAV figures (box plots, no printed numbers).
+simtablepso1 needs the social-cognitive baselines, which are not in the engine yet."""
+
+TNC_TOLERANCE = {"fixed": 0.05, "popup": 0.10, "dynamic": 0.10}
+"""Relative tolerance on mean T_nc by scenario."""
+TS_TOLERANCE = 0.15
+"""Relative tolerance on mean T_S."""
+SCALING_FLEETS = (6, 12, 24)
+
+
+@dataclass(frozen=True)
+class Case:
+    """One simulated configuration; several table rows may share it."""
+
+    scenario: str
+    method: str
+    """'US', 'BS', 'LS' or 'MDM:<L1>+<L2>'."""
+    delta1_pct: float
+    n_uav: int
+    n_false: int
+
+    def profile(self) -> MissionProfile:
+        base = builtin_profile(f"paper-{self.scenario}" + ("-false" if self.n_false else ""))
+        delta1 = self.delta1_pct / 100.0 * base.area.north
+        return with_fleet_size(with_method(base, self.method, delta1), self.n_uav)
+
+
+@dataclass(frozen=True)
+class Row:
+    """A row to report: the table it belongs to, its case, and the paper's numbers if printed."""
+
+    table: str
+    case: Case
+    paper: PaperRow | None
+
+
+def _case_of(row: PaperRow) -> Case:
+    method = f"MDM:{row.level1}+{row.level2}" if row.method == "MDM" else row.method
+    return Case(row.scenario, method, row.delta1_pct_L or 20.0, row.n_uav, row.n_false)
+
+
+def study_rows(tables: tuple[str, ...] = TABLES) -> list[Row]:
+    """Rows of the requested tables, in the paper's order."""
+    unknown = set(tables) - set(TABLES)
+    if unknown:
+        raise ValueError(f"unknown table(s) {sorted(unknown)}; allowed: {', '.join(TABLES)}")
+    rows = [Row(r.table, _case_of(r), r) for r in paper_rows() if r.table in tables]
+    if "scaling" in tables:
+        best = {"fixed": "MDM:LS+BS", "popup": "MDM:US+US", "dynamic": "MDM:LS+BS"}
+        for scenario, mdm in best.items():
+            for n in SCALING_FLEETS:
+                for method in ("US", "BS", "LS", mdm):
+                    rows.append(Row("scaling", Case(scenario, method, 20.0, n, 0), None))
+    return rows
