@@ -96,7 +96,11 @@ def check_mode_encoding(s: Session) -> CheckResult:
 def check_streams(s: Session) -> CheckResult:
     for kind in _STREAMS:
         msg_id = getattr(ml, f"MAVLINK_MSG_ID_{kind}")
-        s.command(ml.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 200_000, tries=1)
+        assert s.sysid is not None
+        # Fire and forget: an autopilot that streams by default needs no request.
+        s.mav.command_long_send(
+            s.sysid, s.compid, ml.MAV_CMD_SET_MESSAGE_INTERVAL, 0, msg_id, 200_000, 0, 0, 0, 0, 0
+        )
     s.collect(3.0)
     missing = [k for k in _STREAMS if not s.seen.get(k)]
     problems = [f"missing {', '.join(missing)}"] if missing else []
@@ -181,12 +185,14 @@ def check_params(s: Session) -> list[CheckResult]:
     s.mav.param_request_list_send(s.sysid, s.compid)
     values: dict[int, Any] = {}
     total = None
-    deadline = time.monotonic() + max(s.timeout, 10.0)
+    deadline = time.monotonic() + 60.0
     while time.monotonic() < deadline and (total is None or len(values) < total):
-        m = s.recv({"PARAM_VALUE"}, 1.0)
-        if m is not None:
-            total = m.param_count
-            values[m.param_index] = m
+        # Wait up to the time-out for the first value and between values, as GCSs do.
+        m = s.recv({"PARAM_VALUE"}, s.timeout)
+        if m is None:
+            break
+        total = m.param_count
+        values[m.param_index] = m
     if not values:
         return [CheckResult("params_list", False, "no PARAM_VALUE after PARAM_REQUEST_LIST")]
     complete = total is not None and len(values) == total
