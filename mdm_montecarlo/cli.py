@@ -16,6 +16,7 @@ from mdm_montecarlo.study import TABLES, Case, Row, study_rows
 from mdm_montecarlo.tables import MeasuredRow, format_table, measured_rows
 from mdm_montecarlo.variants import with_method
 from mdm_profiles import ProfileError, load_profile
+from mdm_profiles.overrides import apply_overrides
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -46,6 +47,13 @@ def _parser() -> argparse.ArgumentParser:
         "--profile", required=True, help="profile file or built-in name (paper-fixed, ...)"
     )
     run.add_argument("--method", help="US, BS, LS or MDM:L1+L2 (default: the profile's policy)")
+    run.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="PATH=VALUE",
+        help="override a profile field, e.g. policy.levels.1.index.kappa=300 (repeatable)",
+    )
     _common(run)
     rep = sub.add_parser("reproduce", help="every table of section IV beside the paper's numbers")
     rep.add_argument(
@@ -98,7 +106,7 @@ def _emit(rows: list[MeasuredRow], as_json: bool) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    profile = load_profile(args.profile)
+    profile = apply_overrides(load_profile(args.profile), args.set)
     if args.method:
         profile = with_method(profile, args.method)
     start = time.perf_counter()

@@ -34,7 +34,7 @@ def _model_at(loc: tuple[int | str, ...]) -> type[BaseModel] | None:
     return model
 
 
-def _describe(source: str, error: ValidationError) -> str:
+def describe_errors(source: str, error: ValidationError) -> str:
     lines = [f"{source}: invalid mission profile ({error.error_count()} problem(s))"]
     for item in error.errors():
         field = ".".join(str(p) for p in item["loc"]) or "(top level)"
@@ -65,7 +65,7 @@ def parse_profile(text: str, source: str) -> MissionProfile:
     try:
         return MissionProfile.model_validate(data)
     except ValidationError as exc:
-        raise ProfileError(_describe(source, exc)) from None
+        raise ProfileError(describe_errors(source, exc)) from None
 
 
 def load_profile(path: str | Path) -> MissionProfile:
