@@ -11,7 +11,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from mdm_montecarlo.report import write_report
-from mdm_montecarlo.runner import MissionResults, run_missions
+from mdm_montecarlo.runner import MissionResults, run_many, run_missions
 from mdm_montecarlo.study import TABLES, Case, Row, study_rows
 from mdm_montecarlo.tables import MeasuredRow, format_table, measured_rows
 from mdm_montecarlo.variants import with_method
@@ -82,17 +82,16 @@ def _simulate(
         disable=args.no_progress or args.json,
         file=sys.stderr,
     )
-    results = {}
-    for case in cases:
-        bar.set_postfix_str(f"{case.scenario} {case.method} {case.n_uav} UAVs")
-        results[case] = run_missions(
-            case.profile(),
-            runs=args.runs,
-            seed=args.seed,
-            workers=_workers(args.workers),
-            scheduler=args.scheduler,
-            progress=bar.update,
-        )
+    profiles = [case.profile() for case in cases]
+    out = run_many(
+        profiles,
+        runs=args.runs,
+        seed=args.seed,
+        workers=_workers(args.workers),
+        scheduler=args.scheduler,
+        progress=bar.update,
+    )
+    results = dict(zip(cases, out, strict=True))
     bar.close()
     return results
 

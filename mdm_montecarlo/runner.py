@@ -62,38 +62,62 @@ def run_missions(
 ) -> MissionResults:
     """Simulate ``runs`` missions. Identical results for any ``workers`` or a Dask ``scheduler``.
 
-    workers: local processes (1 = this process). scheduler: a Dask distributed scheduler address
-    (e.g. 'tcp://127.0.0.1:8786') or a distributed.Client-compatible object's address; when given,
-    blocks are submitted there instead.
+    workers: local processes (1 = this process). scheduler: address of a Dask distributed
+    scheduler (e.g. 'tcp://127.0.0.1:8786'); when given, blocks are computed there instead.
     """
+    return run_many(
+        [profile],
+        runs=runs,
+        seed=seed,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        block_runs=block_runs,
+    )[0]
+
+
+def run_many(
+    profiles: list[MissionProfile],
+    *,
+    runs: int,
+    seed: int = 0,
+    workers: int = 1,
+    scheduler: str | None = None,
+    progress: Progress | None = None,
+    block_runs: int = BLOCK_RUNS,
+) -> list[MissionResults]:
+    """``run_missions`` for several profiles at once, sharing one pool (or Dask client)."""
     if runs < 1:
         raise ValueError(f"runs must be >= 1, got {runs}")
-    blocks = list(_blocks(runs, block_runs))
-    results: list[BlockResult] = []
+    jobs = [(i, b, n) for i in range(len(profiles)) for b, n in _blocks(runs, block_runs)]
+    blocks: dict[int, list[BlockResult]] = {i: [] for i in range(len(profiles))}
     done = progress or (lambda _n: None)
     if scheduler is not None:
         from distributed import Client
         from distributed import as_completed as dask_completed
 
         with Client(scheduler) as client:  # type: ignore[no-untyped-call]
-            futures = [client.submit(run_block, profile, seed, b, n, pure=False) for b, n in blocks]
+            futures = {
+                client.submit(run_block, profiles[i], seed, b, n, pure=False): i for i, b, n in jobs
+            }
             for fut in dask_completed(futures):  # type: ignore[no-untyped-call]
-                block = fut.result()
-                results.append(block)
-                done(block.per_vehicle.shape[0])
+                blocks[futures[fut]].append(fut.result())
+                done(blocks[futures[fut]][-1].per_vehicle.shape[0])
     elif workers > 1:
         with ProcessPoolExecutor(max_workers=workers) as pool:
-            futs = [pool.submit(run_block, profile, seed, b, n) for b, n in blocks]
-            for f in as_completed(futs):
-                block = f.result()
-                results.append(block)
-                done(block.per_vehicle.shape[0])
+            pending = {pool.submit(run_block, profiles[i], seed, b, n): i for i, b, n in jobs}
+            for f in as_completed(pending):
+                blocks[pending[f]].append(f.result())
+                done(blocks[pending[f]][-1].per_vehicle.shape[0])
     else:
-        for b, n in blocks:
-            block = run_block(profile, seed, b, n)
-            results.append(block)
+        for i, b, n in jobs:
+            blocks[i].append(run_block(profiles[i], seed, b, n))
             done(n)
-    results.sort(key=lambda r: r.first_block)
+    return [_collect(profiles[i], seed, blocks[i]) for i in range(len(profiles))]
+
+
+def _collect(profile: MissionProfile, seed: int, results: list[BlockResult]) -> MissionResults:
+    results = sorted(results, key=lambda r: r.first_block)
     per_vehicle = np.concatenate([r.per_vehicle for r in results], axis=0)
     return MissionResults(
         profile=profile,
