@@ -85,6 +85,14 @@ def run_command(args: argparse.Namespace) -> int:
     return 0
 
 
+def _dump_tasks() -> None:
+    """SIGUSR1: log every asyncio task's stack (what is a companion waiting for?)."""
+    for task in asyncio.all_tasks():
+        frames = task.get_stack()
+        where = " <- ".join(f"{f.f_code.co_name}:{f.f_lineno}" for f in frames[::-1])
+        log.warning("task %s: %s", task.get_name(), where or "(no frames)")
+
+
 async def _fly(config: MissionConfig, url: str, backend: Backend, *, tlog: bool) -> str:
     recovered = read_log(config.mission_log_path())
     if recovered.confirmed:
@@ -101,9 +109,12 @@ async def _fly(config: MissionConfig, url: str, backend: Backend, *, tlog: bool)
                              fence=fence_for(config.profile))  # fmt: skip
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(sig, mission.request_end, "operator")
+        loop.add_signal_handler(sig, mission.operator_stop)
+    loop.add_signal_handler(signal.SIGUSR1, _dump_tasks)
     try:
         return await mission.run()
+    except asyncio.CancelledError:
+        return "stopped by a second signal"
     finally:
         sink.close()
 

@@ -42,12 +42,13 @@ class FleetOptions:
 def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
     """The sim-vehicle command line for this run."""
     return [
-        sys.executable, "-m", "sim_vehicle_stub",
+        sys.executable, "-m", "sim_vehicle_stub.cli",
         "--profile", o.profile,
         "--vehicles", str(vehicles),
         "--speedup", str(o.speedup),
         "--persona", o.persona,
         "--base-port", str(o.base_port),
+        "--bind-port-base", str(o.base_port + 200),
         "--seed", str(o.seed),
         "--events", str(o.out / "emulator-events.jsonl"),
     ]  # fmt: skip
@@ -106,7 +107,7 @@ def _watch(
     started: float,
 ) -> None:
     real = sum(not t.false_target for t in profile.targets)
-    last_print = 0.0
+    last_print, last_line = 0.0, ""
     while any(p.poll() is None for p in companions):
         time.sleep(0.5)
         now = time.perf_counter()
@@ -114,10 +115,12 @@ def _watch(
             log.warning("wall limit %.0f s reached; stopping the companions", o.wall_limit)
             break
         if not o.quiet and now - last_print >= 2.0:
-            last_print = now
             views = read_progress(o.out, n)
             found = score(profile, o.out, n, o.duration).tnc
-            print(progress_line(views, found, real), flush=True)
+            line = progress_line(views, found, real)
+            if line != last_line or now - last_print >= 10.0:
+                print(line, flush=True)
+                last_print, last_line = now, line
 
 
 def _stop(p: subprocess.Popen[bytes]) -> None:

@@ -22,11 +22,11 @@ def make_link(
 ) -> VehicleLink:
     """A closed link of the given backend; ``open`` it (or use ``async with``)."""
     if backend == "pymavlink":
-        from companion.link.pymavlink_link import PymavlinkLink  # noqa: PLC0415
+        from companion.link.pymavlink_link import PymavlinkLink
 
         return PymavlinkLink(url=url, target_system=target_system, tlog=tlog, frame=frame)
     if backend == "mavsdk":
-        from companion.link.mavsdk_link import MavsdkLink  # noqa: PLC0415
+        from companion.link.mavsdk_link import MavsdkLink
 
         return MavsdkLink(url=url, target_system=target_system, tlog=tlog)
     raise ValueError(f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")

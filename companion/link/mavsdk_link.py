@@ -255,7 +255,7 @@ class MavsdkLink(VehicleLink):
 
 def _repack(name: str, fields: dict[str, Any], system: int) -> bytes:
     """Re-encode a MavlinkDirect message for the .tlog (b'' when it cannot be)."""
-    from pymavlink.dialects.v20 import ardupilotmega as mavlink2  # noqa: PLC0415
+    from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
     cls = getattr(mavlink2, f"MAVLink_{name.lower()}_message", None)
     if cls is None:

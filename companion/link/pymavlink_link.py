@@ -8,7 +8,7 @@ import math
 import struct
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
@@ -131,6 +131,15 @@ class PymavlinkLink(VehicleLink):
             self._tlog.close()
             self._tlog = None
 
+    async def reconnect(self) -> None:
+        """UDP in: keep the bound port (the vehicle sends to it again); others: re-open."""
+        if self.address.scheme == "udpin" and self._transport is not None:
+            self._remote = None
+            return
+        await self.close()
+        await asyncio.sleep(0.1)  # let the old transport release its socket
+        await self.open()
+
     # -- receiving -------------------------------------------------------------------------
 
     def _receive(self, data: bytes, addr: tuple[str | Any, int] | None) -> None:
@@ -215,15 +224,15 @@ class PymavlinkLink(VehicleLink):
             return
         buf = msg.pack(self._mav)
         self._mav.seq = (self._mav.seq + 1) % 256
-        if isinstance(transport, asyncio.DatagramTransport):
-            if self.address.scheme == "udpin":
-                if self._remote is None:
-                    return  # the vehicle has not spoken yet
-                transport.sendto(buf, self._remote)
-            else:
-                transport.sendto(buf)
-        elif isinstance(transport, asyncio.WriteTransport):
-            transport.write(buf)
+        # (selector datagram transports are not DatagramTransport subclasses: go by scheme)
+        if self.address.scheme == "udpin":
+            if self._remote is None:
+                return  # the vehicle has not spoken yet
+            cast(asyncio.DatagramTransport, transport).sendto(buf, self._remote)
+        elif self.address.scheme == "udpout":
+            cast(asyncio.DatagramTransport, transport).sendto(buf)
+        else:
+            cast(asyncio.WriteTransport, transport).write(buf)
         if self._tlog is not None:
             self._tlog.write(buf)
 
@@ -259,10 +268,11 @@ class PymavlinkLink(VehicleLink):
                 self._send(
                     self._mav.command_long_encode(self.target_system, 1, command, attempt, *full)
                 )
-                try:
-                    result = await asyncio.wait_for(asyncio.shield(future), self._timeout)
-                except TimeoutError:
+                # asyncio.wait, not wait_for: on 3.11 wait_for can swallow a cancel
+                await asyncio.wait({future}, timeout=self._timeout)
+                if not future.done():
                     continue
+                result = future.result()
                 if result != 0:
                     log.warning("command %d refused with result %d", command, result)
                 return result == 0
@@ -302,12 +312,12 @@ class PymavlinkLink(VehicleLink):
                 )
             )
             try:
-                echoed = await asyncio.wait_for(future, self._timeout)
-            except TimeoutError:
-                continue
+                await asyncio.wait({future}, timeout=self._timeout)
             finally:
                 self._params.pop(name, None)
-            if echoed == value:
+            if not future.done():
+                continue
+            if future.result() == value:
                 return True
         log.warning("parameter %s=%d not confirmed by the vehicle", name, value)
         return False

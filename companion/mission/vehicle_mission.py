@@ -81,11 +81,13 @@ class VehicleMission:
         self._own_mode_change = False
         self._guided_seen = False
         self._climbing_by_command = False
+        self._main: asyncio.Task[object] | None = None
 
     # -- public ----------------------------------------------------------------------------
 
     async def run(self) -> str:
         """Fly the mission; returns why it ended."""
+        self._main = asyncio.current_task()
         await self.link.open()
         self.emit("start", vehicle=self.config.vehicle, profile=self.config.profile.name,
                   seed=self.config.seed, resumed=len(self.recovered.confirmed),
@@ -105,10 +107,17 @@ class VehicleMission:
         return self.end_reason or "stopped"
 
     def request_end(self, reason: str) -> None:
-        """Operator stop (signal): end the search and fly the end action."""
+        """End the search and fly the end action (operator signal, mission time, battery)."""
         if self.end_reason is None:
             self.end_reason = reason
             self._changed.set()
+
+    def operator_stop(self) -> None:
+        """SIGINT/SIGTERM: first one ends the mission properly, a second one stops at once."""
+        if self.end_reason is None:
+            self.request_end("operator")
+        elif self._main is not None:
+            self._main.cancel()
 
     def emit(self, event: str, **fields: object) -> None:
         self.sink.emit(self.clock.now, event, **fields)
@@ -119,20 +128,28 @@ class VehicleMission:
         events = self.link.events
         period = self.config.heartbeat_period
         next_beat = 0.0
-        while True:
-            now = time.perf_counter()
-            if now >= next_beat:
-                self.link.send_heartbeat()
-                next_beat = now + period
-            try:
-                event = events.get_nowait()
-            except asyncio.QueueEmpty:
+        getter: asyncio.Task[LinkEvent] | None = None
+        try:
+            while True:
+                now = time.perf_counter()
+                if now >= next_beat:
+                    self.link.send_heartbeat()
+                    next_beat = now + period
                 try:
-                    async with asyncio.timeout(next_beat - now):
-                        event = await events.get()
-                except TimeoutError:
-                    continue
-            self._handle(event)
+                    event = events.get_nowait()
+                except asyncio.QueueEmpty:
+                    # asyncio.wait, not asyncio.timeout: on 3.11 a cancel arriving as the
+                    # timeout expires can be swallowed, and this loop must stop when told.
+                    if getter is None:
+                        getter = asyncio.ensure_future(events.get())
+                    done, _ = await asyncio.wait({getter}, timeout=max(next_beat - now, 0.0))
+                    if not done:
+                        continue
+                    event, getter = getter.result(), None
+                self._handle(event)
+        finally:
+            if getter is not None:
+                getter.cancel()
 
     def _handle(self, event: LinkEvent) -> None:
         if isinstance(event, LocalPosition):
@@ -183,7 +200,11 @@ class VehicleMission:
                       alt=round(-pos.down, 1), found=self.core.confirmed_count)  # fmt: skip
         if self.phase is Phase.SEARCH:
             self._search_step(t, pos)
-        elif self.phase in (Phase.PREPARE, Phase.CLIMB) and not self._climbing_by_command:
+        elif self.phase is Phase.PREPARE:
+            # Neutral stream before arming: stay where it is (a climb here would start the
+            # moment the mode switches, before the vehicle is armed).
+            self._send(Setpoint(pos.north, pos.east, pos.down, 0.0, 0.0, 0.0), pos)
+        elif self.phase is Phase.CLIMB and not self._climbing_by_command:
             here = np.array([pos.north, pos.east])
             self._send(guidance.pursuit(here, pos.down, here, self.guide, self.fence, 1.0), pos)
 
