@@ -53,7 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gcs", action="store_true", help="all vehicles also to UDP gcs-port")
     p.add_argument("--gcs-port", type=int, default=14550)
     p.add_argument("--speedup", type=_speedup, default=1.0, help="sim/wall ratio; 0 or max")
-    p.add_argument("--sim-step", type=float, default=0.02, help="physics step, sim s")
+    p.add_argument("--sim-step", type=float, default=0.05, help="physics step, sim s")
     p.add_argument("--telemetry-hz", type=float, default=10.0, help="streams, per sim s")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--events", type=Path, help="JSON-lines ground-truth and event log")

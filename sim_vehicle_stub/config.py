@@ -7,6 +7,8 @@ from pathlib import Path
 
 from mdm_profiles import MissionProfile
 
+MAX_VEHICLES = 254
+
 
 @dataclass(frozen=True)
 class EmulatorConfig:
@@ -31,7 +33,8 @@ class EmulatorConfig:
     gcs_port: int = 14550
     speedup: float | None = 1.0
     """Sim seconds per wall second; None runs as fast as possible."""
-    sim_step: float = 0.02
+    sim_step: float = 0.05
+    """Physics step, sim s (the lag model is discretised exactly, so this only sets latency)."""
     telemetry_hz: float = 10.0
     """Rate of position/attitude streams and sensor readings, per sim second."""
     seed: int = 0
@@ -43,6 +46,15 @@ class EmulatorConfig:
     """Datagrams per wall second accepted per endpoint; more are dropped unread."""
     start_positions: tuple[tuple[float, float], ...] | None = None
     """Override the profile's periphery start points, metres (north, east)."""
+
+    def __post_init__(self) -> None:
+        if not 1 <= self.fleet_size <= MAX_VEHICLES:
+            raise ValueError(
+                f"vehicles must be 1..{MAX_VEHICLES} (system ids 1..254; 255 is the GCS), "
+                f"got {self.fleet_size}"
+            )
+        if self.telemetry_hz <= 0 or self.sim_step <= 0:
+            raise ValueError("telemetry_hz and sim_step must be > 0")
 
     @property
     def fleet_size(self) -> int:

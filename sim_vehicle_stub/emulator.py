@@ -19,7 +19,14 @@ from sim_vehicle_stub.dynamics import LagModel
 from sim_vehicle_stub.encoder import Encoder
 from sim_vehicle_stub.endpoints import GcsEndpoint, TcpServer, TokenBucket, UdpEndpoint
 from sim_vehicle_stub.events import EventLog
-from sim_vehicle_stub.failsafes import check_failsafes
+from sim_vehicle_stub.failsafes import check_failsafes, inside_fences
+from sim_vehicle_stub.fast_streams import (
+    CRC_EXTRA,
+    DEBUG_VECT,
+    NVF,
+    contact_payload,
+    signal_payload,
+)
 from sim_vehicle_stub.fleet import Fleet
 from sim_vehicle_stub.geo import GeoFrame
 from sim_vehicle_stub.handlers import MessageHandler
@@ -33,19 +40,26 @@ from sim_vehicle_stub.world import Scenario
 
 log = logging.getLogger(__name__)
 _RCVBUF = 1 << 20
+_MIN_SLEEP = 0.002
 
 
 def _same(endpoint: UdpEndpoint) -> UdpEndpoint:
     return endpoint
 
 
-def _grow_receive_buffer(endpoint: UdpEndpoint) -> None:
-    """A larger kernel buffer so bursts wait for the loop instead of being lost uncounted."""
-    if endpoint.transport is None:
-        return
-    sock = endpoint.transport.get_extra_info("socket")
+def _udp_socket(host: str, port: int) -> socket.socket:
+    """A bound, non-blocking UDP socket with a large receive buffer, so bursts wait for the
+    loop instead of being lost uncounted in the kernel."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     with contextlib.suppress(OSError):
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, _RCVBUF)
+    try:
+        sock.bind((host, port))
+    except OSError:
+        sock.close()
+        raise
+    sock.setblocking(False)
+    return sock
 
 
 class Emulator:
@@ -113,11 +127,9 @@ class Emulator:
             bind = cfg.bind_port_base + i if cfg.bind_port_base else 0
             remote = (cfg.host, cfg.base_port + i)
             bucket = TokenBucket(cfg.flood_rate, cfg.flood_rate / 4)
-            ep = UdpEndpoint(node, self._deliver, remote, bucket)
-            await loop.create_datagram_endpoint(
-                functools.partial(_same, ep), local_addr=(cfg.bind_host, bind)
-            )
-            _grow_receive_buffer(ep)
+            sock = _udp_socket(cfg.bind_host, bind)
+            ep = UdpEndpoint(node, self._deliver, remote, bucket, sock)
+            await loop.create_datagram_endpoint(functools.partial(_same, ep), sock=sock)
             self.udp.append(ep)
             node.outputs.append(ep.send)
             if self.gcs is not None:
@@ -204,45 +216,59 @@ class Emulator:
             if k == steps:
                 k = 0
                 self._tick(period)
-            await asyncio.sleep(self.clock.wait_time())
+            wait = self.clock.wait_time()
+            # epoll sleeps in whole milliseconds, so shorter waits are run ahead instead (the
+            # clock is absolute, so this never drifts); the endpoints get the loop every tick.
+            if wait > _MIN_SLEEP:
+                await asyncio.sleep(wait)
+            elif k == 0:
+                await asyncio.sleep(0)
 
     def _tick(self, dt: float) -> None:
         t = self.clock.now
-        for node in self.nodes:
+        self.fleet.update_yaw()
+        vehicles = self.vehicles
+        margins = np.array([v.limits.fence_margin for v in vehicles])
+        inside = inside_fences(self.scenario.area, self.fleet.pos, margins).tolist()
+        for node, ok in zip(self.nodes, inside, strict=True):
             v = node.vehicle
             v.update()
-            check_failsafes(v, self.scenario.area, dt)
-        active = np.array([int(v.params.get("MDM_SENSOR")) for v in self.vehicles], dtype=np.intp)
-        radius = np.array(
-            [
-                v.params.get(f"MDM_SENS_R{max(s, 0)}")
-                for v, s in zip(self.vehicles, active, strict=True)
-            ]
-        )
+            check_failsafes(v, ok, dt)
+        active = np.array([v.limits.sensor for v in vehicles], dtype=np.intp)
+        radius = np.array([v.sensor_radius() for v in vehicles])
         readings = self.sensors.tick(t, self.fleet.pos, active, radius)
         builders = self.telemetry.builders
+        batch = self.telemetry.position_batch()
         for node in self.nodes:
             v = node.vehicle
+            enc = node.encoder
             due = node.schedule.due(t)
             if v.state_changed and d.MAVLINK_MSG_ID_HEARTBEAT not in due:
                 due.insert(0, d.MAVLINK_MSG_ID_HEARTBEAT)
             v.state_changed = False
-            out = [builders[m](v) for m in due]
+            frames = []
+            for m in due:
+                rows = batch.get(m)
+                if rows is not None:
+                    frames.append(enc.frame(m, CRC_EXTRA[m], rows[v.index]))
+                else:
+                    frames.append(enc.pack(builders[m](v)))
             reading = readings.get(v.index)
             if reading is not None:
-                out += self._sensor_messages(reading)
+                frames += self._sensor_frames(enc, reading)
             for severity, text in v.status:
-                out.append(d.MAVLink_statustext_message(severity, text.encode()))
+                frames.append(enc.pack(d.MAVLink_statustext_message(severity, text.encode())))
             v.status.clear()
-            node.send(out)
+            node.send_frames(frames)
 
-    def _sensor_messages(self, r: Reading) -> list[Any]:
+    def _sensor_frames(self, enc: Encoder, r: Reading) -> list[bytes]:
         name = b"CNF" if r.confirms else b"DET"
-        out: list[Any] = [
-            d.MAVLink_named_value_float_message(self.clock.boot_ms, b"SENS_SIG", r.signal)
-        ]
+        out = [enc.frame(NVF, CRC_EXTRA[NVF], signal_payload(self.clock.boot_ms, r.signal))]
         usec = self.clock.usec
-        out += [d.MAVLink_debug_vect_message(name, usec, n, e, s) for _, n, e, s in r.contacts]
+        out += [
+            enc.frame(DEBUG_VECT, CRC_EXTRA[DEBUG_VECT], contact_payload(name, usec, n, e, s))
+            for _, n, e, s in r.contacts
+        ]
         return out
 
     # ----- introspection

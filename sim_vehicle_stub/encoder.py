@@ -1,10 +1,39 @@
-"""MAVLink encoding for one vehicle: its own system id, component 1 and sequence counter."""
+"""MAVLink encoding for one vehicle: its own system id, component 1 and sequence counter.
+
+Messages without numeric arrays take a fast path (one struct.pack, fastcrc when installed) that
+produces the same bytes as pymavlink's own packer; the rest go through pymavlink.
+"""
 
 from __future__ import annotations
 
+import re
+import struct
 from typing import Any
 
+from pymavlink.generator import mavcrc
+
 from sim_vehicle_stub.mavlink import dialect
+
+_HEADER = struct.Struct("<BBBBBBBHB")
+_CRC = struct.Struct("<H")
+_COUNTED = re.compile(r"(\d+)([a-zA-Z?])")
+_FAST: dict[type, tuple[str, ...] | None] = {}
+
+
+def _fast_fields(cls: type) -> tuple[str, ...] | None:
+    """Field order for the fast path, or None when the message has numeric arrays."""
+    if cls not in _FAST:
+        # A repeat count before any struct code but "s" (char[]) means a numeric array.
+        fmt = cls.unpacker.format  # type: ignore[attr-defined]
+        arrays = any(code != "s" for _, code in _COUNTED.findall(fmt))
+        _FAST[cls] = None if arrays else tuple(cls.ordered_fieldnames)  # type: ignore[attr-defined]
+    return _FAST[cls]
+
+
+def _crc16(data: bytes) -> int:
+    if mavcrc.mcrf4xx is not None:
+        return int(mavcrc.mcrf4xx(data))
+    return int(mavcrc.x25crc(data).crc)
 
 
 class Encoder:
@@ -12,8 +41,26 @@ class Encoder:
 
     def __init__(self, sysid: int, compid: int = 1) -> None:
         self.mav = dialect.MAVLink(None, srcSystem=sysid, srcComponent=compid)
+        self.sysid, self.compid = sysid, compid
 
     def pack(self, msg: Any) -> bytes:
-        data: bytes = msg.pack(self.mav)
+        fields = _fast_fields(type(msg))
+        if fields is None:
+            data: bytes = msg.pack(self.mav)
+            self.mav.seq = (self.mav.seq + 1) % 256
+            return data
+        values = [getattr(msg, f) for f in fields]
+        values = [v.encode() if isinstance(v, str) else v for v in values]
+        payload = msg.unpacker.pack(*values).rstrip(b"\x00") or b"\x00"
+        # Class attributes: a field may be called "id" (STATUSTEXT).
+        return self.frame(type(msg).id, type(msg).crc_extra, payload)
+
+    def frame(self, msg_id: int, crc_extra: int, payload: bytes) -> bytes:
+        """A MAVLink 2 frame around a payload whose trailing zeros are already cut."""
+        head = _HEADER.pack(
+            0xFD, len(payload), 0, 0, self.mav.seq, self.sysid, self.compid,
+            msg_id & 0xFFFF, msg_id >> 16,
+        )  # fmt: skip
+        body = head[1:] + payload
         self.mav.seq = (self.mav.seq + 1) % 256
-        return data
+        return head[:1] + body + _CRC.pack(_crc16(body + bytes((crc_extra,))))

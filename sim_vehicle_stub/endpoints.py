@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import socket
 import time
 from collections.abc import Callable
 from typing import Any, cast
@@ -65,16 +66,28 @@ class _PeerSet:
 class UdpEndpoint(asyncio.DatagramProtocol):
     """One vehicle's UDP socket: sends first to ``remote``, answers whoever talks to it."""
 
-    def __init__(self, node: VehicleNode, deliver: Deliver, remote: Address, flood: TokenBucket):
+    def __init__(
+        self,
+        node: VehicleNode,
+        deliver: Deliver,
+        remote: Address,
+        flood: TokenBucket,
+        sock: socket.socket,
+    ) -> None:
         self.node = node
         self.deliver = deliver
         self.peers = _PeerSet(remote)
         self.flood = flood
         self.decoder = FrameDecoder(node.stats)
         self.transport: asyncio.DatagramTransport | None = None
+        self.sock: socket.socket | None = sock
+        """Our own bound socket (also handed to the transport), for sending without a copy."""
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         self.transport = cast(asyncio.DatagramTransport, transport)
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self.sock = None
 
     def datagram_received(self, data: bytes, addr: Address) -> None:
         if not self.flood.allow():
@@ -90,10 +103,17 @@ class UdpEndpoint(asyncio.DatagramProtocol):
         pass
 
     def send(self, data: bytes) -> None:
-        if self.transport is None or self.transport.is_closing():
+        if self.sock is None:
             return
         for addr in self.peers.targets:
-            self.transport.sendto(data, addr)
+            try:
+                # The raw socket: the transport's wrapper costs more than the send itself,
+                # and a full kernel buffer should drop telemetry, not queue it.
+                self.sock.sendto(data, addr)
+            except (BlockingIOError, InterruptedError):
+                self.node.stats.tx_dropped += 1
+            except OSError:
+                pass  # no listener yet (ICMP unreachable): normal for a vehicle sending first
 
 
 class TcpServer:

@@ -6,29 +6,41 @@ Each fires once per occurrence and re-arms when its condition clears. Time-outs 
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from sim_vehicle_stub.personas.base import Action, Behaviour
 from sim_vehicle_stub.vehicle import Vehicle
 from sim_vehicle_stub.world import Area
 
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
 _IDLE_DRAIN = 0.1
 """Battery drain on the ground while armed, as a fraction of the flying drain."""
 
 
-def check_failsafes(vehicle: Vehicle, area: Area, dt: float) -> None:
-    """Run every failsafe of ``vehicle`` after ``dt`` sim seconds since the last check."""
+def check_failsafes(vehicle: Vehicle, inside_fence: bool, dt: float) -> None:
+    """Run every failsafe of ``vehicle`` after ``dt`` sim seconds since the last check;
+    ``inside_fence`` says whether it is within the search area plus its MDM_FENCE_MARG."""
     _battery(vehicle, dt)
     if not vehicle.armed:
         return
     _setpoint_loss(vehicle)
     _link_loss(vehicle)
-    _geofence(vehicle, area)
+    _geofence(vehicle, inside_fence)
+
+
+def inside_fences(area: Area, positions: FloatArray, margins: FloatArray) -> BoolArray:
+    """For every vehicle (n, 2), whether it is inside the area grown by its margin (n,)."""
+    lo = -margins[:, None]
+    hi = area.size[None, :] + margins[:, None]
+    return np.asarray(np.all((positions >= lo) & (positions <= hi), axis=-1))
 
 
 def _setpoint_loss(v: Vehicle) -> None:
     if v.mode.behaviour is not Behaviour.EXTERNAL or v.setpoint is None or v.setpoint_lost:
         return
-    timeout, action = v.persona.setpoint_loss(v.params)
+    timeout, action = v.limits.setpoint
     if v.now - v.setpoint.t <= timeout:
         return
     if not v.persona.position_targets_time_out and v.setpoint.velocity is None:
@@ -46,7 +58,7 @@ def _setpoint_loss(v: Vehicle) -> None:
 def _link_loss(v: Vehicle) -> None:
     if v.last_gcs_heartbeat is None:
         return  # no link was ever established
-    timeout, action = v.persona.link_loss(v.params)
+    timeout, action = v.limits.link
     lost = v.now - v.last_gcs_heartbeat > timeout
     if lost and not v.link_lost and action is not Action.NONE:
         v.link_lost = True
@@ -55,24 +67,23 @@ def _link_loss(v: Vehicle) -> None:
         v.link_lost = False
 
 
-def _geofence(v: Vehicle, area: Area) -> None:
-    margin = v.params.get("MDM_FENCE_MARG")
-    inside = bool(area.contains(v.fleet.pos[v.index], margin))
+def _geofence(v: Vehicle, inside: bool) -> None:
     if inside:
         v.fence_breached = False
         return
-    action = v.persona.fence_action(v.params)
+    action = v.limits.fence
     if not v.fence_breached and not v.landed and action is not Action.NONE:
         v.fence_breached = True
         v.failsafe(action, "geofence")
 
 
 def _battery(v: Vehicle, dt: float) -> None:
-    if v.armed:
-        drain = dt / v.params.get("MDM_BAT_ENDUR")
-        v.battery = float(np.clip(v.battery - (_IDLE_DRAIN * drain if v.landed else drain), 0, 1))
-    threshold, action = v.persona.low_battery(v.params)
-    if v.armed and not v.battery_fired and v.battery < threshold and action is not Action.NONE:
+    if not v.armed:
+        return
+    drain = dt / v.limits.endurance
+    v.battery = max(0.0, v.battery - (_IDLE_DRAIN * drain if v.landed else drain))
+    threshold, action = v.limits.battery
+    if not v.battery_fired and v.battery < threshold and action is not Action.NONE:
         v.battery_fired = True
         if v.mode.behaviour not in (Behaviour.RTL, Behaviour.LAND):
             v.failsafe(action, "low battery")

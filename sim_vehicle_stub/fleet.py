@@ -79,10 +79,11 @@ class Fleet:
         """Advance every vehicle by dt sim seconds."""
         model = self.model
         k = 1.0 / (4.0 * model.tau)
-        dist = np.linalg.norm(self.h_target - self.pos, axis=-1)
+        offset = self.h_target - self.pos
+        dist = np.hypot(offset[:, 0], offset[:, 1])
         pursuit = pursuit_reference(self.pos, self.h_target, np.minimum(self.speed, k * dist))
         vel_cmd = self.h_vel
-        norm = np.linalg.norm(vel_cmd, axis=-1)
+        norm = np.hypot(vel_cmd[:, 0], vel_cmd[:, 1])
         scale = np.where(norm > self.speed, self.speed / np.maximum(norm, 1e-9), 1.0)
         href = np.where(self.h_use_vel[:, None], vel_cmd * scale[:, None], pursuit)
 
@@ -98,11 +99,12 @@ class Fleet:
         vel[grounded] = 0.0
         self.pos, self.vel = pos, vel
         self.alt, self.vz = alt[:, 0], vz[:, 0]
-        below = self.alt < 0.0
-        self.alt[below] = 0.0
-        self.vz[below] = np.maximum(self.vz[below], 0.0)
+        np.maximum(self.alt, 0.0, out=self.alt)
+        self.vz = np.where(self.alt <= 0.0, np.maximum(self.vz, 0.0), self.vz)
 
-        moving = np.linalg.norm(self.vel, axis=-1) > 0.5
+    def update_yaw(self) -> None:
+        """Heading: the commanded yaw, else the direction of travel (kept when hovering)."""
+        moving = np.hypot(self.vel[:, 0], self.vel[:, 1]) > 0.5
         heading = np.arctan2(self.vel[:, 1], self.vel[:, 0])
         commanded = ~np.isnan(self.yaw_cmd)
         self.yaw = np.where(commanded, self.yaw_cmd, np.where(moving, heading, self.yaw))

@@ -35,6 +35,8 @@ class LinkStats:
     not_for_us: int = 0
     nacks: int = 0
     """Commands answered with a failure result."""
+    tx_dropped: int = 0
+    """Outgoing datagrams dropped because the kernel's send buffer was full."""
 
     @property
     def dropped(self) -> int:

@@ -98,7 +98,7 @@ class MessageHandler:
         except ValueError as exc:
             node.stats.nacks += 1
             v.say(4, f"param {exc}")
-        v.apply_speeds()
+        v.apply_params()
         node.send([self._param_value(node, name)])
 
     # ----- setpoints

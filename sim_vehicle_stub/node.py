@@ -27,11 +27,15 @@ class VehicleNode:
 
     def send(self, messages: list[Any]) -> None:
         """Encode and send messages, bundled into datagrams of at most ~1400 bytes as PX4 does."""
-        if not messages:
+        if messages:
+            self.send_frames([self.encoder.pack(msg) for msg in messages])
+
+    def send_frames(self, frames: list[bytes]) -> None:
+        """Send encoded frames, bundled into datagrams of at most ~1400 bytes."""
+        if not frames:
             return
         chunk = bytearray()
-        for msg in messages:
-            data = self.encoder.pack(msg)
+        for data in frames:
             if chunk and len(chunk) + len(data) > _MAX_DATAGRAM:
                 self._emit(bytes(chunk))
                 chunk = bytearray()

@@ -45,10 +45,16 @@ class SensorWorld:
         self._in_range = np.zeros((n_vehicles, m, self.n_sensors), dtype=bool)
         self._detected = np.zeros((n_vehicles, m), dtype=bool)
         self._confirmed = np.zeros((n_vehicles, m), dtype=bool)
+        self._static: FloatArray | None = None
 
     def targets_at(self, t: float) -> FloatArray:
+        if not self.tracks.moving and self._static is not None:
+            return self._static
         pos = self.tracks.positions(np.zeros(1, dtype=np.intp), np.array([t]))
-        return np.asarray(pos[0], dtype=np.float64)
+        targets = np.asarray(pos[0], dtype=np.float64)
+        if not self.tracks.moving:
+            self._static = targets
+        return targets
 
     def tick(
         self, t: float, vehicles: FloatArray, active: IntArray, radius: FloatArray
@@ -67,36 +73,35 @@ class SensorWorld:
         if len(on) == 0:
             return {}
         last = self.n_sensors - 1
-        confirms = active[on] == last
+        sensor = active[on]
+        confirms = sensor == last
         tgt = np.broadcast_to(targets, (len(on), *targets.shape))
         pres = np.broadcast_to(present, (len(on), len(present)))
         mask, strength = contacts(radius[on], confirms, vehicles[on], tgt, pres, spec.false_mask)
         visible = pres & ~(confirms[:, None] & spec.false_mask[None, :])
-        signal = np.where(visible, strength, 0.0).max(axis=1, initial=0.0)
-        out: dict[int, Reading] = {}
-        for row, i in enumerate(on):
-            s = int(active[i])
-            hits = np.flatnonzero(mask[row])
-            self._log_contacts(t, int(i), s, mask[row], targets)
-            out[int(i)] = Reading(
-                s, bool(confirms[row]), float(signal[row]),
-                [(int(k), float(targets[k, 0]), float(targets[k, 1]), float(strength[row, k]))
-                 for k in hits],
-            )  # fmt: skip
-        return out
+        signal = np.where(visible, strength, 0.0).max(axis=1, initial=0.0).tolist()
+        entered = mask & ~self._in_range[on, :, sensor]
+        self._in_range[on, :, sensor] = mask
+        for row, k in zip(*np.nonzero(entered), strict=True):
+            self._log_entry(t, int(on[row]), int(sensor[row]), int(k), targets)
+        hits: dict[int, list[tuple[int, float, float, float]]] = {}
+        for row, k in zip(*np.nonzero(mask), strict=True):
+            hits.setdefault(int(row), []).append(
+                (int(k), float(targets[k, 0]), float(targets[k, 1]), float(strength[row, k]))
+            )
+        sensors, conf = sensor.tolist(), confirms.tolist()
+        return {
+            int(i): Reading(sensors[row], conf[row], signal[row], hits.get(row, []))
+            for row, i in enumerate(on.tolist())
+        }
 
-    def _log_contacts(
-        self, t: float, i: int, s: int, mask: NDArray[np.bool_], targets: FloatArray
-    ) -> None:
-        entered = mask & ~self._in_range[i, :, s]
-        self._in_range[i, :, s] = mask
+    def _log_entry(self, t: float, i: int, s: int, k: int, targets: FloatArray) -> None:
         name = self.scenario.sensors[s].name
-        for k in np.flatnonzero(entered):
-            where = {"north": float(targets[k, 0]), "east": float(targets[k, 1])}
-            self.events.write(t, "entered_range", vehicle=i, target=int(k), sensor=name, **where)
-            is_conf = s == self.n_sensors - 1
-            seen = self._confirmed if is_conf else self._detected
-            if not seen[i, k]:
-                seen[i, k] = True
-                self.events.write(t, "confirmed" if is_conf else "detected", vehicle=i,
-                                  target=int(k), sensor=name, **where)  # fmt: skip
+        where = {"north": float(targets[k, 0]), "east": float(targets[k, 1])}
+        self.events.write(t, "entered_range", vehicle=i, target=k, sensor=name, **where)
+        is_conf = s == self.n_sensors - 1
+        seen = self._confirmed if is_conf else self._detected
+        if not seen[i, k]:
+            seen[i, k] = True
+            self.events.write(t, "confirmed" if is_conf else "detected", vehicle=i, target=k,
+                              sensor=name, **where)  # fmt: skip

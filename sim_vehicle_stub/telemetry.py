@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from sim_vehicle_stub.clock import SimClock
+from sim_vehicle_stub.fast_streams import position_payloads
 from sim_vehicle_stub.fleet import Fleet
 from sim_vehicle_stub.geo import GeoFrame
 from sim_vehicle_stub.mavlink import dialect as d
@@ -53,6 +54,8 @@ class GeoCache:
     amsl: Any = None
     roll: Any = None
     pitch: Any = None
+    batch_t: float = -1.0
+    batch: dict[int, list[bytes]] = field(default_factory=dict)
 
 
 class Telemetry:
@@ -90,6 +93,16 @@ class Telemetry:
             c.roll, c.pitch = f.attitude()
             c.t = self.clock.now
         return c
+
+    def position_batch(self) -> dict[int, list[bytes]]:
+        """Payloads of the 10 Hz position/attitude messages for every vehicle, now."""
+        c = self._geodetic()
+        if c.batch_t != self.clock.now:
+            c.batch = position_payloads(
+                self.fleet, self.clock.boot_ms, c.lat, c.lon, c.amsl, c.roll, c.pitch
+            )
+            c.batch_t = self.clock.now
+        return c.batch
 
     def heartbeat(self, v: Vehicle) -> Any:
         base = d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
@@ -212,9 +225,11 @@ class StreamSchedule:
 
     def due(self, t: float) -> list[int]:
         out = []
-        for k, nxt in self.next_due.items():
-            if t + 1e-9 >= nxt:
+        now = t + 1e-9
+        interval, next_due = self.interval, self.next_due
+        for k, nxt in next_due.items():
+            if now >= nxt:
                 out.append(k)
-                step = self.interval[k]
-                self.next_due[k] = max(nxt + step, t)
+                later = nxt + interval[k]
+                next_due[k] = later if later > t else t
         return out

@@ -27,6 +27,20 @@ log = logging.getLogger(__name__)
 ACCEPTED, TEMPORARILY_REJECTED, DENIED, UNSUPPORTED, FAILED = 0, 1, 2, 3, 4
 
 
+@dataclass(frozen=True)
+class FailsafeLimits:
+    """The persona's failsafe choices for the current parameters (re-read on PARAM_SET)."""
+
+    setpoint: tuple[float, Action]
+    link: tuple[float, Action]
+    fence: Action
+    battery: tuple[float, Action]
+    endurance: float
+    fence_margin: float
+    sensor: int
+    """MDM_SENSOR: active sensor index, -1 when off."""
+
+
 @dataclass
 class Setpoint:
     """The last SET_POSITION_TARGET_* received, in the local frame (north, east, up)."""
@@ -74,7 +88,8 @@ class Vehicle:
         """Set on any mode/arm change so an extra HEARTBEAT goes out."""
         self.status: list[tuple[int, str]] = []
         """STATUSTEXT (severity, text) waiting to be sent."""
-        self.apply_speeds()
+        self.limits: FailsafeLimits
+        self.apply_params()
 
     # ----- facts
     @property
@@ -90,10 +105,25 @@ class Vehicle:
         age = self.now - self.setpoint.t if self.setpoint else math.inf
         return VehicleFacts(self.armed, self.landed, self.mode, home_alt_amsl, age)
 
-    def apply_speeds(self) -> None:
-        speed, climb, descent, _ = self.persona.speeds(self.params)
+    def apply_params(self) -> None:
+        """Re-read the parameters the dynamics and failsafes use (after any PARAM_SET)."""
+        p, params = self.persona, self.params
+        speed, climb, descent, _ = p.speeds(params)
         i = self.index
         self.fleet.speed[i], self.fleet.climb[i], self.fleet.descent[i] = speed, climb, descent
+        self.limits = FailsafeLimits(
+            setpoint=p.setpoint_loss(params),
+            link=p.link_loss(params),
+            fence=p.fence_action(params),
+            battery=p.low_battery(params),
+            endurance=params.get("MDM_BAT_ENDUR"),
+            fence_margin=params.get("MDM_FENCE_MARG"),
+            sensor=int(params.get("MDM_SENSOR")),
+        )
+
+    def sensor_radius(self) -> float:
+        """Radius of the active sensor (of sensor 0 when all are off)."""
+        return self.params.get(f"MDM_SENS_R{max(self.limits.sensor, 0)}")
 
     def say(self, severity: int, text: str) -> None:
         self.status.append((severity, text[:50]))
@@ -103,7 +133,7 @@ class Vehicle:
         """Switch to ``mode``; returns a MAV_RESULT."""
         p = self.persona
         if mode.behaviour is Behaviour.EXTERNAL and p.offboard_needs_setpoints:
-            timeout, _ = p.setpoint_loss(self.params)
+            timeout, _ = self.limits.setpoint
             if self.setpoint is None or self.now - self.setpoint.t > timeout:
                 self.say(4, f"{mode.name} refused: no setpoints")
                 return DENIED
