@@ -33,12 +33,12 @@ def main() -> None:
     print("ready", flush=True)
     while running:
         for key, _ in sel.select(0.2):
-            sock = key.fileobj
-            if not isinstance(sock, socket.socket):
+            ready = key.fileobj
+            if not isinstance(ready, socket.socket):
                 continue
             while True:
                 try:
-                    sock.recv(65536)
+                    ready.recv(65536)
                 except BlockingIOError:
                     break
                 counts[key.data] += 1
