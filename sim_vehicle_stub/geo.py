@@ -1,9 +1,10 @@
 """Conversion between the profile's local frame (north, east, up from the origin) and WGS84.
 
-Uses PX4's own map projection (azimuthal equidistant on a sphere of radius 6371 km, altitude
-separate: ``alt = origin alt + up``), so GLOBAL_POSITION_INT and LOCAL_POSITION_NED agree the way
-they do on a real PX4 over a 20 km area, and the conversion is cheap enough to run for every
-vehicle at every telemetry tick.
+The same convention as the companion (pymap3d's ``ned2geodetic`` / ``geodetic2ned`` on the
+WGS84 ellipsoid, the local frame being the origin's tangent plane), so positions agree to the
+millimetre across the project. The forward direction runs for every vehicle at every telemetry
+tick, so it is written out in numpy (closed-form ECEF to geodetic, Heikkinen 1982) instead of
+calling pymap3d, which costs about a millisecond per call.
 """
 
 from __future__ import annotations
@@ -12,10 +13,45 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pymap3d
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
-EARTH_RADIUS = 6371000.0
+
+_A = 6378137.0
+_F = 1 / 298.257223563
+_B = _A * (1 - _F)
+_E2 = _F * (2 - _F)
+_EP2 = (_A**2 - _B**2) / _B**2
+
+
+def _geodetic2ecef(lat: float, lon: float, h: float) -> tuple[float, float, float]:
+    n = _A / math.sqrt(1 - _E2 * math.sin(lat) ** 2)
+    return (
+        (n + h) * math.cos(lat) * math.cos(lon),
+        (n + h) * math.cos(lat) * math.sin(lon),
+        (n * (1 - _E2) + h) * math.sin(lat),
+    )
+
+
+def _ecef2geodetic(
+    x: FloatArray, y: FloatArray, z: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    p = np.hypot(x, y)
+    f = 54 * _B**2 * z**2
+    g = p**2 + (1 - _E2) * z**2 - _E2 * (_A**2 - _B**2)
+    c = _E2**2 * f * p**2 / g**3
+    s = np.cbrt(1 + c + np.sqrt(c**2 + 2 * c))
+    pp = f / (3 * (s + 1 / s + 1) ** 2 * g**2)
+    q = np.sqrt(1 + 2 * _E2**2 * pp)
+    r0 = -(pp * _E2 * p) / (1 + q) + np.sqrt(
+        _A**2 / 2 * (1 + 1 / q) - pp * (1 - _E2) * z**2 / (q * (1 + q)) - pp * p**2 / 2
+    )
+    u = np.sqrt((p - _E2 * r0) ** 2 + z**2)
+    v = np.sqrt((p - _E2 * r0) ** 2 + (1 - _E2) * z**2)
+    z0 = _B**2 * z / (_A * v)
+    h = u * (1 - _B**2 / (_A * v))
+    return np.arctan((z + _EP2 * z0) / p), np.arctan2(y, x), h
 
 
 @dataclass(frozen=True)
@@ -30,27 +66,19 @@ class GeoFrame:
     def to_geodetic(
         self, north: FloatArray, east: FloatArray, up: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """(lat deg, lon deg, alt AMSL m) of local points."""
+        """(lat deg, lon deg, alt m) of local points, as ``pymap3d.ned2geodetic``."""
         lat0, lon0 = math.radians(self.lat), math.radians(self.lon)
-        x = np.asarray(north, dtype=float) / EARTH_RADIUS
-        y = np.asarray(east, dtype=float) / EARTH_RADIUS
-        c = np.hypot(x, y)
-        sin_c, cos_c = np.sin(c), np.cos(c)
-        safe = np.where(c > 0, c, 1.0)
-        lat = np.arcsin(cos_c * math.sin(lat0) + x * sin_c * math.cos(lat0) / safe)
-        lon = lon0 + np.arctan2(y * sin_c, c * math.cos(lat0) * cos_c - x * math.sin(lat0) * sin_c)
-        lat = np.where(c > 0, lat, lat0)
-        lon = np.where(c > 0, lon, lon0)
-        return np.degrees(lat), np.degrees(lon), self.alt + np.asarray(up, dtype=float)
+        x0, y0, z0 = _geodetic2ecef(lat0, lon0, self.alt)
+        n, e, u = (np.asarray(a, dtype=float) for a in (north, east, up))
+        sl, cl = math.sin(lat0), math.cos(lat0)
+        so, co = math.sin(lon0), math.cos(lon0)
+        x = x0 - so * e - sl * co * n + cl * co * u
+        y = y0 + co * e - sl * so * n + cl * so * u
+        z = z0 + cl * n + sl * u
+        lat, lon, h = _ecef2geodetic(x, y, z)
+        return np.degrees(lat), np.degrees(lon), h
 
     def to_local(self, lat: float, lon: float, alt: float) -> tuple[float, float, float]:
-        """(north, east, up) metres of a WGS84 point with AMSL altitude."""
-        lat0, lon0 = math.radians(self.lat), math.radians(self.lon)
-        la, lo = math.radians(lat), math.radians(lon)
-        cos_dlon = math.cos(lo - lon0)
-        arg = math.sin(lat0) * math.sin(la) + math.cos(lat0) * math.cos(la) * cos_dlon
-        c = math.acos(max(-1.0, min(1.0, arg)))
-        k = 1.0 if abs(c) < 1e-12 else c / math.sin(c)
-        north = k * (math.cos(lat0) * math.sin(la) - math.sin(lat0) * math.cos(la) * cos_dlon)
-        east = k * math.cos(la) * math.sin(lo - lon0)
-        return north * EARTH_RADIUS, east * EARTH_RADIUS, float(alt) - self.alt
+        """(north, east, up) metres of a WGS84 point, as ``pymap3d.geodetic2ned``."""
+        n, e, d = pymap3d.geodetic2ned(lat, lon, alt, self.lat, self.lon, self.alt)
+        return float(n), float(e), -float(d)
