@@ -43,12 +43,12 @@ class ArduCopterPersona(Persona):
         i8, i32 = ParamType.INT8, ParamType.INT32
         return [
             ParamSpec("SYSID_THISMAV", facts.system_id, i8, 1, 255),
-            ParamSpec("SYSID_MYGCS", 255, i8, 1, 255),
+            ParamSpec("SYSID_MYGCS", 255, i8, 1, 255, "listed only: any GCS heartbeat counts"),
             ParamSpec("GUID_TIMEOUT", 3.0 * s, low=0.1, doc="guided velocity target time-out, s"),
             ParamSpec("FS_GCS_ENABLE", 0, i8, 0, 7, "GCS loss: 0 off, 1/2/3/6 RTL, 4/5 land"),
             ParamSpec("FS_GCS_TIMEOUT", 5.0 * s, low=2.0, high=1e6),
             ParamSpec("FENCE_ENABLE", 1, i8, 0, 1, "search-area fence on"),
-            ParamSpec("FENCE_TYPE", 4, i8, 0, 15),
+            ParamSpec("FENCE_TYPE", 4, i8, 0, 15, "listed only: the fence is the search area"),
             ParamSpec("FENCE_ACTION", 1, i8, 0, 5, "0 report, 1/3/5 RTL, 2 land, 4 brake"),
             ParamSpec("BATT_CAPACITY", 5200, i32, 0, 1e6, "mAh"),
             ParamSpec("BATT_LOW_MAH", 800, i32, 0, 1e6, "mAh left that trigger the failsafe"),

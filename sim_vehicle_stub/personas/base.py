@@ -94,7 +94,13 @@ def common_params(facts: ProfileFacts) -> list[ParamSpec]:
             low=1.0,
             doc="flight time from full battery, sim s",
         ),
-        ParamSpec("MDM_TAU", facts.tau, low=1e-3, high=100.0, doc="velocity-loop tau, s"),
+        ParamSpec(
+            "MDM_TAU",
+            facts.tau,
+            low=facts.tau,
+            high=facts.tau,
+            doc="velocity-loop tau, s (read-only)",
+        ),
     ]
     specs += [
         ParamSpec(f"MDM_SENS_R{i}", r, low=1e-3, doc=f"radius of sensor {i}, m")

@@ -57,8 +57,6 @@ class Px4Persona(Persona):
             ParamSpec("COM_DL_LOSS_T", round(10 * s), i32, 5, 1e6, "data link loss, s"),
             ParamSpec("NAV_DLL_ACT", 0, i32, 0, 6, "link loss: 0 off, 1 hold, 2 RTL, 3 land"),
             ParamSpec("GF_ACTION", 2, i32, 0, 5, "fence: 0/1 none, 2 hold, 3 RTL, 5 land"),
-            ParamSpec("GF_MAX_HOR_DIST", 0.0, low=0.0, doc="max distance from home, 0 = off"),
-            ParamSpec("BAT_LOW_THR", 0.15, low=0.0, high=1.0),
             ParamSpec("BAT_CRIT_THR", 0.07, low=0.0, high=1.0),
             ParamSpec("COM_LOW_BAT_ACT", 3, i32, 0, 3, "0 warn, 2 land, 3 RTL at critical"),
             ParamSpec("MIS_TAKEOFF_ALT", 2.5, low=0.0, high=1e4),
