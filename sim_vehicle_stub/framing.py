@@ -74,7 +74,7 @@ class FrameDecoder:
         resync = False  # bytes skipped after a broken frame belong to that frame, not garbage
         i, n = 0, len(buf)
         while i < n:
-            if len(out) >= _MAX_FRAMES_PER_READ:
+            if not self.stream and len(out) >= _MAX_FRAMES_PER_READ:
                 stats.flood_dropped += 1
                 errors += 1
                 break
