@@ -98,9 +98,10 @@ class MavsdkLink(VehicleLink):
                 )
         raw = system._system
         self._direct = MavlinkDirect(raw)
-        self._offboard_sync = Offboard(raw)
         self._action = ActionAsync(system)
         self._offboard = OffboardAsync(system)
+        # the async wrapper's own plugin: offboard.start() checks that a setpoint was set on it
+        self._offboard_sync = self._offboard._plugin
         self._param = ParamAsync(system)
         for name in _SUBSCRIBED:
             self._handles.append(self._direct.subscribe_message(name, self._from_thread))
@@ -226,11 +227,23 @@ class MavsdkLink(VehicleLink):
     async def takeoff(self, altitude: float) -> bool:
         if self._action is None:
             raise LinkError("takeoff before the vehicle was discovered")
+        if self.autopilot is None or self._direct is None:
+            return await self._call("takeoff")
+        # MavlinkDirect's send_command: MAVSDK's takeoff() for ArduPilot climbs to its own
+        # default altitude (2.5 m) whatever set_takeoff_altitude() said.
+        p = self.autopilot.takeoff_params(altitude)
+        fields = {"target_system": self.target_system, "target_component": 1, "command": 22,
+                  "confirmation": 0, **{f"param{i + 1}": v for i, v in enumerate(p)}}  # fmt: skip
+        msg = MavlinkMessage("COMMAND_LONG", *self._ids, self.target_system, 1,
+                             json.dumps(fields).replace("NaN", "null"))  # fmt: skip
+        direct = self._direct
         try:
-            await self._action.set_takeoff_altitude(altitude)
+            ack = await asyncio.get_running_loop().run_in_executor(None, direct.send_command, msg)
+            result = json.loads(ack.fields_json).get("result")
         except Exception as exc:
-            log.warning("MAVSDK set_takeoff_altitude: %s", exc)
-        return await self._call("takeoff")
+            log.warning("MAVSDK takeoff: %s", exc)
+            return False
+        return bool(result == 0)
 
     async def set_sensor(self, index: int) -> bool:
         if self._param is None:

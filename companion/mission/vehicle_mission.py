@@ -291,6 +291,10 @@ class VehicleMission:
             if not await self.link.takeoff(self.config.altitude):
                 self._climbing_by_command = False
                 return False
+            # If the autopilot's takeoff stops short (its own takeoff altitude), setpoints
+            # finish the climb: wait for the altitude or for the climb to stall airborne.
+            await self._until(self._climb_done_or_stalled, self.config.climb_timeout)
+            self._climbing_by_command = False
         try:
             ok = await self._until(
                 lambda: (
@@ -305,6 +309,13 @@ class VehicleMission:
                 self.request_end("climb timeout")
             return False
         return True
+
+    def _climb_done_or_stalled(self) -> bool:
+        pos = self.position
+        if pos is None:
+            return False
+        alt = -pos.down
+        return alt > 0.95 * self.config.altitude or (alt > 1.0 and abs(pos.vd) < 0.05)
 
     async def _ensure_guided(self) -> bool:
         ap = self.link.autopilot
