@@ -154,6 +154,23 @@ class Client:
             send()
             self.pump(1.0 / hz)
 
+    def stream_until(
+        self,
+        send: Callable[[], None],
+        until: Callable[[Any], bool],
+        timeout: float,
+        hz: float = 20.0,
+    ) -> Any:
+        """Send a setpoint at ``hz`` (wall) until a message satisfies ``until``; that message, or
+        None after ``timeout`` wall seconds. Robust to a slow reader: conditions, not snapshots."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            send()
+            msg = self.pump(1.0 / hz, until)
+            if msg is not None:
+                return msg
+        return None
+
     def mode(self) -> int:
         return int(self.last["HEARTBEAT"].custom_mode)
 

@@ -20,6 +20,7 @@ def _px4_airborne(c: Client, alt: float = 10.0) -> None:
     assert c.set_param("MIS_TAKEOFF_ALT", alt) == alt
     assert c.command(400, 1) == 0
     assert c.command(22, *[math.nan] * 7) == 0
+    assert c.pump(10, lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.z < -(alt - 0.3))
     assert c.pump(5, lambda m: m.get_type() == "HEARTBEAT" and m.custom_mode == PX4_HOLD)
 
 
@@ -29,7 +30,7 @@ def _ap_guided_airborne(c: Client, alt: float = 10.0) -> None:
     assert c.command(176, 1, AP_GUIDED) == 0
     assert c.command(400, 1) == 0
     assert c.command(22, 0, 0, 0, 0, 0, 0, alt) == 0
-    assert c.pump(5, lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.z < -(alt - 0.3))
+    assert c.pump(10, lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.z < -(alt - 0.3))
 
 
 def _heartbeat_is(mode: int) -> Callable[[Any], bool]:
@@ -40,31 +41,38 @@ def _heartbeat_is(mode: int) -> Callable[[Any], bool]:
 def test_px4_offboard_setpoint_loss_switches_to_hold_after_com_of_loss_t() -> None:
     with running_emulator(make_config(1, 24900)) as emu, Client(24900, 1) as c:
         _px4_airborne(c)
-        assert c.set_param("COM_OF_LOSS_T", 2.0) == 2.0  # sim seconds
+        assert c.set_param("COM_OF_LOSS_T", 5.0) == 5.0  # sim seconds
         c.stream(lambda: c.velocity(5, 0), 0.3)
         assert c.command(176, 1, 6, 0) == 0
-        c.stream(lambda: c.velocity(5, 0), 0.5)
-        assert c.last["HEARTBEAT"].custom_mode == PX4_OFFBOARD
-        hold = c.pump(3, _heartbeat_is(PX4_HOLD))
+        assert c.stream_until(lambda: c.velocity(5, 0), _heartbeat_is(PX4_OFFBOARD), 5.0)
+        c.stream(lambda: c.velocity(5, 0), 0.3)
+        hold = c.pump(5, _heartbeat_is(PX4_HOLD))
         assert hold is not None
         setpoint = emu.vehicles[0].setpoint
         assert setpoint is not None
         lost_after = c.last["LOCAL_POSITION_NED"].time_boot_ms / 1000 - setpoint.t
-        assert 2.0 - 0.15 <= lost_after <= 2.0 + 0.25  # the time-out, within a tick or two
-        c.pump(1.0)
-        assert abs(c.last["LOCAL_POSITION_NED"].vx) < 0.2
+        assert 5.0 - 0.15 <= lost_after <= 5.0 + 0.25  # the time-out, within a tick or two
+        assert c.pump(5, lambda m: m.get_type() == "LOCAL_POSITION_NED" and abs(m.vx) < 0.2)
 
 
 @pytest.mark.timeout(60)
 def test_ardupilot_guided_velocity_timeout_stops_the_vehicle_in_guided() -> None:
     cfg = make_config(1, 24910, personas=("ardupilot",))
-    with running_emulator(cfg), Client(24910, 1) as c:
+    with running_emulator(cfg) as emu, Client(24910, 1) as c:
         _ap_guided_airborne(c)
-        assert c.set_param("GUID_TIMEOUT", 2.0) == 2.0
-        c.stream(lambda: c.velocity(0, 6), 1.0)
-        assert c.last["LOCAL_POSITION_NED"].vy == pytest.approx(6.0, abs=0.1)
-        c.pump(1.5)
-        assert abs(c.last["LOCAL_POSITION_NED"].vy) < 0.2
+        assert c.set_param("GUID_TIMEOUT", 5.0) == 5.0
+        fast = c.stream_until(
+            lambda: c.velocity(0, 6),
+            lambda m: m.get_type() == "LOCAL_POSITION_NED" and abs(m.vy - 6.0) < 0.05,
+            10.0,
+        )
+        assert fast is not None
+        setpoint = emu.vehicles[0].setpoint
+        assert setpoint is not None
+        stopped = c.pump(5, lambda m: m.get_type() == "LOCAL_POSITION_NED" and abs(m.vy) < 0.2)
+        assert stopped is not None
+        # Braking starts at the time-out (5 sim s after the last setpoint) and takes ~1 s.
+        assert 5.0 < stopped.time_boot_ms / 1000 - setpoint.t < 5.0 + 2.0
         assert c.mode() == AP_GUIDED
 
 
@@ -79,8 +87,8 @@ def test_px4_data_link_loss_runs_nav_dll_act_and_rtl_lands_and_disarms() -> None
         assert c.set_param("MPC_LAND_SPEED", 3.0) == 3.0
         c.heartbeat()
         # No more heartbeats from here on: after 5 sim s the link counts as lost.
-        assert c.pump(3, _heartbeat_is(PX4_RTL)) is not None
-        assert c.pump(5, lambda m: m.get_type() == "HEARTBEAT" and not m.base_mode & 128)
+        assert c.pump(10, _heartbeat_is(PX4_RTL)) is not None
+        assert c.pump(10, lambda m: m.get_type() == "HEARTBEAT" and not m.base_mode & 128)
         c.pump(0.3)
         assert -c.last["LOCAL_POSITION_NED"].z < 0.1
 
@@ -91,9 +99,11 @@ def test_ardupilot_geofence_breach_runs_fence_action_rtl() -> None:
     with running_emulator(cfg), Client(24930, 1) as c:
         _ap_guided_airborne(c)
         assert c.set_param("MDM_FENCE_MARG", 20.0) == 20.0
-        c.stream(lambda: c.velocity(-10, 0), 3.0)
-        # Area starts at north 0; fence at -20 m: the vehicle must have turned back home.
-        assert c.mode() == AP_RTL
+        c.log.clear()
+        assert c.stream_until(lambda: c.velocity(-10, 0), _heartbeat_is(AP_RTL), 10.0)
+        c.pump(1.0)
+        # Area starts at north 0, fence at -20 m: it turned back within a few metres of it.
+        assert min(m.x for m in c.log) < -20.0
         assert min(m.x for m in c.log) > -35.0
 
 
@@ -102,7 +112,8 @@ def test_low_battery_triggers_px4_return() -> None:
     with running_emulator(make_config(1, 24940, battery_endurance=40.0)), Client(24940, 1) as c:
         _px4_airborne(c)
         first = c.last["BATTERY_STATUS"].battery_remaining
-        assert c.pump(6, _heartbeat_is(PX4_RTL)) is not None
+        assert c.pump(15, _heartbeat_is(PX4_RTL)) is not None
+        c.pump(0.3)
         remaining = c.last["BATTERY_STATUS"].battery_remaining
         assert remaining < first
         assert remaining <= 8  # BAT_CRIT_THR 0.07

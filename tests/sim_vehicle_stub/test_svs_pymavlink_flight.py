@@ -4,6 +4,7 @@ real UDP; the response to a velocity step is the tau-lag model and position setp
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import pytest
 
@@ -25,9 +26,19 @@ OVERSHOOT_TOLERANCE = 0.5
 """Metres: how far past a position setpoint the vehicle may go."""
 
 
+def _is_local(m: Any) -> bool:
+    return bool(m.get_type() == "LOCAL_POSITION_NED")
+
+
 def _check_velocity_step(c: Client, vn: float, ve: float) -> None:
     c.log.clear()
-    c.stream(lambda: c.velocity(vn, ve), 1.2)
+    reached = c.stream_until(
+        lambda: c.velocity(vn, ve),
+        lambda m: _is_local(m) and abs(m.vx - vn) < 0.02 and abs(m.vy - ve) < 0.02,
+        15.0,
+    )
+    assert reached is not None
+    c.stream(lambda: c.velocity(vn, ve), 0.2)
     last = c.log[-1]
     assert last.vx == pytest.approx(vn, abs=0.05)
     assert last.vy == pytest.approx(ve, abs=0.05)
@@ -39,7 +50,13 @@ def _check_velocity_step(c: Client, vn: float, ve: float) -> None:
 def _check_position(c: Client, north: float, east: float, alt: float) -> None:
     c.log.clear()
     start_n = c.last["LOCAL_POSITION_NED"].x
-    c.stream(lambda: c.position(north, east, -alt), 2.0)
+    near = c.stream_until(
+        lambda: c.position(north, east, -alt),
+        lambda m: _is_local(m) and math.hypot(m.x - north, m.y - east) < 0.1 and m.vx**2 < 0.01,
+        20.0,
+    )
+    assert near is not None
+    c.stream(lambda: c.position(north, east, -alt), 0.5)
     last = c.log[-1]
     assert math.hypot(last.x - north, last.y - east) < SETTLE_TOLERANCE
     assert -last.z == pytest.approx(alt, abs=SETTLE_TOLERANCE)
@@ -48,7 +65,7 @@ def _check_position(c: Client, north: float, east: float, alt: float) -> None:
     assert overshoot < OVERSHOOT_TOLERANCE
 
 
-@pytest.mark.timeout(60)
+@pytest.mark.timeout(90)
 def test_pymavlink_flies_px4_persona_in_offboard_with_tau_lag_response() -> None:
     with running_emulator(make_config(2, 24600, personas=("px4",))), Client(24601, 2) as c:
         assert c.pump(5, lambda m: m.get_type() == "HEARTBEAT") is not None
@@ -56,19 +73,19 @@ def test_pymavlink_flies_px4_persona_in_offboard_with_tau_lag_response() -> None
         assert c.set_param("MIS_TAKEOFF_ALT", 10.0) == 10.0
         assert c.command(400, 1) == 0
         assert c.command(22, *[math.nan] * 7) == 0
-        assert c.pump(5, lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.z < -9.7)
-        assert c.pump(3, lambda m: m.get_type() == "HEARTBEAT" and m.custom_mode == PX4_HOLD)
+        assert c.pump(10, lambda m: _is_local(m) and m.z < -9.7)
+        assert c.pump(5, lambda m: m.get_type() == "HEARTBEAT" and m.custom_mode == PX4_HOLD)
         # OFFBOARD without a setpoint stream is refused, as PX4 does.
         assert c.command(176, 1, 6, 0) == 2
         c.stream(lambda: c.velocity(0, 0), 0.3)
         assert c.command(176, 1, 6, 0) == 0
-        assert c.pump(2, lambda m: m.get_type() == "HEARTBEAT" and m.custom_mode == PX4_OFFBOARD)
+        assert c.pump(5, lambda m: m.get_type() == "HEARTBEAT" and m.custom_mode == PX4_OFFBOARD)
         _check_velocity_step(c, 8.0, -4.0)
         here = c.last["LOCAL_POSITION_NED"]
         _check_position(c, here.x + 120.0, here.y - 30.0, 15.0)
 
 
-@pytest.mark.timeout(60)
+@pytest.mark.timeout(90)
 def test_pymavlink_flies_ardupilot_persona_in_guided_with_tau_lag_response() -> None:
     with running_emulator(make_config(2, 24610, personas=("ardupilot",))), Client(24610, 1) as c:
         hb = c.pump(5, lambda m: m.get_type() == "HEARTBEAT")
@@ -76,10 +93,10 @@ def test_pymavlink_flies_ardupilot_persona_in_guided_with_tau_lag_response() -> 
         assert hb.custom_mode == 0  # STABILIZE at boot
         c.heartbeat()
         c.conn.mav.set_mode_send(1, 1, 4)
-        assert c.pump(2, lambda m: m.get_type() == "COMMAND_ACK" and m.command == 11).result == 0
+        assert c.pump(5, lambda m: m.get_type() == "COMMAND_ACK" and m.command == 11).result == 0
         assert c.command(400, 1) == 0
         assert c.command(22, 0, 0, 0, 0, 0, 0, 12.0) == 0
-        assert c.pump(5, lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.z < -11.7)
+        assert c.pump(10, lambda m: _is_local(m) and m.z < -11.7)
         _check_velocity_step(c, -6.0, 9.0)
         here = c.last["LOCAL_POSITION_NED"]
         _check_position(c, here.x - 100.0, here.y + 50.0, 12.0)
