@@ -4,6 +4,7 @@ unaffected (tau-lag response, no link loss) and the fuzzed vehicle's counters sh
 from __future__ import annotations
 
 import asyncio
+import logging
 import socket
 import threading
 import time
@@ -19,6 +20,7 @@ from sim_vehicle_stub.framing import FrameDecoder, LinkStats
 from sim_vehicle_stub.fuzz import malformed_corpus
 from sim_vehicle_stub.testing import TAU, Client, fitted_tau, make_config, running_emulator
 
+log = logging.getLogger(__name__)
 BASE = 24840
 N_MALFORMED = 12_000
 N_FLOOD = 4_000
@@ -97,6 +99,9 @@ def test_fuzzing_one_vehicle_does_not_disturb_a_mavsdk_flight_on_another() -> No
         stats = emu.nodes[1].stats
         flown = emu.nodes[0].stats
 
+        log.info("fuzzed vehicle counters: %s", stats.as_dict())
+        log.info("flown vehicle counters: %s", flown.as_dict())
+        log.info("fitted tau during fuzzing: %.4f s", fitted_tau(samples, 6.0))
         assert connected
         assert sent == {"malformed": N_MALFORMED, "flood": N_FLOOD}
         # The flight: a velocity step during the fuzzing still follows the tau-lag model.

@@ -4,6 +4,7 @@ takeoff, offboard, velocity and position setpoints; the response is the tau-lag 
 from __future__ import annotations
 
 import asyncio
+import logging
 import math
 from collections import defaultdict
 from typing import Any
@@ -17,6 +18,7 @@ from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 from sim_vehicle_stub.mavlink import dialect
 from sim_vehicle_stub.testing import TAU, fitted_tau, make_config, running_emulator, step_samples
 
+logger = logging.getLogger(__name__)
 N = 12
 BASE = 24700
 GCS_PORT = 24799
@@ -72,12 +74,15 @@ async def _fly(sysid: int, system: Any, gcs: GcsListener) -> None:
     assert seen[-1].vy == pytest.approx(ve, abs=0.05)
     for axis, target in (("vx", vn), ("vy", ve)):
         tau = fitted_tau(step_samples(seen, axis, target), target)
+        logger.info("vehicle %d %s step to %.1f m/s: fitted tau %.4f s", sysid, axis, target, tau)
         assert tau == pytest.approx(TAU, abs=TAU_TOLERANCE), (sysid, axis)
     here = log[-1]
     goal = (here.x - 80.0, here.y + 40.0, -(10.0 + sysid))
     await off.set_position_ned(PositionNedYaw(*goal, 0.0))
     await asyncio.sleep(2.0)
     last = log[-1]
+    err = math.hypot(last.x - goal[0], last.y - goal[1])
+    logger.info("vehicle %d position error %.3f m", sysid, err)
     assert math.hypot(last.x - goal[0], last.y - goal[1]) < SETTLE_TOLERANCE
     assert last.z == pytest.approx(goal[2], abs=SETTLE_TOLERANCE)
     await off.stop()

@@ -3,6 +3,7 @@ real UDP; the response to a velocity step is the tau-lag model and position setp
 
 from __future__ import annotations
 
+import logging
 import math
 from typing import Any
 
@@ -17,6 +18,7 @@ from sim_vehicle_stub.testing import (
     step_samples,
 )
 
+log = logging.getLogger(__name__)
 PX4_HOLD, PX4_OFFBOARD = 0x3040000, 0x60000
 TAU_TOLERANCE = 0.02
 """Seconds: |fitted tau - profile tau| allowed for a velocity step seen through MAVLink."""
@@ -44,6 +46,7 @@ def _check_velocity_step(c: Client, vn: float, ve: float) -> None:
     assert last.vy == pytest.approx(ve, abs=0.05)
     for axis, target in (("vx", vn), ("vy", ve)):
         tau = fitted_tau(step_samples(c.log, axis, target), target)
+        log.info("velocity step %s -> %.1f m/s: fitted tau %.4f s", axis, target, tau)
         assert tau == pytest.approx(TAU, abs=TAU_TOLERANCE), axis
 
 
@@ -62,6 +65,8 @@ def _check_position(c: Client, north: float, east: float, alt: float) -> None:
     assert -last.z == pytest.approx(alt, abs=SETTLE_TOLERANCE)
     direction = math.copysign(1.0, north - start_n)
     overshoot = max((m.x - north) * direction for m in c.log)
+    err = math.hypot(last.x - north, last.y - east)
+    log.info("position setpoint: settled within %.3f m, overshoot %.3f m", err, overshoot)
     assert overshoot < OVERSHOOT_TOLERANCE
 
 
