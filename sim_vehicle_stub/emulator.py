@@ -7,6 +7,7 @@ import contextlib
 import functools
 import logging
 import socket
+import struct
 import time
 from typing import Any
 
@@ -102,6 +103,9 @@ class Emulator:
         self.udp: list[UdpEndpoint] = []
         self.tcp: list[TcpServer] = []
         self.gcs: GcsEndpoint | None = None
+        self.tick_errors = 0
+        self.telemetry_errors = 0
+        """Messages skipped because a value did not fit its field."""
         self._task: asyncio.Task[None] | None = None
         self._stop = asyncio.Event()
 
@@ -215,7 +219,13 @@ class Emulator:
             k += 1
             if k == steps:
                 k = 0
-                self._tick(period)
+                try:
+                    self._tick(period)
+                except Exception:  # a bug must not stop every vehicle: log it and go on
+                    self.tick_errors += 1
+                    if self.tick_errors % 100 == 1:
+                        log.exception("tick at t=%.2f failed (%d so far)", self.clock.now,
+                                      self.tick_errors)  # fmt: skip
             wait = self.clock.wait_time()
             # epoll sleeps in whole milliseconds, so shorter waits are run ahead instead (the
             # clock is absolute, so this never drifts); the endpoints get the loop every tick.
@@ -251,8 +261,13 @@ class Emulator:
                 rows = batch.get(m)
                 if rows is not None:
                     frames.append(enc.frame(m, CRC_EXTRA[m], rows[v.index]))
-                else:
+                    continue
+                try:
                     frames.append(enc.pack(builders[m](v)))
+                except (ValueError, OverflowError, struct.error):
+                    # A state no field can carry (a vehicle flown thousands of km away):
+                    # that one message is skipped; the vehicle and the others carry on.
+                    self.telemetry_errors += 1
             reading = readings.get(v.index)
             if reading is not None:
                 frames += self._sensor_frames(enc, reading)
@@ -283,4 +298,6 @@ class Emulator:
             "totals": totals,
             "gcs": self.gcs.stats.as_dict() if self.gcs else None,
             "events": self.events.count,
+            "telemetry_errors": self.telemetry_errors,
+            "tick_errors": self.tick_errors,
         }

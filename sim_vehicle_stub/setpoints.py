@@ -22,8 +22,12 @@ def _fields(mask: int) -> tuple[bool, bool, bool, bool, bool]:
     return (mask & 3) == 0, not mask & 4, (mask & 24) == 0, not mask & 32, not mask & 1024
 
 
+_LIMIT = 1e7
+"""Metres or m/s beyond which a setpoint value is rejected as nonsense (no area is that big)."""
+
+
 def _ok(*values: float) -> bool:
-    return all(math.isfinite(x) for x in values)
+    return all(math.isfinite(x) and abs(x) < _LIMIT for x in values)
 
 
 def local_setpoint(msg: Any, v: Vehicle, t: float) -> Setpoint | None:

@@ -75,8 +75,11 @@ def test_bad_commands_get_nacks_and_nothing_breaks() -> None:
         # Setpoints in frames the autopilot does not take are ignored, not crashed on.
         c.conn.mav.set_position_target_local_ned_send(0, 1, 1, 42, 0, *[math.nan] * 11)
         c.conn.mav.set_position_target_global_int_send(0, 1, 1, 6, 0, 10**9, 0, 0, *[0] * 8)
+        c.conn.mav.set_position_target_local_ned_send(0, 1, 1, 1, 3576, 1e12, 0, -10, *[0] * 8)
         assert c.command(400, 1) == 0
-        assert emu.nodes[0].stats.nacks >= 8
+        assert emu.nodes[0].stats.nacks >= 9
+        assert emu.vehicles[0].setpoint is None
+        assert emu.stats()["tick_errors"] == 0
 
 
 @pytest.mark.timeout(60)
