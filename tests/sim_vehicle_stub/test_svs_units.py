@@ -7,6 +7,8 @@ import math
 import numpy as np
 import pymap3d
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from sim_vehicle_stub.emulator import Emulator
 from sim_vehicle_stub.encoder import Encoder
@@ -144,3 +146,16 @@ def test_numpy_packed_streams_are_byte_identical_to_pymavlink() -> None:
             fast = Encoder(v.sysid).frame(msg_id, CRC_EXTRA[msg_id], batch[msg_id][v.index])
             assert fast == Encoder(v.sysid).pack(build(v))
             assert fast == build(v).pack(d.MAVLink(None, srcSystem=v.sysid, srcComponent=1))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.binary(max_size=600), st.booleans())
+def test_decoder_never_raises_and_accounts_for_every_read(data: bytes, stream: bool) -> None:
+    stats = LinkStats()
+    msgs = FrameDecoder(stats, stream=stream).feed(data)
+    assert stats.datagrams == 1
+    assert stats.messages == len(msgs)
+    assert stats.rejected_datagrams in (0, 1)
+    if stats.rejected_datagrams == 0 and not stream:
+        # Nothing dropped: the bytes were whole frames (or nothing at all).
+        assert (len(msgs) > 0) == (len(data) > 0)
