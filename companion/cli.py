@@ -12,7 +12,6 @@ from pathlib import Path
 from companion.autopilots import FlightMode
 from companion.fence_from_profile import fence_for
 from companion.fleet.cli_args import add_fleet_parser
-from companion.fleet.runner import fleet_command
 from companion.link.factory import BACKENDS, Backend, make_link
 from companion.mission import MissionConfig, VehicleMission
 from companion.telemetry import MissionLog, read_log
@@ -53,6 +52,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "run":
             return run_command(args)
+        from companion.fleet.runner import fleet_command
+
         return fleet_command(args)
     except ProfileError as exc:
         print(f"companion: {exc}", file=sys.stderr)

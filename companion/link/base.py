@@ -37,6 +37,10 @@ class VehicleLink(ABC):
     async def close(self) -> None:
         """Release sockets and logs; safe to call twice."""
 
+    async def configure_streams(self) -> None:
+        """Ask the vehicle to stop streams the companion does not read (default: leave them)."""
+        return
+
     async def reconnect(self) -> None:
         """Drop and re-open the transport after a link loss."""
         await self.close()

@@ -281,6 +281,14 @@ class PymavlinkLink(VehicleLink):
         finally:
             self._acks.pop(command, None)
 
+    async def configure_streams(self) -> None:
+        """SET_MESSAGE_INTERVAL -1 for ATTITUDE (and GLOBAL_POSITION_INT in the local frame):
+        at high speed-ups every message not parsed is CPU for the rest of the fleet."""
+        unused = [30] + ([33] if self._frame is None else [])
+        for msg_id in unused:
+            if not await self.command(511, float(msg_id), -1.0):
+                log.info("vehicle keeps streaming message %d", msg_id)
+
     async def set_mode(self, mode: FlightMode) -> bool:
         if self.autopilot is None:
             raise LinkError("set_mode before the first HEARTBEAT")

@@ -247,6 +247,13 @@ class VehicleMission:
     # -- lifecycle -------------------------------------------------------------------------
 
     async def _lifecycle(self) -> None:
+        if self.recovered.ended:
+            # A restart after the end must not take the vehicle back from its RTL / landing.
+            self.end_reason = "already ended (mission log)"
+            self._set_phase(Phase.DONE)
+            return
+        await self._until(lambda: self.heartbeat is not None)
+        await self.link.configure_streams()
         while self.end_reason is None:
             await self._until(lambda: self.heartbeat is not None and self.position is not None)
             if self.end_reason is not None:
@@ -398,11 +405,13 @@ class VehicleMission:
     def _after_link_restored(self, before: Phase) -> None:
         hb, ap = self.heartbeat, self.link.autopilot
         if before is Phase.PAUSED or hb is None or ap is None:
+            self._guided_seen = before is Phase.PAUSED
             self._set_phase(Phase.PAUSED if before is Phase.PAUSED else Phase.PREPARE)
             return
         if ap.is_guided(hb.custom_mode) or not hb.armed or self._hold_mode(hb):
             # Still ours, a rebooted vehicle on the ground, or the autopilot's own link-loss
             # HOLD: the lifecycle re-enters the guided mode (taking off again if needed).
+            self._guided_seen = False
             self._set_phase(Phase.PREPARE)
         else:
             self._set_phase(Phase.PAUSED)  # a pilot has it
