@@ -5,9 +5,12 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import os
 import signal
 import sys
+from collections.abc import Coroutine
 from pathlib import Path
+from typing import Any
 
 from companion.autopilots import FlightMode
 from companion.fence_from_profile import fence_for
@@ -32,7 +35,7 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--log-dir", type=Path, default=Path("runs"))
     p.add_argument("--duration", type=float, help="search time, vehicle s (default: profile)")
-    p.add_argument("--end-action", choices=("rtl", "land"), default="rtl")
+    p.add_argument("--end-action", choices=("rtl", "land"), help="default: profile site, else rtl")
     p.add_argument("--land-wait", type=float, default=600.0, help="vehicle s to wait to land")
     p.add_argument("--no-tlog", action="store_true", help="do not write the .tlog")
     p.add_argument("-v", "--verbose", action="store_true")
@@ -70,6 +73,8 @@ def run_command(args: argparse.Namespace) -> int:
     profile = load_profile(args.profile)
     if not 0 <= args.vehicle < profile.fleet.vehicles:
         raise ValueError(f"--vehicle {args.vehicle}: profile has {profile.fleet.vehicles} vehicles")
+    site = profile.site
+    end_action = args.end_action or (site.end_action if site is not None else "rtl")
     config = MissionConfig(
         vehicle=args.vehicle,
         profile=profile,
@@ -77,13 +82,34 @@ def run_command(args: argparse.Namespace) -> int:
         seed=args.seed,
         log_dir=args.log_dir,
         duration=args.duration,
-        end_action=FlightMode(args.end_action),
+        end_action=FlightMode(end_action),
+        battery_min=site.battery_min if site is not None else 20.0,
         land_wait=args.land_wait,
     )
-    url = args.connect or f"udpin:0.0.0.0:{args.base_port + args.vehicle}"
-    reason = asyncio.run(_fly(config, url, args.backend, tlog=not args.no_tlog))
-    print(f"vehicle {args.vehicle}: mission ended ({reason})")
+    port = args.base_port + args.vehicle
+    url = args.connect or f"udpin:0.0.0.0:{port}"
+    if args.connect is None and site is not None and site.connect:
+        url = site.connect.format(port=port)
+    fly = _fly(config, url, args.backend, tlog=not args.no_tlog)
+    if args.backend == "mavsdk":
+        reason = _run_mavsdk(fly)
+        print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
+        os._exit(0)  # see _run_mavsdk: never join MAVSDK's blocked worker threads
+    reason = asyncio.run(fly)
+    print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
     return 0
+
+
+def _run_mavsdk(coro: Coroutine[Any, Any, str]) -> str:
+    """Run without waiting for the default executor at the end: a MAVSDK call still blocked in
+    its native library after the vehicle went away would otherwise keep the process alive."""
+    loop = asyncio.new_event_loop()
+    try:
+        return loop.run_until_complete(coro)
+    finally:
+        logging.shutdown()
+        sys.stdout.flush()
+        sys.stderr.flush()
 
 
 def _dump_tasks() -> None:

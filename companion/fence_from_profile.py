@@ -11,9 +11,9 @@ from mdm_profiles import MissionProfile
 
 def fence_for(profile: MissionProfile) -> Geofence:
     """Local (north, east) geofence; WGS84 vertices are converted by the link layer's frame."""
-    field = getattr(profile, "field", None)
-    if field is None:
+    site = profile.site
+    if site is None:
         return Geofence.rectangle(profile.area.north, profile.area.east)
     frame = LocalFrame(profile.origin.lat, profile.origin.lon, profile.origin.alt)
-    local = [frame.to_local(p.lat, p.lon, profile.origin.alt)[:2] for p in field.geofence]
+    local = [frame.to_local(p.lat, p.lon, profile.origin.alt)[:2] for p in site.geofence]
     return Geofence(np.array(local))

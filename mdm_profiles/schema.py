@@ -124,6 +124,26 @@ class MissionSpec(_Strict):
     ts_cap: float = Field(default=40000.0, gt=0, description="T_S of runs that never finish, s.")
 
 
+class GeoPoint(_Strict):
+    lat: float = Field(ge=-90, le=90)
+    lon: float = Field(ge=-180, le=180)
+
+
+class SiteSpec(_Strict):
+    """A real flying site (field profiles): geofence, link and failsafe choices of the companion."""
+
+    name: str = ""
+    geofence: list[GeoPoint] = Field(
+        min_length=3, description="Polygon (WGS84) every commanded point stays inside."
+    )
+    connect: str | None = Field(
+        default=None,
+        description="Link URL of vehicle 0; '{port}' is replaced by base port + vehicle index.",
+    )
+    end_action: Literal["rtl", "land"] = "rtl"
+    battery_min: float = Field(default=25.0, ge=0, le=100, description="End below this, %.")
+
+
 class MissionProfile(_Strict):
     """A whole mission: world, fleet, sensors, policy and timing."""
 
@@ -139,6 +159,7 @@ class MissionProfile(_Strict):
     )
     policy: PolicySpec
     mission: MissionSpec = MissionSpec()
+    site: SiteSpec | None = Field(default=None, description="Field profiles only.")
 
     @model_validator(mode="after")
     def _consistent(self) -> MissionProfile:

@@ -195,7 +195,7 @@ class VehicleMission:
         self.position = pos
         if t - self._last_tick >= 10.0:
             self._last_tick = t
-            self.emit("tick", phase=self.phase.value, level=self.core.level,
+            self.emit("tick", phase=self.phase.value, level=self.core.level, wall=round(time.time(), 3),
                       north=round(pos.north, 1), east=round(pos.east, 1),
                       alt=round(-pos.down, 1), found=self.core.confirmed_count)  # fmt: skip
         if self.phase is Phase.SEARCH:
