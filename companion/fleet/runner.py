@@ -45,7 +45,7 @@ def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
         sys.executable, "-m", "sim_vehicle_stub.cli",
         "--profile", o.profile,
         "--vehicles", str(vehicles),
-        "--speedup", str(o.speedup),
+        "--speedup", str(o.speedup) if o.speedup > 0 else "max",
         "--persona", o.persona,
         "--base-port", str(o.base_port),
         "--bind-port-base", str(o.base_port + 200),
@@ -88,7 +88,7 @@ def run_fleet(o: FleetOptions) -> FleetResult:
                     companions.append(
                         subprocess.Popen(companion_command(o, i), stdout=f, stderr=subprocess.STDOUT, env=env)
                     )  # fmt: skip
-            _watch(o, profile, n, companions, started)
+            _watch(o, profile, n, companions, started, emulator)
         finally:
             for p in companions:
                 _stop(p)
@@ -105,12 +105,17 @@ def _watch(
     n: int,
     companions: list[subprocess.Popen[bytes]],
     started: float,
+    emulator: subprocess.Popen[bytes],
 ) -> None:
     real = sum(not t.false_target for t in profile.targets)
     last_print, last_line = 0.0, ""
     while any(p.poll() is None for p in companions):
         time.sleep(0.5)
         now = time.perf_counter()
+        if emulator.poll() is not None:
+            log.error("the emulator exited (code %s); see %s", emulator.returncode,
+                      o.out / "emulator.log")  # fmt: skip
+            break
         if now - started > o.wall_limit:
             log.warning("wall limit %.0f s reached; stopping the companions", o.wall_limit)
             break
