@@ -79,8 +79,3 @@ def pursuit(
         float(target[0]), float(target[1]), target_down, float(velocity[0]), float(velocity[1]), vd
     )
 
-
-def hold_altitude(position: FloatArray, config: GuidanceConfig, fence: Geofence) -> Setpoint:
-    """A position setpoint over the current (fenced) point at this vehicle's altitude."""
-    point = fence.clamp(np.asarray(position, dtype=float))
-    return Setpoint(float(point[0]), float(point[1]), -config.altitude, 0.0, 0.0, 0.0)
