@@ -78,4 +78,3 @@ def pursuit(
     return Setpoint(
         float(target[0]), float(target[1]), target_down, float(velocity[0]), float(velocity[1]), vd
     )
-
