@@ -183,6 +183,14 @@ class VehicleMission:
                 log.info("vehicle %d back in the guided mode: resuming", self.config.vehicle)
                 self._set_phase(Phase.SEARCH if self.core.started else Phase.PREPARE)
         elif self._guided_seen and self.phase in _COMMANDING and not self._own_mode_change:
+            if self._hold_mode(hb):
+                # HOLD is what the autopilot itself falls back to when setpoints stall
+                # (PX4 offboard loss): take the vehicle back, as after a link loss.
+                log.warning("vehicle %d: autopilot fell back to HOLD; re-entering the guided "
+                            "mode", self.config.vehicle)  # fmt: skip
+                self._guided_seen = False
+                self._set_phase(Phase.PREPARE)
+                return
             log.warning("vehicle %d: mode changed to %s by someone else; not commanding",
                         self.config.vehicle, ap.mode_name(hb.custom_mode))  # fmt: skip
             self._set_phase(Phase.PAUSED)
@@ -200,6 +208,9 @@ class VehicleMission:
                       alt=round(-pos.down, 1), found=self.core.confirmed_count)  # fmt: skip
         if self.phase is Phase.SEARCH:
             self._search_step(t, pos)
+        elif self.phase is Phase.PAUSED and self.search_start is not None:
+            if t - self.search_start >= self.config.search_duration:
+                self.request_end("mission time (paused)")  # ends without commanding
         elif self.phase is Phase.PREPARE:
             # Neutral stream before arming: stay where it is (a climb here would start the
             # moment the mode switches, before the vehicle is armed).
