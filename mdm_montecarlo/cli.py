@@ -11,11 +11,11 @@ from pathlib import Path
 from tqdm import tqdm
 
 from mdm_montecarlo.report import write_report
-from mdm_montecarlo.runner import MissionResults, run_many, run_missions
+from mdm_montecarlo.runner import MissionResults, run_many
 from mdm_montecarlo.study import TABLES, Case, Row, study_rows
 from mdm_montecarlo.tables import MeasuredRow, format_table, measured_rows
 from mdm_montecarlo.variants import with_method
-from mdm_profiles import ProfileError, load_profile
+from mdm_profiles import MissionProfile, ProfileError, load_profile
 from mdm_profiles.overrides import apply_overrides
 
 
@@ -73,16 +73,16 @@ def _workers(n: int) -> int:
 
 
 def _simulate(
-    cases: list[Case], args: argparse.Namespace, label: str
-) -> dict[Case, MissionResults]:
+    profiles: list[MissionProfile], args: argparse.Namespace, label: str
+) -> list[MissionResults]:
+    """Run every profile with one progress bar over all their runs."""
     bar = tqdm(
-        total=len(cases) * args.runs,
+        total=len(profiles) * args.runs,
         unit="run",
         desc=label,
         disable=args.no_progress or args.json,
         file=sys.stderr,
     )
-    profiles = [case.profile() for case in cases]
     out = run_many(
         profiles,
         runs=args.runs,
@@ -91,9 +91,8 @@ def _simulate(
         scheduler=args.scheduler,
         progress=bar.update,
     )
-    results = dict(zip(cases, out, strict=True))
     bar.close()
-    return results
+    return out
 
 
 def _emit(rows: list[MeasuredRow], as_json: bool) -> None:
@@ -109,22 +108,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.method:
         profile = with_method(profile, args.method)
     start = time.perf_counter()
-    bar = tqdm(
-        total=args.runs,
-        unit="run",
-        desc=profile.name,
-        disable=args.no_progress or args.json,
-        file=sys.stderr,
-    )
-    res = run_missions(
-        profile,
-        runs=args.runs,
-        seed=args.seed,
-        workers=_workers(args.workers),
-        scheduler=args.scheduler,
-        progress=bar.update,
-    )
-    bar.close()
+    res = _simulate([profile], args, profile.name)[0]
     pol = profile.policy
     names = [lv.distribution for lv in pol.levels]
     method = "MDM:" + "+".join(names) if pol.kind == "mdm" else names[0]
@@ -155,7 +139,9 @@ def _reproduce(args: argparse.Namespace) -> int:
     rows = study_rows(tables)
     cases = list(dict.fromkeys(r.case for r in rows))
     start = time.perf_counter()
-    results = _simulate(cases, args, "reproduce")
+    results = dict(
+        zip(cases, _simulate([c.profile() for c in cases], args, "reproduce"), strict=True)
+    )
     wall = time.perf_counter() - start
     measured = measured_rows(rows, results)
     header = (
