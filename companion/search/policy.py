@@ -144,11 +144,22 @@ class SearchPolicy:
 
     def known(self, state: PolicyState, lanes: IntArray, positions: FloatArray) -> BoolArray:
         """(len(lanes), m): True where a position lies within memory_radius of a remembered target."""
-        memory = state.memory[lanes]
-        used = np.arange(memory.shape[1])[None, :] < state.memory_count[lanes][:, None]
-        gap = positions[:, :, None, :] - memory[:, None, :, :]
-        close = np.einsum("nmkd,nmkd->nmk", gap, gap) <= self.config.memory_radius**2
-        return np.asarray(np.any(close & used[:, None, :], axis=2))
+        out = np.zeros(positions.shape[:2], dtype=bool)
+        counts = state.memory_count[lanes]
+        rows = np.flatnonzero(counts > 0)
+        if rows.size == 0:
+            return out
+        memory = state.memory[lanes[rows]]
+        points = positions[rows]
+        hit = np.zeros((rows.size, positions.shape[1]), dtype=bool)
+        radius2 = self.config.memory_radius**2
+        # One memory slot at a time: (rows, m) work per slot instead of a (rows, m, K, 2) block.
+        for k in range(int(counts[rows].max())):
+            north = points[:, :, 0] - memory[:, k, None, 0]
+            east = points[:, :, 1] - memory[:, k, None, 1]
+            hit |= (north * north + east * east <= radius2) & (counts[rows] > k)[:, None]
+        out[rows] = hit
+        return out
 
     def step(
         self,
@@ -160,7 +171,10 @@ class SearchPolicy:
         """Apply one observation to the vehicles ``lanes`` of ``state`` (in place)."""
         last = self.n_levels - 1
         level = state.level[lanes]
-        new = obs.contacts & ~self.known(state, lanes, obs.contact_positions)
+        new = obs.contacts.copy()
+        seen = np.flatnonzero(new.any(axis=1))
+        if seen.size:
+            new[seen] &= ~self.known(state, lanes[seen], obs.contact_positions[seen])
         has = new.any(axis=1)
 
         detected = has & (level < last)
