@@ -7,6 +7,8 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from mdm_profiles.mqtt_spec import MqttSpec
+
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -160,6 +162,7 @@ class MissionProfile(_Strict):
     policy: PolicySpec
     mission: MissionSpec = MissionSpec()
     site: SiteSpec | None = Field(default=None, description="Field profiles only.")
+    mqtt: MqttSpec | None = Field(default=None, description="Broker for telemetry and commands.")
 
     @model_validator(mode="after")
     def _consistent(self) -> MissionProfile:
