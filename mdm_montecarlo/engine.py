@@ -29,7 +29,7 @@ from mdm_profiles import MissionProfile
 from sim_vehicle_stub.world import Scenario, first_entry_time
 
 FloatArray = NDArray[np.float64]
-BLOCK_RUNS = 50
+BLOCK_RUNS = 200
 _EPS = 1e-9
 
 
@@ -94,8 +94,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         horizon = np.minimum.reduce([leg, deadline, tracks.next_node_time(t) - t, stop[runs] - t])
         horizon = np.maximum(horizon, 0.0)
 
-        target_pos = tracks.positions(runs, t)
-        target_vel = tracks.velocities(runs, t)
+        target_pos, target_vel = tracks.motion(runs, t)
         confirms = policy.uses_confirmation_sensor(state)[idx]
         eligible = ~policy.known(state, idx, target_pos)
         eligible &= ~(confirms[:, None] & targets.false_mask[None, :])
@@ -129,7 +128,8 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
             position=new_x,
             reached=reached,
             contacts=contacts,
-            contact_positions=tracks.positions(runs, new_t),
+            # Targets move linearly until the next grid node, which bounds the step.
+            contact_positions=target_pos + target_vel * (new_t - t)[:, None, None],
         )
         outcome = policy.step(state, idx, obs, rng_policy)
         events += 1

@@ -119,12 +119,11 @@ class TargetTracks:
         pos, _ = self._interpolate(run, t)
         return pos
 
-    def velocities(self, run: IntArray, t: FloatArray) -> FloatArray:
-        """Target velocities (n, m, 2) on the grid interval that starts at or before t."""
+    def motion(self, run: IntArray, t: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Positions and velocities (n, m, 2) at t; both hold until ``next_node_time(t)``."""
         if self.walk is None:
-            return np.zeros((len(run), self.spec.count, 2))
-        _, vel = self._interpolate(run, t)
-        return vel
+            return self.positions(run, t), np.zeros((len(run), self.spec.count, 2))
+        return self._interpolate(run, t)
 
     def _interpolate(self, run: IntArray, t: FloatArray) -> tuple[FloatArray, FloatArray]:
         k = np.floor(t / self.grid_dt + 1e-9).astype(np.intp)

@@ -41,7 +41,7 @@ def test_fixed_targets_never_move() -> None:
     tracks = TargetTracks(spec((1.0, 2.0), (3.0, 4.0)), Area(10, 10), 3, np.random.default_rng(0))
     run, t = np.array([0, 2]), np.array([0.0, 1e6])
     np.testing.assert_array_equal(tracks.positions(run, t), [[[1, 2], [3, 4]]] * 2)
-    np.testing.assert_array_equal(tracks.velocities(run, t), np.zeros((2, 2, 2)))
+    np.testing.assert_array_equal(tracks.motion(run, t)[1], np.zeros((2, 2, 2)))
     assert np.all(np.isinf(tracks.next_node_time(t)))
     assert not tracks.moving
 
@@ -109,7 +109,7 @@ def test_positions_are_linear_between_grid_nodes() -> None:
     b = tracks.positions(run, np.full(2, 40.0))
     mid = tracks.positions(run, np.full(2, 32.5))
     np.testing.assert_allclose(mid, a + 0.25 * (b - a), rtol=1e-12)
-    np.testing.assert_allclose(tracks.velocities(run, np.full(2, 32.5)), (b - a) / 10.0)
+    np.testing.assert_allclose(tracks.motion(run, np.full(2, 32.5))[1], (b - a) / 10.0)
     np.testing.assert_allclose(tracks.next_node_time(np.array([30.0, 32.5])), [40.0, 40.0])
 
 
