@@ -11,6 +11,7 @@ import signal
 import sys
 from pathlib import Path
 
+from mavlink_signing import ENV_VAR, load_signing_key
 from mdm_profiles import ProfileError, builtin_profile, builtin_profiles, load_profile
 from mdm_profiles.schema import MissionProfile
 from sim_vehicle_stub.config import EmulatorConfig
@@ -66,6 +67,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="keep real failsafe time-outs at speed-ups (clients must stream at sim rate)",
     )
     p.add_argument("--flood-rate", type=float, default=5000.0, help="datagrams/s per endpoint")
+    p.add_argument(
+        "--signing-key-file",
+        type=Path,
+        help=f"MAVLink 2 signing: file holding the passphrase (default: ${ENV_VAR}; neither: off)",
+    )
     p.add_argument("--log-level", default="INFO")
     return p
 
@@ -91,6 +97,7 @@ def config_from_args(args: argparse.Namespace) -> EmulatorConfig:
         battery_endurance=args.battery_endurance,
         scale_timeouts=not args.no_scale_timeouts,
         flood_rate=args.flood_rate,
+        signing_key=load_signing_key(args.signing_key_file),
     )
 
 

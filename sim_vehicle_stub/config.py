@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from mdm_profiles import MissionProfile
@@ -46,6 +46,9 @@ class EmulatorConfig:
     """Datagrams per wall second accepted per endpoint; more are dropped unread."""
     start_positions: tuple[tuple[float, float], ...] | None = None
     """Override the profile's periphery start points, metres (north, east)."""
+    signing_key: bytes | None = field(default=None, repr=False)
+    """MAVLink 2 signing secret (32 bytes); None: signing off. From a key file or the
+    environment (mavlink_signing.load_signing_key), never from the profile."""
 
     def __post_init__(self) -> None:
         if not 1 <= self.fleet_size <= MAX_VEHICLES:
@@ -55,6 +58,8 @@ class EmulatorConfig:
             )
         if self.telemetry_hz <= 0 or self.sim_step <= 0:
             raise ValueError("telemetry_hz and sim_step must be > 0")
+        if self.signing_key is not None and len(self.signing_key) != 32:
+            raise ValueError(f"signing key of {len(self.signing_key)} bytes; need 32")
 
     @property
     def fleet_size(self) -> int:

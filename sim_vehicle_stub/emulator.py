@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from mavlink_signing import SigningState
 from sim_vehicle_stub.clock import SimClock
 from sim_vehicle_stub.commands import CommandHandler
 from sim_vehicle_stub.config import EmulatorConfig
@@ -98,7 +99,8 @@ class Emulator:
             vehicle = Vehicle(
                 i, persona, persona.param_table(facts), self.fleet, self.events, self._now
             )
-            self.nodes.append(VehicleNode(vehicle, Encoder(i + 1)))
+            signing = SigningState(config.signing_key) if config.signing_key else None
+            self.nodes.append(VehicleNode(vehicle, Encoder(i + 1, signing=signing)))
         self.handler = MessageHandler(CommandHandler(self.telemetry, o.alt), self.geo, self._now)
         self.udp: list[UdpEndpoint] = []
         self.tcp: list[TcpServer] = []
@@ -143,7 +145,8 @@ class Emulator:
                 await server.start(cfg.bind_host, cfg.tcp_base + 10 * i)
                 self.tcp.append(server)
         self._task = asyncio.create_task(self._loop(), name="sim-loop")
-        log.info("emulator up: %d vehicles, speedup %s", len(self.nodes), cfg.speedup or "max")
+        log.info("emulator up: %d vehicles, speedup %s, MAVLink signing %s", len(self.nodes),
+                 cfg.speedup or "max", "on" if cfg.signing_key else "off")  # fmt: skip
 
     async def stop(self) -> None:
         self._stop.set()

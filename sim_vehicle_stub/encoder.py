@@ -1,7 +1,8 @@
 """MAVLink encoding for one vehicle: its own system id, component 1 and sequence counter.
 
 Messages without numeric arrays take a fast path (one struct.pack, fastcrc when installed) that
-produces the same bytes as pymavlink's own packer; the rest go through pymavlink.
+produces the same bytes as pymavlink's own packer; the rest go through pymavlink. With a signing
+state every frame is signed (MAVLink 2 signing), whichever path built it.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from typing import Any
 
 from pymavlink.generator import mavcrc
 
+from mavlink_signing import SigningState
 from sim_vehicle_stub.mavlink import dialect
 
 _HEADER = struct.Struct("<BBBBBBBHB")
@@ -37,18 +39,21 @@ def _crc16(data: bytes) -> int:
 
 
 class Encoder:
-    """Packs messages as system ``sysid``, component 1, numbering them in sequence."""
+    """Packs messages as system ``sysid``, component 1, numbering them in sequence; signs them
+    when given a signing state."""
 
-    def __init__(self, sysid: int, compid: int = 1) -> None:
+    def __init__(self, sysid: int, compid: int = 1, signing: SigningState | None = None) -> None:
         self.mav = dialect.MAVLink(None, srcSystem=sysid, srcComponent=compid)
         self.sysid, self.compid = sysid, compid
+        self.signing = signing
+        self._incompat = 0 if signing is None else 1
 
     def pack(self, msg: Any) -> bytes:
         fields = _fast_fields(type(msg))
         if fields is None:
-            data: bytes = msg.pack(self.mav)
-            self.mav.seq = (self.mav.seq + 1) % 256
-            return data
+            # pymavlink packs the payload (arrays, trailing zeros cut); frame() adds the rest.
+            payload: bytes = msg.pack(self.mav)[10:-2]
+            return self.frame(type(msg).id, type(msg).crc_extra, payload)
         values = [getattr(msg, f) for f in fields]
         values = [v.encode() if isinstance(v, str) else v for v in values]
         payload = msg.unpacker.pack(*values).rstrip(b"\x00") or b"\x00"
@@ -58,9 +63,12 @@ class Encoder:
     def frame(self, msg_id: int, crc_extra: int, payload: bytes) -> bytes:
         """A MAVLink 2 frame around a payload whose trailing zeros are already cut."""
         head = _HEADER.pack(
-            0xFD, len(payload), 0, 0, self.mav.seq, self.sysid, self.compid,
+            0xFD, len(payload), self._incompat, 0, self.mav.seq, self.sysid, self.compid,
             msg_id & 0xFFFF, msg_id >> 16,
         )  # fmt: skip
         body = head[1:] + payload
         self.mav.seq = (self.mav.seq + 1) % 256
-        return head[:1] + body + _CRC.pack(_crc16(body + bytes((crc_extra,))))
+        data = head[:1] + body + _CRC.pack(_crc16(body + bytes((crc_extra,))))
+        if self.signing is not None:
+            data += self.signing.signature(data)
+        return data

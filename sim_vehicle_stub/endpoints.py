@@ -93,8 +93,8 @@ class UdpEndpoint(asyncio.DatagramProtocol):
         if not self.flood.allow():
             self.node.stats.flood_dropped += 1
             return
-        msgs = self.decoder.feed(data)
-        if msgs:
+        msgs = self.node.authentic(self.decoder.feed(data))
+        if msgs:  # only a sender of accepted messages becomes a peer
             self.peers.saw(addr)
             self.deliver(self.node, msgs)
 
@@ -139,7 +139,7 @@ class TcpServer:
         self.node.outputs.append(send)
         try:
             while data := await reader.read(4096):
-                msgs = decoder.feed(data)
+                msgs = self.node.authentic(decoder.feed(data))
                 if msgs:
                     self.deliver(self.node, msgs)
         except (ConnectionError, OSError):
@@ -173,17 +173,22 @@ class GcsEndpoint(asyncio.DatagramProtocol):
             self.stats.flood_dropped += 1
             return
         msgs = self.decoder.feed(data)
-        if msgs:
-            self.peers.saw(addr)
+        routed: list[tuple[VehicleNode, list[Any]]] = []
         for msg in msgs:
             target = getattr(msg, "target_system", 0)
             if target == 0:
-                for node in self.nodes:
-                    self.deliver(node, [msg])
+                nodes = self.nodes
             elif 1 <= target <= len(self.nodes):
-                self.deliver(self.nodes[target - 1], [msg])
+                nodes = [self.nodes[target - 1]]
             else:
                 self.stats.not_for_us += 1
+                continue
+            routed += [(node, ok) for node in nodes if (ok := node.authentic([msg]))]
+        # A sender becomes a peer by speaking MAVLink; with signing on, by an accepted message.
+        if routed or (msgs and self.nodes[0].encoder.signing is None):
+            self.peers.saw(addr)
+        for node, accepted in routed:
+            self.deliver(node, accepted)
 
     def error_received(self, exc: Exception) -> None:
         pass

@@ -37,6 +37,12 @@ class LinkStats:
     """Commands answered with a failure result."""
     tx_dropped: int = 0
     """Outgoing datagrams dropped because the kernel's send buffer was full."""
+    unsigned: int = 0
+    """Signing on: messages without a signature (or MAVLink 1), not acted on."""
+    bad_signature: int = 0
+    """Signing on: messages signed with another key or altered on the way, not acted on."""
+    replayed: int = 0
+    """Signing on: correctly signed messages with a timestamp already seen (replays)."""
 
     @property
     def dropped(self) -> int:
@@ -49,8 +55,12 @@ class LinkStats:
             + self.flood_dropped
         )
 
+    @property
+    def signing_rejected(self) -> int:
+        return self.unsigned + self.bad_signature + self.replayed
+
     def as_dict(self) -> dict[str, int]:
-        return {**asdict(self), "dropped": self.dropped}
+        return {**asdict(self), "dropped": self.dropped, "signing_rejected": self.signing_rejected}
 
 
 class FrameDecoder:

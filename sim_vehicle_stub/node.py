@@ -6,6 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from mavlink_signing import Verdict
 from sim_vehicle_stub.encoder import Encoder
 from sim_vehicle_stub.framing import LinkStats
 from sim_vehicle_stub.telemetry import StreamSchedule
@@ -24,6 +25,34 @@ class VehicleNode:
     stats: LinkStats = field(default_factory=LinkStats)
     outputs: list[Callable[[bytes], None]] = field(default_factory=list)
     """Senders of every endpoint that carries this vehicle (UDP, TCP clients, GCS)."""
+
+    def authentic(self, messages: list[Any]) -> list[Any]:
+        """The messages this vehicle may act on: all of them with signing off; with signing on
+        (the encoder's signing state, which also signs what the vehicle sends),
+        those correctly signed with a new timestamp. The others are counted (unsigned,
+        bad_signature, replayed) and logged as ``signing_rejected`` at counts 1, 10, 100, ..."""
+        signing = self.encoder.signing
+        if signing is None:
+            return messages
+        out = []
+        for msg in messages:
+            verdict = signing.check(msg.get_msgbuf())
+            if verdict is Verdict.OK:
+                out.append(msg)
+                continue
+            stats = self.stats
+            if verdict is Verdict.UNSIGNED:
+                stats.unsigned += 1
+            elif verdict is Verdict.BAD_SIGNATURE:
+                stats.bad_signature += 1
+            else:
+                stats.replayed += 1
+            count = stats.signing_rejected
+            if count == 10 ** (len(str(count)) - 1):
+                v = self.vehicle
+                v.events.write(v.now, "signing_rejected", vehicle=v.index, reason=verdict.value,
+                               message=msg.get_type(), source=msg.get_srcSystem(), count=count)  # fmt: skip
+        return out
 
     def send(self, messages: list[Any]) -> None:
         """Encode and send messages, bundled into datagrams of at most ~1400 bytes as PX4 does."""

@@ -1,0 +1,13 @@
+"""MAVLink 2 message signing shared by the emulator and the companion: the key and the state."""
+
+from mavlink_signing.key import ENV_VAR, SigningKeyError, load_signing_key, passphrase_to_secret
+from mavlink_signing.state import SigningState, Verdict
+
+__all__ = [
+    "ENV_VAR",
+    "SigningKeyError",
+    "SigningState",
+    "Verdict",
+    "load_signing_key",
+    "passphrase_to_secret",
+]
