@@ -12,6 +12,16 @@ Backend = Literal["pymavlink", "mavsdk"]
 BACKENDS: tuple[Backend, ...] = ("pymavlink", "mavsdk")
 
 
+def check_signing_support(backend: str, signing_key: bytes | None) -> None:
+    """Refuse a signing key for a backend that cannot sign (raises ValueError saying why)."""
+    if signing_key is not None and backend == "mavsdk":
+        raise ValueError(
+            "MAVLink signing: the mavsdk backend cannot sign (MAVSDK 4 has no message-signing "
+            "API); use --backend pymavlink, or unset the key (--signing-key-file / "
+            "MDM_MAVLINK_KEY)"
+        )
+
+
 def make_link(
     backend: Backend,
     *,
@@ -19,12 +29,16 @@ def make_link(
     target_system: int,
     tlog: Path | None,
     frame: LocalFrame | None = None,
+    signing_key: bytes | None = None,
 ) -> VehicleLink:
     """A closed link of the given backend; ``open`` it (or use ``async with``)."""
+    check_signing_support(backend, signing_key)
     if backend == "pymavlink":
         from companion.link.pymavlink_link import PymavlinkLink
 
-        return PymavlinkLink(url=url, target_system=target_system, tlog=tlog, frame=frame)
+        return PymavlinkLink(
+            url=url, target_system=target_system, tlog=tlog, frame=frame, signing_key=signing_key
+        )
     if backend == "mavsdk":
         from companion.link.mavsdk_link import MavsdkLink
 

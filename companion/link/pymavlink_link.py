@@ -26,6 +26,7 @@ from companion.link.messages import (
     SystemStatus,
 )
 from companion.link.tlog import TelemetryLog
+from mavlink_signing import SigningState, Verdict
 
 log = logging.getLogger(__name__)
 
@@ -65,6 +66,9 @@ class PymavlinkLink(VehicleLink):
             from GLOBAL_POSITION_INT around the profile origin (real vehicles, whose local origin
             is their own EKF origin).
         command_timeout / command_tries: transport retries of COMMAND_LONG and PARAM_SET (wall s).
+        signing_key: MAVLink 2 signing secret (32 bytes), or None. With a key, every message sent
+            is signed, and received messages that are unsigned, wrongly signed or replayed are
+            dropped and counted in ``signing_rejected``.
     """
 
     def __init__(
@@ -78,6 +82,7 @@ class PymavlinkLink(VehicleLink):
         frame: LocalFrame | None = None,
         command_timeout: float = 1.0,
         command_tries: int = 5,
+        signing_key: bytes | None = None,
     ) -> None:
         self.address: Address = parse_address(url)
         self.target_system = target_system
@@ -97,6 +102,8 @@ class PymavlinkLink(VehicleLink):
         self._time_ms = 0
         self._armed = False
         self.bad_packets = 0
+        self._signing = SigningState(signing_key) if signing_key is not None else None
+        self.signing_rejected = 0
 
     async def open(self) -> None:
         loop = asyncio.get_running_loop()
@@ -156,6 +163,8 @@ class PymavlinkLink(VehicleLink):
                 continue
             if msg.get_srcSystem() != self.target_system:
                 continue
+            if self._signing is not None and not self._authentic(self._signing, msg):
+                continue
             if addr is not None and self.address.scheme == "udpin":
                 self._remote = (str(addr[0]), int(addr[1]))
             if self._tlog is not None:
@@ -167,6 +176,17 @@ class PymavlinkLink(VehicleLink):
                 continue
             if event is not None:
                 self.events.put_nowait(event)
+
+    def _authentic(self, signing: SigningState, msg: Any) -> bool:
+        verdict = signing.check(msg.get_msgbuf())
+        if verdict is Verdict.OK:
+            return True
+        self.signing_rejected += 1
+        n = self.signing_rejected
+        if n == 10 ** (len(str(n)) - 1):
+            log.warning("dropped %s from system %d: %s (%d dropped so far)", msg.get_type(),
+                        self.target_system, verdict.value, n)  # fmt: skip
+        return False
 
     def _translate(self, msg: Any, received: float) -> LinkEvent | None:
         kind = msg.get_type()
@@ -223,6 +243,8 @@ class PymavlinkLink(VehicleLink):
         if transport is None:
             return
         buf = msg.pack(self._mav)
+        if self._signing is not None:
+            buf = self._signing.sign_frame(buf, msg.crc_extra)
         self._mav.seq = (self._mav.seq + 1) % 256
         # (selector datagram transports are not DatagramTransport subclasses: go by scheme)
         if self.address.scheme == "udpin":
