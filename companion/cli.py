@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import logging
 import os
 import signal
@@ -17,8 +18,11 @@ from companion.fence_from_profile import fence_for
 from companion.fleet.cli_args import add_fleet_parser
 from companion.link.factory import BACKENDS, Backend, make_link
 from companion.mission import MissionConfig, VehicleMission
-from companion.telemetry import MissionLog, read_log
+from companion.telemetry import EventSink, MissionLog, read_log
+from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
+from companion.telemetry.tee_sink import TeeSink
 from mdm_profiles import ProfileError, load_profile
+from mdm_profiles.mqtt_spec import MqttSpec
 
 log = logging.getLogger("companion")
 DEFAULT_BASE_PORT = 14540
@@ -39,6 +43,7 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--land-wait", type=float, default=600.0, help="vehicle s to wait to land")
     p.add_argument("--no-tlog", action="store_true", help="do not write the .tlog")
     p.add_argument("-v", "--verbose", action="store_true")
+    add_mqtt_arguments(p)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -90,7 +95,8 @@ def run_command(args: argparse.Namespace) -> int:
     url = args.connect or f"udpin:0.0.0.0:{port}"
     if args.connect is None and site is not None and site.connect:
         url = site.connect.format(port=port)
-    fly = _fly(config, url, args.backend, tlog=not args.no_tlog)
+    mqtt = mqtt_spec(args, profile.mqtt)
+    fly = _fly(config, url, args.backend, tlog=not args.no_tlog, mqtt=mqtt)
     if args.backend == "mavsdk":
         reason = _run_mavsdk(fly)
         print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
@@ -120,7 +126,9 @@ def _dump_tasks() -> None:
         log.warning("task %s: %s", task.get_name(), where or "(no frames)")
 
 
-async def _fly(config: MissionConfig, url: str, backend: Backend, *, tlog: bool) -> str:
+async def _fly(
+    config: MissionConfig, url: str, backend: Backend, *, tlog: bool, mqtt: MqttSpec | None
+) -> str:
     recovered = read_log(config.mission_log_path())
     if recovered.confirmed:
         log.info("resuming with %d confirmed target(s) from %s", len(recovered.confirmed),
@@ -131,7 +139,15 @@ async def _fly(config: MissionConfig, url: str, backend: Backend, *, tlog: bool)
         target_system=config.system_id,
         tlog=config.tlog_path() if tlog else None,
     )
-    sink = MissionLog(config.mission_log_path())
+    mission_log = MissionLog(config.mission_log_path())
+    sink: EventSink = mission_log
+    telemetry = None
+    if mqtt is not None:  # no broker configured: no MQTT code at all
+        from companion.telemetry.mqtt.vehicle_telemetry import VehicleTelemetry
+
+        telemetry = VehicleTelemetry.open(mqtt, profile_name=config.profile.name,
+                                          vehicle=config.vehicle, log_dir=config.log_dir)  # fmt: skip
+        sink = TeeSink(mission_log, telemetry)
     mission = VehicleMission(config, link, sink, recovered=recovered,
                              fence=fence_for(config.profile))  # fmt: skip
     loop = asyncio.get_running_loop()
@@ -139,11 +155,12 @@ async def _fly(config: MissionConfig, url: str, backend: Backend, *, tlog: bool)
         loop.add_signal_handler(sig, mission.operator_stop)
     loop.add_signal_handler(signal.SIGUSR1, _dump_tasks)
     try:
-        return await mission.run()
+        async with telemetry.running(mission) if telemetry else contextlib.nullcontext():
+            return await mission.run()
     except asyncio.CancelledError:
         return "stopped by a second signal"
     finally:
-        sink.close()
+        mission_log.close()
 
 
 if __name__ == "__main__":

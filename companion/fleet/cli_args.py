@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from companion.link.factory import BACKENDS
+from companion.telemetry.mqtt.cli_args import add_mqtt_arguments
 
 
 def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -26,3 +27,4 @@ def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
     p.add_argument("--out", type=Path, help="run directory (default runs/fleet-<time>)")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     p.add_argument("--quiet", action="store_true", help="no live progress lines")
+    add_mqtt_arguments(p)

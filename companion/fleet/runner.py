@@ -15,6 +15,7 @@ from pathlib import Path
 
 from companion.fleet.progress import progress_line, read_progress
 from companion.fleet.scoring import FleetResult, score
+from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
 from mdm_profiles import MissionProfile, load_profile
 
 log = logging.getLogger(__name__)
@@ -37,6 +38,8 @@ class FleetOptions:
     quiet: bool = True
     wall_limit: float = 900.0
     """Wall seconds after which the run is stopped (companions get SIGTERM)."""
+    mqtt_args: tuple[str, ...] = ()
+    """--mqtt* flags passed to every companion (none: no MQTT unless the profile has it)."""
 
 
 def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
@@ -67,6 +70,7 @@ def companion_command(o: FleetOptions, vehicle: int) -> list[str]:
         "--log-dir", str(o.out),
         "--duration", str(o.duration),
         "--land-wait", "0",
+        *o.mqtt_args,
     ]  # fmt: skip
 
 
@@ -141,11 +145,12 @@ def _stop(p: subprocess.Popen[bytes]) -> None:
 def fleet_command(args: argparse.Namespace) -> int:
     """`companion fleet`: run, then print a summary (or JSON)."""
     out = args.out or Path("runs") / time.strftime("fleet-%Y%m%d-%H%M%S")
+    mqtt_spec(args, load_profile(args.profile).mqtt)  # bad --mqtt* flags fail here, not N times
     opts = FleetOptions(
         profile=args.profile, out=out, vehicles=args.vehicles, speedup=args.speedup,
         duration=args.duration, backend=args.backend, persona=args.persona,
         setpoints=args.setpoints, seed=args.seed, base_port=args.base_port,
-        quiet=args.quiet or args.json,
+        quiet=args.quiet or args.json, mqtt_args=tuple(mqtt_argv(args)),
     )  # fmt: skip
     started = time.perf_counter()
     result = run_fleet(opts)

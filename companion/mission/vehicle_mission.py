@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import math
 import random
 import time
 from collections.abc import Callable
@@ -82,6 +83,9 @@ class VehicleMission:
         self._guided_seen = False
         self._climbing_by_command = False
         self._main: asyncio.Task[object] | None = None
+        self._operator_paused = False
+        self._end_action = config.end_action
+        self._chores: set[asyncio.Task[None]] = set()
 
     # -- public ----------------------------------------------------------------------------
 
@@ -121,6 +125,57 @@ class VehicleMission:
 
     def emit(self, event: str, **fields: object) -> None:
         self.sink.emit(self.clock.now, event, **fields)
+
+    # -- operator (MQTT commands): each returns None when obeyed, else why not -------------
+
+    def operator_pause(self) -> str | None:
+        """Stop commanding and hold (autopilot HOLD) until ``operator_resume``."""
+        if self.phase is not Phase.SEARCH:
+            return f"pause: not searching (phase {self.phase.value})"
+        self._operator_paused = True
+        self._set_phase(Phase.PAUSED, by="operator")
+        task = asyncio.ensure_future(self._hold())
+        self._chores.add(task)
+        task.add_done_callback(self._chores.discard)
+        return None
+
+    def operator_resume(self) -> str | None:
+        """Back to the guided mode and the search, as after a link loss."""
+        if not (self._operator_paused and self.phase is Phase.PAUSED):
+            return f"resume: not paused by the operator (phase {self.phase.value})"
+        self._operator_paused = False
+        self._guided_seen = False
+        self._set_phase(Phase.PREPARE)
+        return None
+
+    def operator_end(self, action: FlightMode, reason: str) -> str | None:
+        """End the mission now with ``action`` (RTL or LAND) instead of the configured one."""
+        if self.end_reason is not None:
+            return f"{action.value}: the mission is already ending ({self.end_reason})"
+        self._end_action = action
+        self.request_end(reason)
+        return None
+
+    def snapshot(self) -> dict[str, object]:
+        """What the vehicle is doing now (the MQTT state message)."""
+        pos, hb, ap = self.position, self.heartbeat, self.link.autopilot
+        t = self.clock.now
+        ci = self.core.index_value(t) if self.core.started else math.nan
+        sensor = self.core.sensor()
+        return {"vehicle": self.config.vehicle, "t": round(t, 3), "phase": self.phase.value,
+                "mode": ap.mode_name(hb.custom_mode) if hb is not None and ap is not None else None,
+                "armed": hb.armed if hb is not None else None, "level": self.core.level,
+                "sensor": sensor, "sensor_name": self.config.profile.sensors[sensor].name,
+                "ci": None if math.isnan(ci) else round(ci, 4), "found": self.core.confirmed_count,
+                **({} if pos is None else {"north": round(pos.north, 1), "east": round(pos.east, 1),
+                                           "alt": round(-pos.down, 1)})}  # fmt: skip
+
+    async def _hold(self) -> None:
+        try:
+            if not await self.link.set_mode(FlightMode.HOLD):
+                log.error("vehicle %d refused hold", self.config.vehicle)
+        except LinkError as exc:
+            log.error("vehicle %d: hold not sent: %s", self.config.vehicle, exc)
 
     # -- decision loop ---------------------------------------------------------------------
 
@@ -179,7 +234,7 @@ class VehicleMission:
             self.emit("mode", mode=ap.mode_name(hb.custom_mode), guided=guided)
         if guided:
             self._guided_seen = True
-            if self.phase is Phase.PAUSED:
+            if self.phase is Phase.PAUSED and not self._operator_paused:
                 log.info("vehicle %d back in the guided mode: resuming", self.config.vehicle)
                 self._set_phase(Phase.SEARCH if self.core.started else Phase.PREPARE)
         elif self._guided_seen and self.phase in _COMMANDING and not self._own_mode_change:
@@ -363,7 +418,9 @@ class VehicleMission:
         self.sensors.select(self.core.sensor(), t)
 
     async def _finish(self) -> None:
-        paused = self.phase in (Phase.PAUSED, Phase.LINK_LOST)
+        paused = self.phase is Phase.LINK_LOST or (
+            self.phase is Phase.PAUSED and not self._operator_paused
+        )
         self._set_phase(Phase.RETURN)
         self.emit("end", reason=self.end_reason, found=self.core.confirmed_count)
         self.sensors.select(-1, self.clock.now)
@@ -371,8 +428,8 @@ class VehicleMission:
             self._set_phase(Phase.DONE)
             return  # never fight the pilot; nothing to bring back on the ground
         self._own_mode_change = True
-        if not await self.link.set_mode(self.config.end_action):
-            log.error("vehicle %d refused %s", self.config.vehicle, self.config.end_action.value)
+        if not await self.link.set_mode(self._end_action):
+            log.error("vehicle %d refused %s", self.config.vehicle, self._end_action.value)
         if self.config.land_wait > 0:
             await self._until(
                 lambda: self.heartbeat is not None and not self.heartbeat.armed,

@@ -1,4 +1,4 @@
-"""Telemetry out of the companion: the durable mission log (MQTT comes later behind EventSink)."""
+"""Telemetry out of the companion: the durable mission log; MQTT in companion.telemetry.mqtt."""
 
 from companion.telemetry.mission_log import EventSink, MissionLog, Recovered, read_log, read_records
 

@@ -2,9 +2,9 @@
 
 The companion's telemetry (state, events, status, commands) is built on it, and so can any
 other use (a PSO peer channel: publish my best, receive the others'). ``run`` keeps one
-connection up, reconnecting with jittered exponential backoff and subscribing again each time;
-handlers are plain functions called on the event loop, and an exception in one is logged,
-never raised into the connection or its caller.
+connection up, reconnecting with jittered exponential backoff (at most ``backoff_max`` s)
+and subscribing again each time; handlers are plain functions called on the event loop, and
+an exception in one is logged, never raised into the connection or its caller.
 """
 
 from __future__ import annotations
@@ -108,7 +108,7 @@ class MqttChannel:
             finally:
                 self._client = None
                 self.connected.clear()
-            await asyncio.sleep(backoff * (1.0 + random.random()))
+            await asyncio.sleep(backoff * (0.5 + 0.5 * random.random()))  # jittered
             backoff = min(2.0 * backoff, self._backoff_max)
 
     @property

@@ -1,0 +1,122 @@
+"""Test harness (for tests and demos): a Mosquitto broker of one's own on a spare port, and
+Mosquitto's own clients (mosquitto_sub, mosquitto_pub) to watch and command a fleet, so what a
+test sees does not depend on this package's MQTT code."""
+
+from __future__ import annotations
+
+import getpass
+import json
+import signal
+import socket
+import subprocess
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _wait_port(port: int, timeout: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return
+        time.sleep(0.05)
+    raise TimeoutError(f"no broker listening on 127.0.0.1:{port} after {timeout} s")
+
+
+class Broker:
+    """``mosquitto`` on 127.0.0.1:``port`` with persistence in ``workdir`` (sessions and queued
+    QoS 1 messages survive :meth:`stop` + :meth:`start`); ``security`` adds config lines."""
+
+    def __init__(self, workdir: Path, *, security: str = "allow_anonymous true\n") -> None:
+        workdir.mkdir(parents=True, exist_ok=True)
+        self.port = free_port()
+        self.workdir = workdir
+        self.conf = workdir / "mosquitto.conf"
+        self.conf.write_text(
+            f"listener {self.port} 127.0.0.1\n"
+            f"user {getpass.getuser()}\n"
+            f"persistence true\npersistence_location {workdir}/\n"
+            f"log_dest file {workdir}/mosquitto.log\n" + security
+        )
+        self._proc: subprocess.Popen[bytes] | None = None
+
+    def start(self) -> None:
+        self._proc = subprocess.Popen(["mosquitto", "-c", str(self.conf)])
+        _wait_port(self.port)
+
+    def stop(self) -> None:
+        """Graceful stop (SIGTERM): the broker saves its sessions."""
+        if self._proc is not None and self._proc.poll() is None:
+            self._proc.send_signal(signal.SIGTERM)
+            self._proc.wait(timeout=10)
+        self._proc = None
+
+    def __enter__(self) -> Broker:
+        self.start()
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self.stop()
+
+
+@dataclass(frozen=True)
+class Message:
+    topic: str
+    payload: str
+    retained: bool
+
+    def json(self) -> Any:
+        return json.loads(self.payload)
+
+
+class Subscriber:
+    """``mosquitto_sub`` at QoS 1 with a persistent session (it reconnects by itself, and the
+    broker keeps its messages while it is away); every message lands in ``path``."""
+
+    def __init__(
+        self, port: int, topic_filter: str, path: Path, *, user: str | None = None,
+        password: str | None = None,
+    ) -> None:  # fmt: skip
+        self.path = path
+        auth = [] if user is None else ["-u", user, "-P", password or ""]
+        with path.open("wb") as out:
+            self._proc = subprocess.Popen(
+                ["mosquitto_sub", "-h", "127.0.0.1", "-p", str(port), "-q", "1", "-c",
+                 "-i", f"test-sub-{port}", "-t", topic_filter, "-F", "%r %t %p", *auth],
+                stdout=out,
+            )  # fmt: skip
+
+    def messages(self, leaf: str | None = None) -> list[Message]:
+        """Every complete line so far; ``leaf`` keeps topics ending in /leaf."""
+        out = []
+        for line in self.path.read_text(encoding="utf-8").splitlines(keepends=True):
+            if not line.endswith("\n"):
+                break
+            retained, topic, payload = line.rstrip("\n").split(" ", 2)
+            if leaf is None or topic.endswith("/" + leaf):
+                out.append(Message(topic, payload, retained == "1"))
+        return out
+
+    def stop(self) -> None:
+        self._proc.terminate()
+        self._proc.wait(timeout=10)
+
+
+def publish(
+    port: int, topic: str, payload: str, *, user: str | None = None, password: str | None = None
+) -> subprocess.CompletedProcess[str]:
+    """``mosquitto_pub`` at QoS 1; a refused connection shows in the return code and stderr."""
+    auth = [] if user is None else ["-u", user, "-P", password or ""]
+    return subprocess.run(
+        ["mosquitto_pub", "-h", "127.0.0.1", "-p", str(port), "-q", "1", "-t", topic,
+         "-m", payload, *auth],
+        capture_output=True, text=True, timeout=20, check=False,
+    )  # fmt: skip
