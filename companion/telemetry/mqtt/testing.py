@@ -105,6 +105,16 @@ class Subscriber:
                 out.append(Message(topic, payload, retained == "1"))
         return out
 
+    def ready(self, port: int, topic: str, timeout: float = 10.0, **auth: str) -> None:
+        """Publish probes on ``topic`` until one arrives: the subscription is in place."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            publish(port, topic, "probe", **auth)
+            time.sleep(0.1)
+            if any(m.topic == topic for m in self.messages()):
+                return
+        raise TimeoutError(f"mosquitto_sub on port {port} never received {topic}")
+
     def stop(self) -> None:
         self._proc.terminate()
         self._proc.wait(timeout=10)
