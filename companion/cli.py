@@ -21,6 +21,7 @@ from companion.mission import MissionConfig, VehicleMission
 from companion.telemetry import EventSink, MissionLog, read_log
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
 from companion.telemetry.tee_sink import TeeSink
+from mavlink_signing import ENV_VAR, load_signing_key
 from mdm_profiles import ProfileError, load_profile
 from mdm_profiles.mqtt_spec import MqttSpec
 
@@ -42,17 +43,24 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--end-action", choices=("rtl", "land"), help="default: profile site, else rtl")
     p.add_argument("--land-wait", type=float, default=600.0, help="vehicle s to wait to land")
     p.add_argument("--no-tlog", action="store_true", help="do not write the .tlog")
+    p.add_argument("--signing-key-file", type=Path,
+                   help=f"MAVLink 2 signing passphrase file (default: ${ENV_VAR}; neither: off)")  # fmt: skip
     p.add_argument("-v", "--verbose", action="store_true")
     add_mqtt_arguments(p)
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Entry point of the `companion` command."""
+def build_parser() -> argparse.ArgumentParser:
+    """The `companion` command line: `run` and `fleet`."""
     parser = argparse.ArgumentParser(prog="companion", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     _run_parser(sub)
     add_fleet_parser(sub)
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the `companion` command."""
+    args = build_parser().parse_args(argv)
     logging.basicConfig(
         level=logging.DEBUG if getattr(args, "verbose", False) else logging.INFO,
         format="%(asctime)s %(levelname)s %(name)s: %(message)s",
@@ -96,7 +104,8 @@ def run_command(args: argparse.Namespace) -> int:
     if args.connect is None and site is not None and site.connect:
         url = site.connect.format(port=port)
     mqtt = mqtt_spec(args, profile.mqtt)
-    fly = _fly(config, url, args.backend, tlog=not args.no_tlog, mqtt=mqtt)
+    signing_key = load_signing_key(args.signing_key_file)
+    fly = _fly(config, url, args.backend, tlog=not args.no_tlog, mqtt=mqtt, signing_key=signing_key)
     if args.backend == "mavsdk":
         reason = _run_mavsdk(fly)
         print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
@@ -127,8 +136,9 @@ def _dump_tasks() -> None:
 
 
 async def _fly(
-    config: MissionConfig, url: str, backend: Backend, *, tlog: bool, mqtt: MqttSpec | None
-) -> str:
+    config: MissionConfig, url: str, backend: Backend, *, tlog: bool, mqtt: MqttSpec | None,
+    signing_key: bytes | None,
+) -> str:  # fmt: skip
     recovered = read_log(config.mission_log_path())
     if recovered.confirmed:
         log.info("resuming with %d confirmed target(s) from %s", len(recovered.confirmed),
@@ -138,6 +148,7 @@ async def _fly(
         url=url,
         target_system=config.system_id,
         tlog=config.tlog_path() if tlog else None,
+        signing_key=signing_key,
     )
     mission_log = MissionLog(config.mission_log_path())
     sink: EventSink = mission_log

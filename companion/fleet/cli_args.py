@@ -27,4 +27,7 @@ def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
     p.add_argument("--out", type=Path, help="run directory (default runs/fleet-<time>)")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     p.add_argument("--quiet", action="store_true", help="no live progress lines")
+    p.add_argument("--signing-key-file", type=Path,
+                   help="MAVLink 2 signing passphrase file for the emulator and every companion "
+                   "(default: $MDM_MAVLINK_KEY, inherited; neither: off)")  # fmt: skip
     add_mqtt_arguments(p)

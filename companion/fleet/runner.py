@@ -15,7 +15,9 @@ from pathlib import Path
 
 from companion.fleet.progress import progress_line, read_progress
 from companion.fleet.scoring import FleetResult, score
+from companion.link.factory import check_signing_support
 from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
+from mavlink_signing import load_signing_key
 from mdm_profiles import MissionProfile, load_profile
 
 log = logging.getLogger(__name__)
@@ -40,6 +42,9 @@ class FleetOptions:
     """Wall seconds after which the run is stopped (companions get SIGTERM)."""
     mqtt_args: tuple[str, ...] = ()
     """--mqtt* flags passed to every companion (none: no MQTT unless the profile has it)."""
+    signing_key_file: Path | None = None
+    """MAVLink signing passphrase file for the emulator and the companions (they also inherit
+    $MDM_MAVLINK_KEY)."""
 
 
 def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
@@ -54,6 +59,7 @@ def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
         "--bind-port-base", str(o.base_port + 200),
         "--seed", str(o.seed),
         "--events", str(o.out / "emulator-events.jsonl"),
+        *_signing_args(o),
     ]  # fmt: skip
 
 
@@ -71,13 +77,20 @@ def companion_command(o: FleetOptions, vehicle: int) -> list[str]:
         "--duration", str(o.duration),
         "--land-wait", "0",
         *o.mqtt_args,
+        *_signing_args(o),
     ]  # fmt: skip
+
+
+def _signing_args(o: FleetOptions) -> list[str]:
+    return ["--signing-key-file", str(o.signing_key_file)] if o.signing_key_file else []
 
 
 def run_fleet(o: FleetOptions) -> FleetResult:
     """Fly one fleet mission; returns its scored result (also written to out/results.json)."""
     profile = load_profile(o.profile)
     n = o.vehicles or profile.fleet.vehicles
+    # a bad key or a backend that cannot sign fails here, not in every process
+    check_signing_support(o.backend, load_signing_key(o.signing_key_file))
     o.out.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     started = time.perf_counter()
@@ -151,6 +164,7 @@ def fleet_command(args: argparse.Namespace) -> int:
         duration=args.duration, backend=args.backend, persona=args.persona,
         setpoints=args.setpoints, seed=args.seed, base_port=args.base_port,
         quiet=args.quiet or args.json, mqtt_args=tuple(mqtt_argv(args)),
+        signing_key_file=args.signing_key_file,
     )  # fmt: skip
     started = time.perf_counter()
     result = run_fleet(opts)
