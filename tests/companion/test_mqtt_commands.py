@@ -1,0 +1,119 @@
+"""Operator commands over the Mosquitto on 127.0.0.1:1883 (flags, not a profile section): bad
+payloads only give error events; pause holds the vehicle (no more setpoints: the emulator's
+vehicle stops), resume flies on, abort returns it (RTL), land lands it."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from companion.fleet.runner import FleetOptions, run_fleet
+from companion.telemetry import read_records
+from companion.telemetry.mqtt.testing import Subscriber, publish
+
+PROFILE = """
+name: mqtt-command-test
+area: {north: 3000.0, east: 3000.0}
+targets:
+  - {north: 1500.0, east: 1500.0}
+  - {north: 600.0, east: 2400.0, false_target: true}
+fleet: {vehicles: 2, speed: 20.0, tau: 0.33, altitude: 30.0, altitude_step: 5.0}
+sensors:
+  - {name: detection, radius: 1000.0}
+  - {name: confirmation, radius: 50.0}
+policy:
+  kind: mdm
+  levels:
+    - {distribution: LS, step: 600.0}
+    - distribution: BS
+      step: 1000.0
+      index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 150.0}
+mission: {duration: 5000.0, ts_cap: 5000.0}
+"""
+
+
+def _wait(predicate: Any, timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what}")
+        time.sleep(0.1)
+
+
+@pytest.mark.timeout(120)
+def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> None:
+    prefix = f"mdm/test-{os.getpid()}-commands"
+    profile = tmp_path / "profile.yaml"
+    profile.write_text(PROFILE)
+    out = tmp_path / "run"
+    sub = Subscriber(1883, f"{prefix}/#", tmp_path / "sub.txt")
+
+    def states(i: int) -> list[dict[str, Any]]:
+        return [m.json() for m in sub.messages("state") if m.topic == f"{prefix}/uav{i}/state"]
+
+    def phase(i: int) -> str | None:
+        s = states(i)
+        return str(s[-1]["phase"]) if s else None
+
+    def command(i: int | str, payload: dict[str, str] | str) -> None:
+        text = payload if isinstance(payload, str) else json.dumps(payload)
+        done = publish(1883, f"{prefix}/{i}/cmd", text)
+        assert done.returncode == 0, done.stderr
+
+    fleet = threading.Thread(target=run_fleet, args=(FleetOptions(
+        profile=str(profile), out=out, speedup=50.0, duration=5000.0, base_port=35560, seed=4,
+        wall_limit=100, mqtt_args=("--mqtt", "127.0.0.1:1883", "--mqtt-prefix", prefix,
+                                   "--mqtt-state-rate", "10")),))  # fmt: skip
+    try:
+        sub.ready(1883, f"{prefix}/probe")
+        fleet.start()
+        _wait(lambda: phase(0) == "search" and phase(1) == "search", 60, "both searching")
+        command("uav1", "not json")
+        command("uav1", {"command": "explode"})
+        command("uav0", {"command": "pause", "id": "p1"})
+        command("uav1", {"command": "abort", "id": "a1"})
+        _wait(lambda: phase(0) == "paused", 10, "vehicle 0 paused")
+        held_from = len(states(0))
+        time.sleep(1.5)  # about 75 sim s at 50x: 1.5 km of flight if it were still searching
+        held = [s for s in states(0)[held_from:] if s["phase"] == "paused"]
+        assert len(held) >= 5
+        drift = max(math.dist((a["north"], a["east"]), (b["north"], b["east"]))
+                    for a in held for b in held)  # fmt: skip
+        assert drift < 5.0, f"vehicle 0 moved {drift:.1f} m while paused"
+        command("uav0", {"command": "resume", "id": "r1"})
+        _wait(lambda: phase(0) == "search", 20, "vehicle 0 searching again")
+        here = held[-1]
+        _wait(lambda: math.dist((here["north"], here["east"]),
+                                (states(0)[-1]["north"], states(0)[-1]["east"])) > 50.0,
+              20, "vehicle 0 moving again")  # fmt: skip
+        command("all", {"command": "land", "id": "l1"})
+        fleet.join(60)
+        assert not fleet.is_alive(), "the fleet did not end after abort and land"
+    finally:
+        sub.stop()
+
+    v0 = read_records(out / "mission-0.jsonl")
+    v1 = read_records(out / "mission-1.jsonl")
+    assert [(r["command"], r["id"]) for r in v0 if r["event"] == "command"] == [
+        ("pause", "p1"), ("resume", "r1"), ("land", "l1")]  # fmt: skip
+    assert {"event": "phase", "phase": "paused", "by": "operator"}.items() <= next(
+        r for r in v0 if r.get("phase") == "paused").items()  # fmt: skip
+    assert next(r for r in v0 if r["event"] == "end")["reason"] == "operator land"
+    errors = [r["error"] for r in v1 if r["event"] == "error"]
+    assert len(errors) == 2, errors
+    assert errors[0].startswith("not JSON"), errors
+    assert errors[1] == "command 'explode': expected one of pause, resume, abort, land"
+    assert [(r["command"], r["id"]) for r in v1 if r["event"] == "command"] == [("abort", "a1")]
+    assert next(r for r in v1 if r["event"] == "end")["reason"] == "operator abort"
+
+    emulator = [r for r in read_records(out / "emulator-events.jsonl") if r["event"] == "mode"]
+    modes = {i: [r["mode"] for r in emulator if r["vehicle"] == i] for i in (0, 1)}
+    assert modes[0][-3:] == ["HOLD", "OFFBOARD", "LAND"], modes[0]
+    assert modes[1][-1] == "RTL", modes[1]
