@@ -46,7 +46,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--profile", required=True, help="profile file or built-in name (paper-fixed, ...)"
     )
-    run.add_argument("--method", help="US, BS, LS or MDM:L1+L2 (default: the profile's policy)")
+    run.add_argument(
+        "--method", help="US, BS, LS, PSO, SPSO, ARPSO or MDM:L1+L2 (default: the profile's policy)"
+    )
     run.add_argument(
         "--set",
         action="append",
@@ -112,6 +114,8 @@ def _run(args: argparse.Namespace) -> int:
     pol = profile.policy
     names = [lv.distribution for lv in pol.levels]
     method = "MDM:" + "+".join(names) if pol.kind == "mdm" else names[0]
+    if pol.kind not in ("mdm", "sss"):
+        method = pol.kind.upper()
     scenario = (
         "dynamic"
         if profile.target_motion

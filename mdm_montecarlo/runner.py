@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 
 from mdm_montecarlo import metrics
 from mdm_montecarlo.engine import BLOCK_RUNS, BlockResult, run_block
+from mdm_montecarlo.social_engine import SWARM_KINDS, run_swarm_block
 from mdm_profiles import MissionProfile
 
 Progress = Callable[[int], None]
@@ -43,6 +44,13 @@ class MissionResults:
     def ts(self) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """T_S of every run (capped at mission.ts_cap) and which runs were capped."""
         return metrics.time_to_all(self.team_times, self.real, self.profile.mission.ts_cap)
+
+
+def simulate_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
+    """One block of runs: the event-driven engine, or the time-stepped one for PSO/SPSO/ARPSO."""
+    if profile.policy.kind in SWARM_KINDS:
+        return run_swarm_block(profile, seed, block, n_runs)
+    return run_block(profile, seed, block, n_runs)
 
 
 def _blocks(runs: int, block_runs: int) -> Iterator[tuple[int, int]]:
@@ -98,20 +106,21 @@ def run_many(
 
         with Client(scheduler) as client:  # type: ignore[no-untyped-call]
             futures = {
-                client.submit(run_block, profiles[i], seed, b, n, pure=False): i for i, b, n in jobs
+                client.submit(simulate_block, profiles[i], seed, b, n, pure=False): i
+                for i, b, n in jobs
             }
             for fut in dask_completed(futures):  # type: ignore[no-untyped-call]
                 blocks[futures[fut]].append(fut.result())
                 done(blocks[futures[fut]][-1].per_vehicle.shape[0])
     elif workers > 1:
         with ProcessPoolExecutor(max_workers=workers) as pool:
-            pending = {pool.submit(run_block, profiles[i], seed, b, n): i for i, b, n in jobs}
+            pending = {pool.submit(simulate_block, profiles[i], seed, b, n): i for i, b, n in jobs}
             for f in as_completed(pending):
                 blocks[pending[f]].append(f.result())
                 done(blocks[pending[f]][-1].per_vehicle.shape[0])
     else:
         for i, b, n in jobs:
-            blocks[i].append(run_block(profiles[i], seed, b, n))
+            blocks[i].append(simulate_block(profiles[i], seed, b, n))
             done(n)
     return [_collect(profiles[i], seed, blocks[i]) for i in range(len(profiles))]
 

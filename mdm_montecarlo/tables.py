@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass
 from mdm_montecarlo import metrics
 from mdm_montecarlo.runner import MissionResults
 from mdm_montecarlo.study import TNC_TOLERANCE, TS_TOLERANCE, Case, Row
+from mdm_montecarlo.variants import SWARM_METHODS
 
 
 @dataclass(frozen=True)
@@ -70,7 +71,8 @@ def measured_rows(rows: list[Row], results: dict[Case, MissionResults]) -> list[
         if not case.method.startswith("MDM") and mdm_case is not None:
             mdm_tnc, mdm_ts, _ = stats[mdm_case]
             aise = round(metrics.aise(mdm_tnc.mean, tnc.mean), 1)
-            aisc = round(metrics.aisc(mdm_ts.mean, ts.mean), 1)
+            if case.method not in SWARM_METHODS:  # swarm rows are simulated up to T_nc only
+                aisc = round(metrics.aisc(mdm_ts.mean, ts.mean), 1)
         levels = case.method.removeprefix("MDM:").split("+")
         paper = row.paper
         out.append(

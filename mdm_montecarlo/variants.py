@@ -1,23 +1,31 @@
-"""Named policy variants of section IV: 'US', 'BS', 'LS' (single sensor) and 'MDM:LS+BS' etc."""
+"""Named policy variants of section IV: 'US', 'BS', 'LS' (single sensor), 'MDM:LS+BS' etc., and
+the social-cognitive baselines 'PSO', 'SPSO', 'ARPSO'."""
 
 from __future__ import annotations
 
 from mdm_profiles import LevelSpec, MissionProfile, PolicySpec
 
 METHODS = ("US", "BS", "LS")
+SWARM_METHODS = ("PSO", "SPSO", "ARPSO")
 
 
 def parse_method(text: str) -> tuple[str, tuple[str, ...]]:
-    """'LS' -> ('sss', ('LS',)); 'MDM:LS+BS' -> ('mdm', ('LS', 'BS'))."""
+    """'LS' -> ('sss', ('LS',)); 'MDM:LS+BS' -> ('mdm', ('LS', 'BS')); 'PSO' -> ('pso', ('US',)).
+
+    The swarm methods explore with US (the single-sensor uniform step) until they have a best.
+    """
     text = text.strip().upper()
     if text in METHODS:
         return "sss", (text,)
+    if text in SWARM_METHODS:
+        return text.lower(), ("US",)
     if text.startswith("MDM:"):
         names = tuple(text[4:].split("+"))
         if names and all(n in METHODS for n in names):
             return "mdm", names
     raise ValueError(
-        f"unknown method {text!r}; allowed: US, BS, LS, or MDM:<L1>+<L2>[+...] with L in US/BS/LS"
+        f"unknown method {text!r}; allowed: US, BS, LS, PSO, SPSO, ARPSO, "
+        "or MDM:<L1>+<L2>[+...] with L in US/BS/LS"
     )
 
 
@@ -33,7 +41,7 @@ def with_method(
     kind, names = parse_method(method)
     current = profile.policy
     step1 = delta1 if delta1 is not None else current.levels[0].step
-    if kind == "sss":
+    if kind != "mdm":
         levels = [LevelSpec(distribution=names[0], step=step1, step_law=current.levels[0].step_law)]
     else:
         if len(names) != len(profile.sensors):

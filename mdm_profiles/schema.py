@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from mdm_profiles.mqtt_spec import MqttSpec
+from mdm_profiles.swarm import SwarmSpec
 
 
 class _Strict(BaseModel):
@@ -112,13 +113,16 @@ class DistributionParams(_Strict):
 
 
 class PolicySpec(_Strict):
-    kind: Literal["mdm", "sss"] = "mdm"
+    kind: Literal["mdm", "sss", "pso", "spso", "arpso"] = "mdm"
     levels: list[LevelSpec] = Field(min_length=1)
     distributions: DistributionParams = DistributionParams()
     out_of_area: Literal["reflect", "clip", "redraw"] = "reflect"
     waypoint_origin: Literal["position", "anchor"] = "position"
     confine_to_detection: bool = True
     memory_radius: float = Field(default=400.0, ge=0)
+    swarm: SwarmSpec = Field(
+        default=SwarmSpec(), description="PSO/SPSO/ARPSO parameters; levels[0] explores."
+    )
 
 
 class MissionSpec(_Strict):
@@ -167,8 +171,8 @@ class MissionProfile(_Strict):
     @model_validator(mode="after")
     def _consistent(self) -> MissionProfile:
         levels = self.policy.levels
-        if self.policy.kind == "sss" and len(levels) != 1:
-            raise ValueError("policy.kind 'sss' takes exactly one level (the confirmation sensor)")
+        if self.policy.kind != "mdm" and len(levels) != 1:
+            raise ValueError(f"policy.kind {self.policy.kind!r} takes exactly one level")
         if self.policy.kind == "mdm" and len(levels) != len(self.sensors):
             raise ValueError(
                 f"policy.kind 'mdm' needs one level per sensor: {len(levels)} levels, "

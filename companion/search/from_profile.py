@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from companion.search.distributions import Brownian, Levy, Sampler, Uniform
 from companion.search.levels import DecayIndex, Level, PolicyConfig
+from companion.search.pso import VARIANTS, SwarmConfig
 from mdm_profiles import MissionProfile
 from mdm_profiles.schema import DistributionParams, LevelSpec
 
@@ -39,10 +40,14 @@ def _level(spec: LevelSpec, radius: float, params: DistributionParams) -> Level:
 
 
 def policy_config(profile: MissionProfile) -> PolicyConfig:
-    """PolicyConfig of a profile: MDM uses sensor k on level k, SSS only the confirmation sensor."""
+    """PolicyConfig of a profile: MDM uses sensor k on level k, SSS only the confirmation sensor.
+
+    For the swarm kinds (pso, spso, arpso) it is the single-sensor search that explores until a
+    particle has a best to follow.
+    """
     spec = profile.policy
     radii = [s.radius for s in profile.sensors]
-    if spec.kind == "sss":
+    if spec.kind != "mdm":
         radii = radii[-1:]
     levels = tuple(
         _level(lv, r, spec.distributions) for lv, r in zip(spec.levels, radii, strict=True)
@@ -59,6 +64,28 @@ def policy_config(profile: MissionProfile) -> PolicyConfig:
 
 def sensor_for_level(profile: MissionProfile, level: int) -> int:
     """Index into profile.sensors of the sensor switched on at ``level`` (0-based)."""
-    if profile.policy.kind == "sss":
+    if profile.policy.kind != "mdm":
         return len(profile.sensors) - 1
     return level
+
+
+def swarm_config(profile: MissionProfile) -> SwarmConfig:
+    """SwarmConfig of a pso/spso/arpso profile: steps clamped to speed x update interval."""
+    kind = profile.policy.kind
+    variant = next((v for v in VARIANTS if v == kind), None)
+    if variant is None:
+        raise ValueError(f"policy.kind {kind!r} is not a swarm variant; allowed: {VARIANTS}")
+    spec = profile.policy.swarm
+    return SwarmConfig(
+        variant=variant,
+        max_step=profile.fleet.speed * spec.update_interval,
+        constant_speed=spec.constant_speed,
+        inertia=spec.inertia,
+        cognitive=spec.cognitive,
+        social=spec.social,
+        spso_inertia=spec.spso_inertia,
+        spso_acceleration=spec.spso_acceleration,
+        arpso_initial_inertia=spec.arpso_initial_inertia,
+        arpso_speed_weight=spec.arpso_speed_weight,
+        arpso_aggregation_weight=spec.arpso_aggregation_weight,
+    )

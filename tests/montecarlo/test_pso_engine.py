@@ -1,0 +1,79 @@
+"""The time-stepped engine of the swarm baselines (mdm_montecarlo.social_engine)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mdm_montecarlo.runner import run_missions
+from mdm_montecarlo.social_engine import run_swarm_block
+from mdm_montecarlo.variants import with_method
+from mdm_profiles import MissionProfile, load_profile
+from mdm_profiles.overrides import apply_overrides
+
+
+def _profile(method: str, *settings: str) -> MissionProfile:
+    """paper-fixed flown by a swarm method, simulated up to the 1000 s mission duration."""
+    base = apply_overrides(load_profile("paper-fixed"), ["mission.ts_cap=1000", *settings])
+    return with_method(base, method)
+
+
+def _late_repeats(per_vehicle: np.ndarray, interval: float) -> int:
+    """Confirmations of a target later than one update interval after the team's first."""
+    team = per_vehicle.min(axis=1, keepdims=True)
+    later = np.isfinite(per_vehicle) & (per_vehicle > team + interval)
+    return int(later.sum())
+
+
+def test_two_workers_match_one() -> None:
+    profile = _profile("SPSO", "policy.swarm.signal_radius=2000")
+    one = run_missions(profile, runs=60, seed=3, workers=1, block_runs=25)
+    two = run_missions(profile, runs=60, seed=3, workers=2, block_runs=25)
+    assert np.array_equal(one.team_times, two.team_times)
+    assert one.events == two.events
+    assert np.isfinite(one.team_times).any()
+
+
+def test_shared_confirmations_are_not_repeated_and_lost_ones_are() -> None:
+    """With messages, a vehicle leaves a target another confirmed; with drop = 1 it does not
+    know, so the same targets get confirmed again by other vehicles."""
+    shared = run_swarm_block(_profile("PSO", "policy.swarm.signal_radius=2000"), 5, 0, 100)
+    alone = run_swarm_block(
+        _profile("PSO", "policy.swarm.signal_radius=2000", "policy.swarm.message_drop=1.0"),
+        5,
+        0,
+        100,
+    )
+    confirmed = int(np.isfinite(shared.per_vehicle.min(axis=1)).sum())
+    assert confirmed > 300
+    # With messages, only vehicles that enter the disc in the same iteration repeat a target.
+    assert _late_repeats(shared.per_vehicle, 5.0) == 0
+    assert _late_repeats(alone.per_vehicle, 5.0) > 0.2 * confirmed
+
+
+def test_no_messages_means_no_sharing_whatever_the_delay() -> None:
+    """drop = 1: nothing arrives, so the delay cannot change a single bit (independent particles)."""
+    settings = ("policy.swarm.signal_radius=2000", "policy.swarm.message_drop=1.0")
+    now = run_swarm_block(_profile("ARPSO", *settings), 9, 0, 40)
+    late = run_swarm_block(_profile("ARPSO", *settings, "policy.swarm.message_delay=120"), 9, 0, 40)
+    assert np.array_equal(now.per_vehicle, late.per_vehicle)
+    shared = run_swarm_block(_profile("ARPSO", "policy.swarm.signal_radius=2000"), 9, 0, 40)
+    assert not np.array_equal(now.per_vehicle, shared.per_vehicle)
+
+
+def test_sharing_helps_with_a_2km_signal() -> None:
+    """Fixed seed, 200 runs: the team confirms more with messages than without."""
+    shared = run_missions(_profile("PSO", "policy.swarm.signal_radius=2000"), runs=200, seed=7)
+    lost = run_missions(
+        _profile("PSO", "policy.swarm.signal_radius=2000", "policy.swarm.message_drop=1.0"),
+        runs=200,
+        seed=7,
+    )
+    assert shared.tnc.mean() > lost.tnc.mean() + 0.2
+
+
+def test_default_pso_is_near_the_paper_row() -> None:
+    """Fixed targets, default choices (r_2 signal): mean T_nc within 10 % of the paper's 4.281."""
+    res = run_missions(_profile("PSO"), runs=200, seed=2024)
+    assert res.tnc.mean() == pytest.approx(4.281, rel=0.10)
+    assert 0 < res.tnc.std() < 2.5
