@@ -49,7 +49,10 @@ class Broker:
         self._proc: subprocess.Popen[bytes] | None = None
 
     def start(self) -> None:
-        self._proc = subprocess.Popen(["mosquitto", "-c", str(self.conf)])
+        with (self.workdir / "mosquitto.out").open("ab") as out:
+            self._proc = subprocess.Popen(
+                ["mosquitto", "-c", str(self.conf)], stdout=out, stderr=subprocess.STDOUT
+            )
         _wait_port(self.port)
 
     def stop(self) -> None:
@@ -78,19 +81,21 @@ class Message:
 
 
 class Subscriber:
-    """``mosquitto_sub`` at QoS 1 with a persistent session (it reconnects by itself, and the
-    broker keeps its messages while it is away); every message lands in ``path``."""
+    """``mosquitto_sub`` at QoS 1; every message lands in ``path``. ``persistent``: a
+    persistent session (it reconnects by itself, and a broker with persistence keeps its
+    messages while it is away, even across a broker restart)."""
 
     def __init__(
         self, port: int, topic_filter: str, path: Path, *, user: str | None = None,
-        password: str | None = None,
+        password: str | None = None, persistent: bool = False,
     ) -> None:  # fmt: skip
         self.path = path
         auth = [] if user is None else ["-u", user, "-P", password or ""]
+        session = ["-c", "-i", f"test-sub-{port}"] if persistent else []
         with path.open("wb") as out:
             self._proc = subprocess.Popen(
-                ["mosquitto_sub", "-h", "127.0.0.1", "-p", str(port), "-q", "1", "-c",
-                 "-i", f"test-sub-{port}", "-t", topic_filter, "-F", "%r %t %p", *auth],
+                ["mosquitto_sub", "-h", "127.0.0.1", "-p", str(port), "-q", "1", *session,
+                 "-t", topic_filter, "-F", "%r %t %p", *auth],
                 stdout=out,
             )  # fmt: skip
 
