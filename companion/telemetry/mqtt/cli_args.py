@@ -40,10 +40,15 @@ def add_mqtt_arguments(p: argparse.ArgumentParser) -> None:
 
 def parse_broker(value: str) -> tuple[str, int | None]:
     """``HOST``, ``HOST:PORT`` or ``[IPV6]:PORT`` -> (host, port or None)."""
-    host, sep, port = value.rpartition(":")
-    if not sep or (host.count(":") and not host.startswith("[")):
-        host, port = value, ""  # no port, or a bare IPv6 address
-    host = host.strip("[]")
+    if value.startswith("["):
+        host, _, rest = value[1:].partition("]")
+        if rest and not rest.startswith(":"):
+            raise ValueError(f"--mqtt {value!r}: expected [IPV6]:PORT")
+        port = rest[1:]
+    elif value.count(":") == 1:
+        host, _, port = value.partition(":")
+    else:
+        host, port = value, ""  # a name, or a bare IPv6 address
     if not host:
         raise ValueError(f"--mqtt {value!r}: no host")
     if not port:
