@@ -100,7 +100,7 @@ def test_events_survive_a_30_s_broker_outage_complete_and_in_order(tmp_path: Pat
         seqs = arrived(i)
         first = list(dict.fromkeys(seqs))  # first arrival of each seq, in arrival order
         assert first == list(range(len(logged(i)))), f"vehicle {i}: missing or out of order"
-        events = {}
+        events: dict[int, dict[str, Any]] = {}
         for m in sub.messages("event"):
             e = m.json()
             if f"/uav{i}/" in m.topic:

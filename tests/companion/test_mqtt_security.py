@@ -66,7 +66,8 @@ def test_only_the_operator_commands_and_vehicles_publish_only_their_own(tmp_path
                     f"password_file {passwd}\nacl_file {ACL}\n")  # fmt: skip
     broker.start()
     op = {"user": "operator", "password": PASSWORDS["operator"]}
-    sub = Subscriber(broker.port, "mdm/#", tmp_path / "sub.txt", **op)
+    sub = Subscriber(broker.port, "mdm/#", tmp_path / "sub.txt", user="operator",
+                     password=PASSWORDS["operator"])  # fmt: skip
 
     def pause(**auth: str) -> subprocess.CompletedProcess[str]:
         msg = json.dumps({"command": "pause", "id": auth.get("user", "anonymous")})
@@ -84,7 +85,8 @@ def test_only_the_operator_commands_and_vehicles_publish_only_their_own(tmp_path
             "--mqtt-password-file", str(tmp_path / "uav{vehicle}.pw"))),
     ))  # fmt: skip
     try:
-        sub.ready(broker.port, f"{PREFIX}/probe/cmd", **op)
+        sub.ready(broker.port, f"{PREFIX}/probe/cmd", user="operator",
+                  password=PASSWORDS["operator"])  # fmt: skip
         fleet.start()
         _wait(lambda: phase() == "search", 60, "vehicle 0 searching (its account publishes)")
 

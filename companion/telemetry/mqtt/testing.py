@@ -110,11 +110,13 @@ class Subscriber:
                 out.append(Message(topic, payload, retained == "1"))
         return out
 
-    def ready(self, port: int, topic: str, timeout: float = 10.0, **auth: str) -> None:
+    def ready(
+        self, port: int, topic: str, *, user: str | None = None, password: str | None = None
+    ) -> None:
         """Publish probes on ``topic`` until one arrives: the subscription is in place."""
-        deadline = time.monotonic() + timeout
+        deadline = time.monotonic() + 10.0
         while time.monotonic() < deadline:
-            publish(port, topic, "probe", **auth)
+            publish(port, topic, "probe", user=user, password=password)
             time.sleep(0.1)
             if any(m.topic == topic for m in self.messages()):
                 return
