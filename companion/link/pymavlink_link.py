@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
+import socket
 import struct
 import time
 from pathlib import Path
@@ -37,6 +38,8 @@ POSITION_MASK = 3576
 _NOT_AUTOPILOT_TYPES = {6, 18, 26, 27}  # GCS, onboard controller, gimbal, ADS-B
 _HEALTH_BITS = 0x20 | 0x10000000  # GPS, pre-arm check
 _PARAM_INT32 = 6
+_DRAIN_MAX = 256
+"""Datagrams read at once beyond the one asyncio hands over (see ``PymavlinkLink._drain``)."""
 
 
 class _Protocol(asyncio.DatagramProtocol, asyncio.Protocol):
@@ -45,6 +48,7 @@ class _Protocol(asyncio.DatagramProtocol, asyncio.Protocol):
 
     def datagram_received(self, data: bytes, addr: tuple[str | Any, int]) -> None:
         self.link._receive(data, addr)
+        self.link._drain()
 
     def data_received(self, data: bytes) -> None:
         self.link._receive(data, None)
@@ -96,6 +100,7 @@ class PymavlinkLink(VehicleLink):
         self._timeout = command_timeout
         self._tries = command_tries
         self._transport: asyncio.BaseTransport | None = None
+        self._sock: socket.socket | None = None
         self._remote: tuple[str, int] | None = None
         self._acks: dict[int, asyncio.Future[int]] = {}
         self._params: dict[str, asyncio.Future[float]] = {}
@@ -111,15 +116,15 @@ class PymavlinkLink(VehicleLink):
         if self._tlog_path is not None and self._tlog is None:
             self._tlog = TelemetryLog(self._tlog_path)
         try:
-            if a.scheme == "udpin":
+            if a.scheme in ("udpin", "udpout"):
+                # Our own socket (the transport's wrapper cannot read): see _drain.
+                sock = await _udp_socket(loop, a.host, a.port, bind=a.scheme == "udpin")
                 self._transport, _ = await loop.create_datagram_endpoint(
-                    lambda: _Protocol(self), local_addr=(a.host, a.port)
+                    lambda: _Protocol(self), sock=sock
                 )
-            elif a.scheme == "udpout":
-                self._remote = (a.host, a.port)
-                self._transport, _ = await loop.create_datagram_endpoint(
-                    lambda: _Protocol(self), remote_addr=(a.host, a.port)
-                )
+                self._sock = sock
+                if a.scheme == "udpout":
+                    self._remote = (a.host, a.port)
             else:
                 self._transport, _ = await loop.create_connection(
                     lambda: _Protocol(self), a.host, a.port
@@ -132,6 +137,7 @@ class PymavlinkLink(VehicleLink):
         if self._transport is not None:
             self._transport.close()
             self._transport = None
+        self._sock = None
         if self.address.scheme == "udpin":
             self._remote = None
         if self._tlog is not None:
@@ -148,6 +154,21 @@ class PymavlinkLink(VehicleLink):
         await self.open()
 
     # -- receiving -------------------------------------------------------------------------
+
+    def _drain(self) -> None:
+        """Read every datagram already waiting. asyncio hands over one datagram per loop
+        iteration, so a companion that fell behind a sped-up vehicle would answer each stale
+        position in turn (seconds of vehicle time late); read at once, the decision loop acts
+        on the newest position only."""
+        sock = self._sock
+        for _ in range(_DRAIN_MAX if sock is not None else 0):
+            try:
+                data, addr = sock.recvfrom(65536)  # type: ignore[union-attr]
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:  # ICMP port unreachable and the like: the transport reports them
+                return
+            self._receive(data, addr)
 
     def _receive(self, data: bytes, addr: tuple[str | Any, int] | None) -> None:
         received = time.perf_counter()
@@ -360,6 +381,27 @@ class PymavlinkLink(VehicleLink):
         ):
             return float(struct.unpack("<i", struct.pack("<f", value))[0])
         return value if math.isfinite(value) else math.nan
+
+
+async def _udp_socket(
+    loop: asyncio.AbstractEventLoop, host: str, port: int, *, bind: bool
+) -> socket.socket:
+    """A non-blocking UDP socket bound to (host, port), or connected to it."""
+    infos = await loop.getaddrinfo(host, port, type=socket.SOCK_DGRAM)
+    if not infos:
+        raise OSError(f"cannot resolve {host}")
+    family, kind, proto, _, where = infos[0]
+    sock = socket.socket(family, kind, proto)
+    try:
+        sock.setblocking(False)
+        if bind:
+            sock.bind(where)
+        else:
+            sock.connect(where)
+    except OSError:
+        sock.close()
+        raise
+    return sock
 
 
 def _text(raw: str | bytes) -> str:

@@ -201,10 +201,25 @@ class VehicleMission:
                     if not done:
                         continue
                     event, getter = getter.result(), None
-                self._handle(event)
+                self._handle_queued(event, events)
         finally:
             if getter is not None:
                 getter.cancel()
+
+    def _handle_queued(self, first: LinkEvent, events: asyncio.Queue[LinkEvent]) -> None:
+        """``first`` and the events queued behind it, in order; of several positions only the
+        newest is acted on: after a stall (a loaded machine, a sped-up vehicle) the older ones
+        are stale, and a setpoint computed from each would steer seconds late."""
+        if events.empty():
+            self._handle(first)
+            return
+        batch = [first]
+        while not events.empty():
+            batch.append(events.get_nowait())
+        newest = max(i for i, e in enumerate(batch) if isinstance(e, LocalPosition) or i == 0)
+        for i, event in enumerate(batch):
+            if i == newest or not isinstance(event, LocalPosition):
+                self._handle(event)
 
     def _handle(self, event: LinkEvent) -> None:
         if isinstance(event, LocalPosition):

@@ -1,0 +1,143 @@
+"""A companion that fell behind acts on the newest position only (no setpoints from stale ones).
+
+The pymavlink link reads every datagram already waiting in one go, and the decision loop, of
+several queued positions, steers from the newest.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import socket
+from pathlib import Path
+from typing import Any
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from companion.autopilots import FlightMode
+from companion.guidance import Setpoint
+from companion.link.base import SetpointKind, VehicleLink
+from companion.link.messages import Heartbeat, LinkEvent, LocalPosition
+from companion.link.pymavlink_link import PymavlinkLink, _Protocol
+from companion.mission import MissionConfig, VehicleMission
+from companion.mission.phase import Phase
+from mdm_profiles import load_profile
+
+
+class _Sink:
+    def __init__(self) -> None:
+        self.events: list[str] = []
+
+    def emit(self, t: float, event: str, **fields: Any) -> None:
+        self.events.append(event)
+
+
+class _Link(VehicleLink):
+    def __init__(self) -> None:
+        self.events: asyncio.Queue[LinkEvent] = asyncio.Queue()
+        self.autopilot = None
+        self.setpoints: list[Setpoint] = []
+
+    async def open(self) -> None:
+        return
+
+    async def close(self) -> None:
+        return
+
+    def send_heartbeat(self) -> None:
+        return
+
+    def send_setpoint(self, setpoint: Setpoint, kind: SetpointKind) -> None:
+        self.setpoints.append(setpoint)
+
+    async def set_mode(self, mode: FlightMode) -> bool:
+        return True
+
+    async def arm(self) -> bool:
+        return True
+
+    async def takeoff(self, altitude: float) -> bool:
+        return True
+
+    async def set_sensor(self, index: int) -> bool:
+        return True
+
+
+def _position(t: float, north: float) -> LocalPosition:
+    return LocalPosition(t, north, 100.0, -30.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def test_of_queued_positions_only_the_newest_is_steered_from(tmp_path: Path) -> None:
+    async def main() -> tuple[list[Setpoint], VehicleMission]:
+        link = _Link()
+        config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
+        mission = VehicleMission(config, link, _Sink())
+        mission.phase = Phase.PREPARE  # a neutral setpoint for every position acted on
+        for k in range(5):
+            link.events.put_nowait(_position(0.1 * k, 1000.0 + k))
+        link.events.put_nowait(Heartbeat(12, 0, False, 3))
+        mission._handle_queued(_position(0.0, 999.0), link.events)
+        assert link.events.empty()
+        return link.setpoints, mission
+
+    setpoints, mission = asyncio.run(main())
+    assert [sp.north for sp in setpoints] == [1004.0]
+    assert mission.position is not None
+    assert mission.position.north == 1004.0
+    assert mission.heartbeat is not None  # other events are all handled
+
+
+def test_a_lone_position_is_acted_on(tmp_path: Path) -> None:
+    async def main() -> list[Setpoint]:
+        link = _Link()
+        config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
+        mission = VehicleMission(config, link, _Sink())
+        mission.phase = Phase.PREPARE
+        mission._handle_queued(_position(0.0, 5.0), link.events)
+        link.events.put_nowait(_position(0.1, 6.0))
+        mission._handle_queued(Heartbeat(12, 0, False, 3), link.events)
+        return link.setpoints
+
+    assert [sp.north for sp in asyncio.run(main())] == [5.0, 6.0]
+
+
+def test_link_reads_every_waiting_datagram_at_once(monkeypatch: Any) -> None:
+    calls = 0
+    original = _Protocol.datagram_received
+
+    def counting(self: _Protocol, data: bytes, addr: tuple[str | Any, int]) -> None:
+        nonlocal calls
+        calls += 1
+        original(self, data, addr)
+
+    monkeypatch.setattr(_Protocol, "datagram_received", counting)
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+
+    async def main() -> list[LinkEvent]:
+        link = PymavlinkLink(url=f"udpin:127.0.0.1:{port}", target_system=1)
+        await link.open()
+        mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+        try:
+            with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as vehicle:
+                for k in range(6):  # all waiting before the loop looks at the socket
+                    msg = mav.local_position_ned_encode(100 * k, float(k), 0.0, -30.0, 0, 0, 0)
+                    vehicle.sendto(msg.pack(mav), ("127.0.0.1", port))
+                await asyncio.sleep(0.05)
+            out = []
+            while not link.events.empty():
+                out.append(link.events.get_nowait())
+            return out
+        finally:
+            await link.close()
+
+    events = asyncio.run(main())
+    assert [e.north for e in events if isinstance(e, LocalPosition)] == [
+        0.0,
+        1.0,
+        2.0,
+        3.0,
+        4.0,
+        5.0,
+    ]
+    assert calls == 1
