@@ -1,0 +1,56 @@
+"""Wall and CPU time of the full `mdm-montecarlo reproduce` (every table of section IV).
+
+    .venv/bin/python benchmarks/reproduce_wall.py                 # 1000 runs per row, all cores
+    .venv/bin/python benchmarks/reproduce_wall.py --runs 200 --tables simtable1,simtablepso1
+
+It runs the real command line in a child process and prints its wall time, the CPU seconds the
+child and its workers used, and the load average before and after (this machine is shared: a
+wall time taken under load says little; CPU seconds / cores is the floor on an idle machine).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=1000)
+    parser.add_argument("--tables", help="comma-separated subset (default: all)")
+    parser.add_argument("--workers", type=int, default=0, help="0 = all cores")
+    args = parser.parse_args()
+    exe = Path(sys.executable).with_name("mdm-montecarlo")
+    with tempfile.TemporaryDirectory() as out:
+        cmd = [str(exe), "reproduce", "--runs", str(args.runs), "--out", out, "--no-progress"]
+        cmd += ["--workers", str(args.workers)]
+        if args.tables:
+            cmd += ["--tables", args.tables]
+        load_before = os.getloadavg()[0]
+        start = time.perf_counter()
+        done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+        wall = time.perf_counter() - start
+        load_after = os.getloadavg()[0]
+        if done.returncode != 0:
+            print(done.stderr, file=sys.stderr)
+            return done.returncode
+        header = (Path(out) / "report.md").read_text().splitlines()[2]
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = usage.ru_utime + usage.ru_stime
+    cores = os.cpu_count() or 1
+    print(f"command      reproduce --runs {args.runs} --tables {args.tables or 'all'}")
+    print(f"report       {header}")
+    print(f"wall         {wall:.1f} s")
+    print(f"cpu          {cpu:.1f} s over {cores} cores (idle-machine floor {cpu / cores:.1f} s)")
+    print(f"load average {load_before:.1f} before, {load_after:.1f} after")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
