@@ -29,7 +29,7 @@ from mdm_profiles import MissionProfile
 from sim_vehicle_stub.world import Scenario, first_entry_time
 
 FloatArray = NDArray[np.float64]
-BLOCK_RUNS = 200
+BLOCK_RUNS = 500
 _EPS = 1e-9
 
 
