@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -9,13 +11,24 @@ FloatArray = NDArray[np.float64]
 
 
 class Geofence:
-    """A simple polygon (vertices in order, metres north/east of the profile origin)."""
+    """A simple polygon (vertices in order, metres north/east of the profile origin).
+
+    The guidance asks twice per setpoint; a fence has a handful of edges, so the geometry runs
+    on Python floats over edges prepared once (numpy's per-call overhead was most of a
+    companion's decision time). Same arithmetic as the array form, result for result.
+    """
 
     def __init__(self, vertices: FloatArray) -> None:
         v = np.asarray(vertices, dtype=float)
         if v.ndim != 2 or v.shape[1] != 2 or len(v) < 3:
             raise ValueError(f"a geofence needs >= 3 (north, east) vertices, got shape {v.shape}")
         self.vertices = v
+        points = [(float(a), float(b)) for a, b in v]
+        # (a_north, a_east, b_north, b_east, ab_north, ab_east, |ab|^2) per edge a -> b
+        self._edges = [
+            (an, ae, bn, be, bn - an, be - ae, (bn - an) * (bn - an) + (be - ae) * (be - ae))
+            for (an, ae), (bn, be) in zip(points, points[1:] + points[:1], strict=True)
+        ]
 
     @classmethod
     def rectangle(cls, north: float, east: float) -> Geofence:
@@ -24,14 +37,13 @@ class Geofence:
 
     def contains(self, point: FloatArray) -> bool:
         """Ray casting; points on an edge count as inside."""
-        if self._edge_distance(point)[0] <= 1e-9:
-            return True
         x, y = float(point[0]), float(point[1])
+        if self._nearest(x, y)[0] <= 1e-9:
+            return True
         inside = False
-        v = self.vertices
-        for a, b in zip(v, np.roll(v, -1, axis=0), strict=True):
-            if (a[1] > y) != (b[1] > y):
-                cross = a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
+        for an, ae, bn, be, _, _, _ in self._edges:
+            if (ae > y) != (be > y):
+                cross = an + (y - ae) * (bn - an) / (be - ae)
                 if x < cross:
                     inside = not inside
         return inside
@@ -41,14 +53,17 @@ class Geofence:
         p = np.asarray(point, dtype=float)
         if self.contains(p):
             return p
-        return self._edge_distance(p)[1]
+        _, n, e = self._nearest(float(p[0]), float(p[1]))
+        return np.array([n, e])
 
-    def _edge_distance(self, point: FloatArray) -> tuple[float, FloatArray]:
-        a = self.vertices
-        b = np.roll(a, -1, axis=0)
-        ab = b - a
-        t = np.clip(np.einsum("kd,kd->k", point - a, ab) / np.einsum("kd,kd->k", ab, ab), 0, 1)
-        nearest = a + t[:, None] * ab
-        d = np.linalg.norm(nearest - point, axis=1)
-        i = int(np.argmin(d))
-        return float(d[i]), np.asarray(nearest[i])
+    def _nearest(self, x: float, y: float) -> tuple[float, float, float]:
+        """Distance to the boundary and the nearest boundary point (first edge on ties)."""
+        best, bn_, be_ = math.inf, math.nan, math.nan
+        for an, ae, _, _, dn, de, length2 in self._edges:
+            t = ((x - an) * dn + (y - ae) * de) / length2 if length2 > 0 else 0.0
+            t = 0.0 if t < 0.0 else 1.0 if t > 1.0 else t
+            n, e = an + t * dn, ae + t * de
+            d = math.sqrt((n - x) * (n - x) + (e - y) * (e - y))
+            if d < best:
+                best, bn_, be_ = d, n, e
+        return best, bn_, be_
