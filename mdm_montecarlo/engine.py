@@ -78,6 +78,8 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     active = np.ones(n, dtype=bool)
     events = 0
     appear = targets.appear_times
+    # Fixed targets: which targets each lane has not confirmed itself (policy.known, cached).
+    unknown = np.ones((n, m), dtype=bool)
 
     while True:
         idx = np.flatnonzero(active)
@@ -96,7 +98,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
 
         target_pos, target_vel = tracks.motion(runs, t)
         confirms = policy.uses_confirmation_sensor(state)[idx]
-        eligible = ~policy.known(state, idx, target_pos)
+        eligible = ~policy.known(state, idx, target_pos) if tracks.moving else unknown[idx]
         eligible &= ~(confirms[:, None] & targets.false_mask[None, :])
         entry = first_entry_time(
             x,
@@ -132,6 +134,10 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
             contact_positions=target_pos + target_vel * (new_t - t)[:, None, None],
         )
         outcome = policy.step(state, idx, obs, rng_policy)
+        if not tracks.moving and outcome.confirmed.any():
+            # Memory changes only on a confirmation; fixed targets never move.
+            lanes = idx[outcome.confirmed]
+            unknown[lanes] = ~policy.known(state, lanes, obs.contact_positions[outcome.confirmed])
         events += 1
         position[idx] = new_x
         time[idx] = new_t
