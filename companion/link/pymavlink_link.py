@@ -325,9 +325,11 @@ class PymavlinkLink(VehicleLink):
             self._acks.pop(command, None)
 
     async def configure_streams(self) -> None:
-        """SET_MESSAGE_INTERVAL -1 for ATTITUDE (and GLOBAL_POSITION_INT in the local frame):
-        at high speed-ups every message not parsed is CPU for the rest of the fleet."""
-        unused = [30] + ([33] if self._frame is None else [])
+        """SET_MESSAGE_INTERVAL -1 for the streams the mission does not read: ATTITUDE,
+        SYSTEM_TIME, GPS_RAW_INT, BATTERY_STATUS, HOME_POSITION, EXTENDED_SYS_STATE (and
+        GLOBAL_POSITION_INT in the local frame): at high speed-ups every message not parsed is
+        CPU for the rest of the fleet. HEARTBEAT, SYS_STATUS and the position stay."""
+        unused = [30, 2, 24, 147, 242, 245] + ([33] if self._frame is None else [])
         for msg_id in unused:
             if not await self.command(511, float(msg_id), -1.0):
                 log.info("vehicle keeps streaming message %d", msg_id)
