@@ -1,0 +1,72 @@
+"""Swarm bests exchanged through a real Mosquitto broker feed the PSO core's swarm_best."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from companion.search.pso import Best, swarm_best
+from companion.telemetry.mqtt.channel import MqttChannel
+from companion.telemetry.mqtt.settings import MqttSettings
+from companion.telemetry.mqtt.swarm_peers import PeerReport, SwarmPeers
+from companion.telemetry.mqtt.testing import Broker, publish
+
+PREFIX = "mdm/test"
+
+
+async def _wait(condition: Callable[[], bool], timeout: float = 10.0) -> None:
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + timeout
+    while not condition():
+        if loop.time() > deadline:
+            raise TimeoutError("condition not met")
+        await asyncio.sleep(0.02)
+
+
+def test_a_peer_best_reaches_the_other_vehicle_and_wins_swarm_best(tmp_path: Path) -> None:
+    with Broker(tmp_path / "broker") as broker:
+        asyncio.run(_exchange(broker.port))
+
+
+async def _exchange(port: int) -> None:
+    settings = MqttSettings(host="127.0.0.1", port=port)
+    channels = [MqttChannel(settings, client_id=f"swarm-{i}") for i in range(2)]
+    peers = [SwarmPeers(c, PREFIX, i, 3) for i, c in enumerate(channels)]
+    tasks = [asyncio.create_task(c.run()) for c in channels]
+    try:
+        await asyncio.wait_for(asyncio.gather(*(c.connected.wait() for c in channels)), 10)
+        report = PeerReport(12.0, (5000.0, 4200.0), 0.8, 3, 0.5, frozenset({1}))
+        # Resend until it arrives: the subscription may not be in place at the first send.
+        while peers[1].heard()[0].fitness[0, 0] == 0:
+            await peers[0].publish(report)
+            await asyncio.sleep(0.05)
+        heard, current = peers[1].heard()
+        assert heard.position[0, 0].tolist() == [5000.0, 4200.0]
+        assert heard.source[0].tolist() == [3, -1, -1]
+        assert current[0].tolist() == [0.5, 0.0, 0.0]
+        assert peers[1].known() == {1}
+        # The sender does not hear itself.
+        assert peers[0].heard()[0].fitness.sum() == 0
+
+        own = Best(np.array([[0.0, 0.0]]), np.array([0.3]), np.array([0]))
+        links = np.array([[True, False, True]])
+        best, mine = swarm_best(own, heard, links)
+        assert best.position[0].tolist() == [5000.0, 4200.0]
+        assert not mine[0]
+
+        # An older report does not replace a newer one: the garbage sent after it on the same
+        # connection arrives after it, so once that is counted the old report was handled.
+        await peers[0].publish(PeerReport(5.0, (1.0, 1.0), 0.9, 2, 0.9, frozenset()))
+        await channels[0].publish(f"{PREFIX}/swarm/uav0", b"not json")
+        await _wait(lambda: peers[1].rejected == 1)
+        assert peers[1].heard()[0].fitness[0, 0] == 0.8
+        # A vehicle outside the fleet is counted and dropped, not raised.
+        await asyncio.to_thread(publish, port, f"{PREFIX}/swarm/uav7", report.encode().decode())
+        await _wait(lambda: peers[1].rejected == 2)
+    finally:
+        for t in tasks:
+            t.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
