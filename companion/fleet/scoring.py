@@ -23,7 +23,7 @@ class Confirmation:
     north: float
     east: float
     target: int
-    """Index of the nearest target in the profile."""
+    """Index in the profile of the target it was (-1: no target was in range)."""
     distance: float
     real: bool
     """The nearest target is real and within the confirmation radius."""
@@ -55,16 +55,81 @@ class FleetResult:
         return out
 
 
+EMULATOR_EVENTS = "emulator-events.jsonl"
+_SLACK_S = 2.0
+"""A confirmation may be logged this long after the emulator saw the target come in range."""
+
+
+@dataclass(frozen=True)
+class _Truth:
+    """Where a target was when it came within a vehicle's confirmation sensor (emulator log)."""
+
+    time: float
+    target: int
+    position: np.ndarray
+
+
+def _ground_truth(path: Path, sensor: str) -> dict[int, list[_Truth]]:
+    """Per vehicle, the emulator's entered_range events of the confirmation sensor."""
+    out: dict[int, list[_Truth]] = {}
+    for rec in read_records(path):
+        if rec.get("event") == "entered_range" and rec.get("sensor") == sensor:
+            where = np.array([rec["north"], rec["east"]], dtype=float)
+            out.setdefault(int(rec["vehicle"]), []).append(
+                _Truth(float(rec["t"]), int(rec["target"]), where)
+            )
+    return out
+
+
+def _match(
+    where: np.ndarray, t: float, targets: np.ndarray, truth: list[_Truth] | None, drift: float
+) -> tuple[int, float]:
+    """The target a confirmation at ``where`` (vehicle time ``t``) was, and how far it was.
+
+    With the emulator's log: the nearest of the targets this vehicle's confirmation sensor had
+    in range up to then, less the distance such a target can have moved since (``drift`` m/s).
+    Without it (fixed targets only): the nearest profile target.
+    """
+    if truth is None:
+        gaps = np.linalg.norm(targets - where, axis=1)
+        k = int(np.argmin(gaps))
+        return k, float(gaps[k])
+    seen = [e for e in truth if e.time <= t + _SLACK_S]
+    if not seen:
+        return -1, float("inf")
+    gaps = [
+        max(0.0, float(np.linalg.norm(e.position - where)) - drift * max(0.0, t - e.time))
+        for e in seen
+    ]
+    best = int(np.argmin(gaps))
+    return seen[best].target, gaps[best]
+
+
 def score(profile: MissionProfile, log_dir: Path, vehicles: int, duration: float) -> FleetResult:
-    """Read mission-<i>.jsonl of every vehicle and compute T_nc, T_S and the false confirmations."""
+    """Read mission-<i>.jsonl of every vehicle and compute T_nc, T_S and the false confirmations.
+
+    A confirmation counts when it lies within the confirmation radius of a real target: of the
+    target's position when the emulator saw it come in range (emulator-events.jsonl in
+    ``log_dir``, needed for moving targets), else of the profile's position.
+    """
     targets = np.array([[t.north, t.east] for t in profile.targets])
     real = np.array([not t.false_target for t in profile.targets])
     radius = profile.sensors[-1].radius
+    events = log_dir / EMULATOR_EVENTS
+    motion = profile.target_motion
+    if motion is not None and not events.exists():
+        raise FileNotFoundError(
+            f"{events}: moving targets are scored against the emulator's event log, "
+            "which is missing"
+        )
+    truth = _ground_truth(events, profile.sensors[-1].name) if events.exists() else None
+    drift = 0.0 if motion is None else motion.speed * max(abs(motion.low), abs(motion.high))
     per_vehicle = np.full((1, vehicles, len(targets)), np.inf)
     found: list[Confirmation] = []
     reasons: dict[int, str] = {}
     for i in range(vehicles):
         start: float | None = None
+        mine = None if truth is None else truth.get(i, [])
         for rec in read_records(log_dir / f"mission-{i}.jsonl"):
             if rec.get("event") == "phase" and "search_start" in rec and start is None:
                 start = float(rec["search_start"])
@@ -72,13 +137,10 @@ def score(profile: MissionProfile, log_dir: Path, vehicles: int, duration: float
                 reasons[i] = str(rec.get("reason"))
             elif rec.get("event") == "confirmation":
                 where = np.array([rec["north"], rec["east"]], dtype=float)
-                gaps = np.linalg.norm(targets - where, axis=1)
-                k = int(np.argmin(gaps))
+                k, gap = _match(where, float(rec["t"]), targets, mine, drift * np.sqrt(2.0))
                 t = float(rec["t"]) - (start or 0.0)
-                ok = bool(real[k] and gaps[k] <= radius)
-                found.append(
-                    Confirmation(i, t, float(where[0]), float(where[1]), k, float(gaps[k]), ok)
-                )
+                ok = bool(k >= 0 and real[k] and gap <= radius)
+                found.append(Confirmation(i, t, float(where[0]), float(where[1]), k, gap, ok))
                 if ok:
                     per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
     times = team_times(per_vehicle)
