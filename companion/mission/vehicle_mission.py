@@ -33,6 +33,8 @@ from companion.telemetry.mission_log import EventSink, Recovered
 
 log = logging.getLogger(__name__)
 _COMMANDING = (Phase.PREPARE, Phase.CLIMB, Phase.SEARCH)
+_SETPOINT_GAP_S = 0.5
+"""A gap in our setpoints this long (vehicle s) can explain a HOLD: PX4's COM_OF_LOSS_T is 1 s."""
 
 
 class VehicleMission:
@@ -80,6 +82,8 @@ class VehicleMission:
         self._last_tick = -np.inf
         self._changed = asyncio.Event()
         self._own_mode_change = False
+        self._setpoint_time = -np.inf
+        """Vehicle time of the position our last setpoint answered."""
         self._guided_seen = False
         self._climbing_by_command = False
         self._main: asyncio.Task[object] | None = None
@@ -253,9 +257,10 @@ class VehicleMission:
                 log.info("vehicle %d back in the guided mode: resuming", self.config.vehicle)
                 self._set_phase(Phase.SEARCH if self.core.started else Phase.PREPARE)
         elif self._guided_seen and self.phase in _COMMANDING and not self._own_mode_change:
-            if self._hold_mode(hb):
-                # HOLD is what the autopilot itself falls back to when setpoints stall
-                # (PX4 offboard loss): take the vehicle back, as after a link loss.
+            if self._hold_mode(hb) and self._setpoints_stalled():
+                # HOLD after our setpoints stalled is the autopilot's own fall-back (PX4
+                # offboard loss): take the vehicle back, as after a link loss. A HOLD while
+                # they flowed is someone else's choice.
                 log.warning("vehicle %d: autopilot fell back to HOLD; re-entering the guided "
                             "mode", self.config.vehicle)  # fmt: skip
                 self._guided_seen = False
@@ -322,6 +327,7 @@ class VehicleMission:
 
     def _send(self, sp: Setpoint, pos: LocalPosition) -> None:
         self.link.send_setpoint(sp, self.config.setpoints)
+        self._setpoint_time = pos.time
         if len(self.latencies) < 200_000:
             self.latencies.append(time.perf_counter() - pos.received)
 
@@ -498,6 +504,11 @@ class VehicleMission:
             self._set_phase(Phase.PREPARE)
         else:
             self._set_phase(Phase.PAUSED)  # a pilot has it
+
+    def _setpoints_stalled(self) -> bool:
+        """The newest position is _SETPOINT_GAP_S or more past the one our last setpoint answered."""
+        pos = self.position
+        return pos is not None and pos.time - self._setpoint_time >= _SETPOINT_GAP_S
 
     def _hold_mode(self, hb: Heartbeat) -> bool:
         ap = self.link.autopilot

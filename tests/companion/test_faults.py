@@ -272,3 +272,25 @@ def test_pilot_takes_over_and_hands_back_mavsdk_ardupilot(
         wait_for(lambda: _searching_after(tmp_path, n), 20, "search after the hand-back")
     finally:
         pilot.close()
+
+
+@pytest.mark.timeout(120)
+def test_pilot_hold_on_px4_is_not_taken_back(
+    procs: Procs, small_profile: str, tmp_path: Path
+) -> None:
+    """HOLD while setpoints flow is a pilot's choice (a setpoint-loss HOLD is taken back)."""
+    procs.emulator(small_profile, 34780, persona="px4")
+    procs.companion(small_profile, 0, 34780, duration=3000)
+    wait_for(lambda: has(_log(tmp_path), "phase", phase="search"), 40, "search")
+    pilot = mavutil.mavlink_connection("udpout:127.0.0.1:34880", source_system=255,
+                                       source_component=190)  # fmt: skip
+    try:
+        pilot.mav.command_long_send(1, 1, 176, 0, 129, 4, 3, 0, 0, 0, 0)  # AUTO.LOITER (HOLD)
+        wait_for(lambda: has(_log(tmp_path), "phase", phase="paused"), 10, "companion pauses")
+        time.sleep(3.0)
+    finally:
+        pilot.close()
+    modes = [e["mode"] for e in records(tmp_path / "emulator-events.jsonl") if e["event"] == "mode"]
+    assert modes[-1] == "HOLD", f"companion fought the pilot: modes {modes}"
+    phases = [r["phase"] for r in records(_log(tmp_path)) if r.get("event") == "phase"]
+    assert phases[-1] == "paused", phases
