@@ -185,30 +185,37 @@ class VehicleMission:
 
     async def _decide(self) -> None:
         events = self.link.events
-        period = self.config.heartbeat_period
-        next_beat = 0.0
-        getter: asyncio.Task[LinkEvent] | None = None
+        loop = asyncio.get_running_loop()
+        me = asyncio.current_task()
+        failed: list[Exception] = []
+        timer: asyncio.TimerHandle | None = None
+
+        def beat() -> None:
+            # The companion HEARTBEAT every period (wall s), scheduled by this loop and stopped
+            # with it: if the decision loop dies, the vehicle stops hearing the companion. A
+            # timer, not a timeout on every wait: one plain queue wait per wake-up is most of
+            # the asyncio cost at 1000 positions per wall second.
+            nonlocal timer
+            try:
+                self.link.send_heartbeat()
+            except Exception as exc:  # ends the decision loop with this error
+                failed.append(exc)
+                if me is not None:
+                    me.cancel()
+                return
+            timer = loop.call_later(self.config.heartbeat_period, beat)
+
+        beat()
         try:
             while True:
-                now = time.perf_counter()
-                if now >= next_beat:
-                    self.link.send_heartbeat()
-                    next_beat = now + period
-                try:
-                    event = events.get_nowait()
-                except asyncio.QueueEmpty:
-                    # asyncio.wait, not asyncio.timeout: on 3.11 a cancel arriving as the
-                    # timeout expires can be swallowed, and this loop must stop when told.
-                    if getter is None:
-                        getter = asyncio.ensure_future(events.get())
-                    done, _ = await asyncio.wait({getter}, timeout=max(next_beat - now, 0.0))
-                    if not done:
-                        continue
-                    event, getter = getter.result(), None
-                self._handle_queued(event, events)
+                self._handle_queued(await events.get(), events)
+        except asyncio.CancelledError:
+            if failed:
+                raise failed[0] from None
+            raise
         finally:
-            if getter is not None:
-                getter.cancel()
+            if timer is not None:
+                timer.cancel()
 
     def _handle_queued(self, first: LinkEvent, events: asyncio.Queue[LinkEvent]) -> None:
         """``first`` and the events queued behind it, in order; of several positions only the

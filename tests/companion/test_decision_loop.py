@@ -1,16 +1,19 @@
-"""A companion that fell behind acts on the newest position only (no setpoints from stale ones).
-
-The pymavlink link reads every datagram already waiting in one go, and the decision loop, of
-several queued positions, steers from the newest.
+"""The decision loop: heartbeats on a wall-clock period only while it runs; a companion that fell
+behind acts on the newest position only (no setpoints from stale ones): the pymavlink link reads
+every datagram already waiting in one go, and the loop, of several queued positions, steers from
+the newest.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import socket
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.autopilots import FlightMode
@@ -141,3 +144,53 @@ def test_link_reads_every_waiting_datagram_at_once(monkeypatch: Any) -> None:
         5.0,
     ]
     assert calls == 1
+
+
+class _BeatingLink(_Link):
+    def __init__(self, fail_after: int | None = None) -> None:
+        super().__init__()
+        self.beats = 0
+        self.fail_after = fail_after
+
+    def send_heartbeat(self) -> None:
+        if self.fail_after is not None and self.beats >= self.fail_after:
+            raise OSError("socket gone")
+        self.beats += 1
+
+
+def _mission(tmp_path: Path, link: _Link) -> VehicleMission:
+    config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
+    return VehicleMission(replace(config, heartbeat_period=0.02), link, _Sink())
+
+
+def test_heartbeats_flow_while_the_loop_runs_and_stop_with_it(tmp_path: Path) -> None:
+    async def main() -> tuple[int, int, int]:
+        link = _BeatingLink()
+        mission = _mission(tmp_path, link)
+        mission.phase = Phase.PREPARE
+        task = asyncio.create_task(mission._decide())
+        await asyncio.sleep(0)
+        first = link.beats  # one at once
+        link.events.put_nowait(_position(0.1, 7.0))
+        await asyncio.sleep(0.3)
+        running = link.beats
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await task
+        await asyncio.sleep(0.1)
+        assert [sp.north for sp in link.setpoints] == [7.0]
+        return first, running, link.beats - running
+
+    first, running, after = asyncio.run(main())
+    assert first == 1
+    assert running >= 3
+    assert after == 0
+
+
+def test_a_failing_heartbeat_ends_the_loop_with_its_error(tmp_path: Path) -> None:
+    async def main() -> None:
+        link = _BeatingLink(fail_after=2)
+        await asyncio.wait_for(_mission(tmp_path, link)._decide(), 5.0)
+
+    with pytest.raises(OSError, match="socket gone"):
+        asyncio.run(main())
