@@ -35,7 +35,7 @@ class Geofence:
         """The search area [0, north] x [0, east] of a paper profile."""
         return cls(np.array([[0.0, 0.0], [north, 0.0], [north, east], [0.0, east]]))
 
-    def contains(self, point: FloatArray) -> bool:
+    def contains(self, point: FloatArray | tuple[float, float]) -> bool:
         """Ray casting; points on an edge count as inside."""
         x, y = float(point[0]), float(point[1])
         if self._nearest(x, y)[0] <= 1e-9:
@@ -55,6 +55,13 @@ class Geofence:
             return p
         _, n, e = self._nearest(float(p[0]), float(p[1]))
         return np.array([n, e])
+
+    def clamp_xy(self, north: float, east: float) -> tuple[float, float]:
+        """:meth:`clamp` of the point (north, east), on floats."""
+        if self.contains((north, east)):
+            return north, east
+        _, n, e = self._nearest(north, east)
+        return n, e
 
     def _nearest(self, x: float, y: float) -> tuple[float, float, float]:
         """Distance to the boundary and the nearest boundary point (first edge on ties)."""
