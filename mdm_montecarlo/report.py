@@ -45,10 +45,11 @@ def plot_table(
         "targets confirmed T_nc",
         f"{title}: efficiency",
     )
+    timed = [(c, label) for c, label in zip(cases, labels, strict=True) if results[c].has_ts]
     _boxes(
         b,
-        [list(results[c].ts()[0]) for c in cases],
-        labels,
+        [list(results[c].ts()[0]) for c, _ in timed],
+        [label for _, label in timed],
         "time to confirm all T_S (s)",
         f"{title}: completeness",
     )
@@ -108,7 +109,9 @@ def write_report(
         if inside:
             lines.append(f"T_nc inside tolerance: {sum(inside)} of {len(inside)} rows.")
             ts_in = [m.ts_within for m in mine if m.ts_within is not None]
-            lines += [f"T_S inside tolerance: {sum(ts_in)} of {len(ts_in)} rows.", ""]
+            if ts_in:
+                lines.append(f"T_S inside tolerance: {sum(ts_in)} of {len(ts_in)} rows.")
+            lines.append("")
         for scenario in dict.fromkeys(r.case.scenario for r in rows if r.table == table):
             png = f"{table}-{scenario}.png"
             if table == "scaling":

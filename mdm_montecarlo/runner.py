@@ -41,6 +41,11 @@ class MissionResults:
         """T_nc of every run at the profile's mission duration."""
         return metrics.confirmed_within(self.team_times, self.profile.mission.duration)
 
+    @property
+    def has_ts(self) -> bool:
+        """False for PSO/SPSO/ARPSO: simulated only up to the mission duration (T_nc), no T_S."""
+        return self.profile.policy.kind not in SWARM_KINDS
+
     def ts(self) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """T_S of every run (capped at mission.ts_cap) and which runs were capped."""
         return metrics.time_to_all(self.team_times, self.real, self.profile.mission.ts_cap)

@@ -8,7 +8,6 @@ from dataclasses import asdict, dataclass
 from mdm_montecarlo import metrics
 from mdm_montecarlo.runner import MissionResults
 from mdm_montecarlo.study import TNC_TOLERANCE, TS_TOLERANCE, Case, Row
-from mdm_montecarlo.variants import SWARM_METHODS
 
 
 @dataclass(frozen=True)
@@ -26,12 +25,13 @@ class MeasuredRow:
     n_false: int
     tnc_mean: float
     tnc_std: float
-    ts_mean_s: float
-    ts_std_s: float
+    ts_mean_s: float | None
+    ts_std_s: float | None
+    """None where the method is simulated only up to the mission duration (the swarms)."""
     aise_pct: float | None
     aisc_pct: float | None
     runs: int
-    capped: int
+    capped: int | None
     tnc_ci95: tuple[float, float]
     paper_tnc_mean: float | None
     paper_ts_mean_s: float | None
@@ -71,8 +71,9 @@ def measured_rows(rows: list[Row], results: dict[Case, MissionResults]) -> list[
         if not case.method.startswith("MDM") and mdm_case is not None:
             mdm_tnc, mdm_ts, _ = stats[mdm_case]
             aise = round(metrics.aise(mdm_tnc.mean, tnc.mean), 1)
-            if case.method not in SWARM_METHODS:  # swarm rows are simulated up to T_nc only
+            if results[case].has_ts:
                 aisc = round(metrics.aisc(mdm_ts.mean, ts.mean), 1)
+        has_ts = results[case].has_ts
         levels = case.method.removeprefix("MDM:").split("+")
         paper = row.paper
         out.append(
@@ -88,19 +89,21 @@ def measured_rows(rows: list[Row], results: dict[Case, MissionResults]) -> list[
                 n_false=case.n_false,
                 tnc_mean=round(tnc.mean, 3),
                 tnc_std=round(tnc.std, 3),
-                ts_mean_s=round(ts.mean),
-                ts_std_s=round(ts.std),
+                ts_mean_s=round(ts.mean) if has_ts else None,
+                ts_std_s=round(ts.std) if has_ts else None,
                 aise_pct=aise,
                 aisc_pct=aisc,
                 runs=tnc.n,
-                capped=capped,
+                capped=capped if has_ts else None,
                 tnc_ci95=(round(tnc.ci_low, 3), round(tnc.ci_high, 3)),
                 paper_tnc_mean=paper.tnc_mean if paper else None,
                 paper_ts_mean_s=paper.ts_mean_s if paper else None,
                 tnc_within=_within(
                     tnc.mean, paper.tnc_mean if paper else None, TNC_TOLERANCE[case.scenario]
                 ),
-                ts_within=_within(ts.mean, paper.ts_mean_s if paper else None, TS_TOLERANCE),
+                ts_within=_within(
+                    ts.mean, paper.ts_mean_s if paper and has_ts else None, TS_TOLERANCE
+                ),
             )
         )
     return out
@@ -122,10 +125,11 @@ def format_table(rows: list[MeasuredRow]) -> str:
         def num(v: float | None, fmt: str) -> str:
             return "" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
 
+        ts = "" if r.ts_mean_s is None else f"{r.ts_mean_s:.0f} ± {r.ts_std_s:.0f}"
         lines.append(
             f"| {r.table} | {r.scenario} | {r.method} | {r.level1} | {r.level2} | {r.delta1_pct_L:g} | "
             f"{r.n_uav} | {r.n_false} | {r.tnc_mean:.3f} ± {r.tnc_std:.3f} | {num(r.paper_tnc_mean, '.3f')} | "
-            f"{mark(r.tnc_within)} | {r.ts_mean_s:.0f} ± {r.ts_std_s:.0f} | {num(r.paper_ts_mean_s, '.0f')} | "
-            f"{mark(r.ts_within)} | {num(r.aise_pct, '.1f')} | {num(r.aisc_pct, '.1f')} | {r.runs} | {r.capped} |"
+            f"{mark(r.tnc_within)} | {ts} | {num(r.paper_ts_mean_s, '.0f')} | "
+            f"{mark(r.ts_within)} | {num(r.aise_pct, '.1f')} | {num(r.aisc_pct, '.1f')} | {r.runs} | {num(r.capped, 'd')} |"
         )
     return "\n".join(lines)
