@@ -1,7 +1,8 @@
 """Time-stepped batched missions for the social-cognitive baselines (PSO, SPSO, ARPSO).
 
 Unlike MDM, particles share state, so a run is stepped as a whole at the swarm's update interval,
-batched over (runs, vehicles). One iteration:
+batched over (runs, vehicles). One iteration (the per-particle parts are
+companion.search.swarm_iteration, shared with the live companion):
 
 1. every vehicle with a best to follow (its own or one it heard of, fitness > 0) takes the PSO
    step of its variant (companion.search.pso); the others fly the single-sensor exploration of
@@ -30,15 +31,12 @@ from numpy.typing import NDArray
 
 from companion.search import SearchPolicy
 from companion.search.from_profile import policy_config, swarm_config
-from companion.search.pso import (
-    Best,
-    arpso_inertia,
-    forget,
-    improve,
-    next_step,
-    random_informants,
-    signal_fitness,
-    swarm_best,
+from companion.search.pso import Best, forget, random_informants, signal_fitness
+from companion.search.swarm_iteration import (
+    choose_move,
+    explore,
+    read_into_best,
+    refresh_informants,
 )
 from mdm_montecarlo.engine import BlockResult, block_rngs
 from mdm_profiles import MissionProfile
@@ -104,7 +102,7 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
     delay = round(spec.message_delay / dt)
     outbox: deque[Message] = deque(maxlen=delay + 1)
 
-    waypoint = _explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
+    waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
     step = np.zeros((*shape, 2))
     guided = np.zeros(shape, dtype=bool)
     social_fitness = np.zeros(shape)
@@ -114,32 +112,22 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
     steps = 0
 
     while t < stop - 1e-9:
-        social, own_is_social = swarm_best(own, heard, links)
-        follow = social.fitness > 0
-        inertia = None
-        if config.variant == "arpso":
-            reads = np.concatenate([current[..., None], heard_current], axis=-1)
-            counted = np.concatenate([np.ones((*shape, 1), dtype=bool), links], axis=-1)
-            now_best = np.where(counted, reads, 0.0).max(axis=-1)
-            now_mean = np.where(counted, reads, 0.0).sum(axis=-1) / counted.sum(axis=-1)
-            inertia = arpso_inertia(
-                previous_best,
-                own.fitness,
-                now_best,
-                now_mean,
-                config.arpso_initial_inertia,
-                config.arpso_speed_weight,
-                config.arpso_aggregation_weight,
-            )
-        swarm_move = next_step(config, step, position, own, social, own_is_social, inertia, rng)
-        # Vehicles that lost their best go back to exploring from where they are.
-        lost = guided & ~follow
-        if lost.any():
-            waypoint[lost] = _explore(explorer, position[lost], rng)
-        to_waypoint = waypoint - position
-        gap = np.linalg.norm(to_waypoint, axis=-1, keepdims=True)
-        explore_move = to_waypoint * np.minimum(1.0, speed * dt / np.maximum(gap, 1e-12))
-        move = np.where(follow[..., None], swarm_move, explore_move)
+        move, follow, _ = choose_move(
+            config,
+            explorer,
+            position=position,
+            step=step,
+            waypoint=waypoint,
+            guided=guided,
+            own=own,
+            heard=heard,
+            heard_current=heard_current,
+            current=current,
+            previous_best=previous_best,
+            links=links,
+            distance=speed * dt,
+            rng=rng,
+        )
         new_position = np.clip(position + move, 0.0, area)
         step = new_position - position
         guided = follow
@@ -166,7 +154,7 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
 
         reached = ~follow & (np.linalg.norm(waypoint - position, axis=-1) <= 1e-6)
         if reached.any():
-            waypoint[reached] = _explore(explorer, position[reached], rng)
+            waypoint[reached] = explore(explorer, position[reached], rng)
 
         # Fitness: the signal sensor, targets known to be confirmed left out.
         now = np.full(n, t)
@@ -182,9 +170,7 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
         current, source = signal_fitness(
             strength.reshape(*shape, m), within.reshape(*shape, m) & ~known
         )
-        own = forget(own, known)
-        previous_best = own.fitness.copy()
-        own = improve(own, position, current, source)
+        own, previous_best = read_into_best(own, known, position, current, source)
 
         outbox.append(Message(own.copy(), current.copy(), known.copy()))
         # Drawn every iteration, so the random stream does not depend on delay or drop.
@@ -194,22 +180,17 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
         own = forget(own, known)
         heard = forget(heard, np.broadcast_to(known[:, :, None, :], (*shape, n_vehicles, m)))
         if config.variant == "spso":
-            # Adaptive random topology: new informants where the local best did not improve.
-            updated, _ = swarm_best(own, heard, links)
-            stuck = updated.fitness <= social_fitness
-            if stuck.any():
-                fresh = random_informants(rng, (n_runs,), n_vehicles, spec.informants)
-                links = np.where(stuck[..., None], fresh, links)
-            social_fitness = updated.fitness
+            links, social_fitness = refresh_informants(
+                own,
+                heard,
+                links,
+                social_fitness,
+                lambda: random_informants(rng, (n_runs,), n_vehicles, spec.informants),
+            )
         if t >= duration and _all_confirmed(first, real):
             break
 
     return BlockResult(block, first, steps * n, float(t * n))
-
-
-def _explore(policy: SearchPolicy, position: FloatArray, rng: np.random.Generator) -> FloatArray:
-    """Fresh level-1 waypoints of the single-sensor search from the given positions."""
-    return policy.start(position, np.zeros(len(position)), rng).waypoint
 
 
 def _deliver(
