@@ -38,18 +38,18 @@ async def _exchange(port: int) -> None:
     tasks = [asyncio.create_task(c.run()) for c in channels]
     try:
         await asyncio.wait_for(asyncio.gather(*(c.connected.wait() for c in channels)), 10)
-        report = PeerReport(12.0, (5000.0, 4200.0), 0.8, 3, 0.5, frozenset({1}))
+        report = PeerReport(12.0, (5000.0, 4200.0), 0.8, 0.5, ((700.0, 650.5),))
         # Resend until it arrives: the subscription may not be in place at the first send.
-        while peers[1].heard()[0].fitness[0, 0] == 0:
+        while peers[1].heard(12.0)[0].fitness[0, 0] == 0:
             await peers[0].publish(report)
             await asyncio.sleep(0.05)
-        heard, current = peers[1].heard()
+        heard, current = peers[1].heard(12.0)
         assert heard.position[0, 0].tolist() == [5000.0, 4200.0]
-        assert heard.source[0].tolist() == [3, -1, -1]
+        assert heard.source[0].tolist() == [-1, -1, -1]
         assert current[0].tolist() == [0.5, 0.0, 0.0]
-        assert peers[1].known() == {1}
+        assert peers[1].known() == [(700.0, 650.5)]
         # The sender does not hear itself.
-        assert peers[0].heard()[0].fitness.sum() == 0
+        assert peers[0].heard(12.0)[0].fitness.sum() == 0
 
         own = Best(np.array([[0.0, 0.0]]), np.array([0.3]), np.array([0]))
         links = np.array([[True, False, True]])
@@ -59,13 +59,44 @@ async def _exchange(port: int) -> None:
 
         # An older report does not replace a newer one: the garbage sent after it on the same
         # connection arrives after it, so once that is counted the old report was handled.
-        await peers[0].publish(PeerReport(5.0, (1.0, 1.0), 0.9, 2, 0.9, frozenset()))
+        await peers[0].publish(PeerReport(5.0, (1.0, 1.0), 0.9, 0.9))
         await channels[0].publish(f"{PREFIX}/swarm/uav0", b"not json")
         await _wait(lambda: peers[1].rejected == 1)
-        assert peers[1].heard()[0].fitness[0, 0] == 0.8
+        assert peers[1].heard(20.0)[0].fitness[0, 0] == 0.8
         # A vehicle outside the fleet is counted and dropped, not raised.
         await asyncio.to_thread(publish, port, f"{PREFIX}/swarm/uav7", report.encode().decode())
         await _wait(lambda: peers[1].rejected == 2)
+    finally:
+        for t in tasks:
+            t.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
+
+
+def test_delay_holds_a_report_back_and_drop_one_loses_every_report(tmp_path: Path) -> None:
+    with Broker(tmp_path / "broker") as broker:
+        asyncio.run(_degraded(broker.port))
+
+
+async def _degraded(port: int) -> None:
+    settings = MqttSettings(host="127.0.0.1", port=port)
+    channels = [MqttChannel(settings, client_id=f"swarm-deg-{i}") for i in range(3)]
+    sender = SwarmPeers(channels[0], PREFIX, 0, 3)
+    late = SwarmPeers(channels[1], PREFIX, 1, 3, delay=30.0)
+    deaf = SwarmPeers(channels[2], PREFIX, 2, 3, drop=1.0)
+    tasks = [asyncio.create_task(c.run()) for c in channels]
+    tasks.append(asyncio.create_task(sender.run()))
+    try:
+        await asyncio.wait_for(asyncio.gather(*(c.connected.wait() for c in channels)), 10)
+        report = PeerReport(100.0, (10.0, 20.0), 0.6, 0.6)
+        while late.received == 0 or deaf.received == 0:
+            sender.post(report)
+            await asyncio.sleep(0.05)
+        assert sender.sent >= 1
+        # Sent at vehicle time 100 s with a 30 s delay: not usable before 130 s.
+        assert late.heard(129.9)[0].fitness[0, 0] == 0
+        assert late.heard(130.0)[0].fitness[0, 0] == 0.6
+        assert deaf.dropped == deaf.received
+        assert deaf.heard(1e9)[0].fitness.sum() == 0
     finally:
         for t in tasks:
             t.cancel()
