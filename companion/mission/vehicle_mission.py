@@ -26,8 +26,9 @@ from companion.link.messages import (
 )
 from companion.mission.clock import VehicleClock
 from companion.mission.config import MissionConfig
+from companion.mission.core_for import core_for
 from companion.mission.phase import Phase
-from companion.mission.search_core import SearchCore
+from companion.mission.swarm_core import SwarmExchange
 from companion.sensors.mavlink_source import MavlinkSensorSource
 from companion.telemetry.mission_log import EventSink, Recovered
 
@@ -54,6 +55,7 @@ class VehicleMission:
         *,
         recovered: Recovered | None = None,
         fence: Geofence | None = None,
+        peers: SwarmExchange | None = None,
     ) -> None:
         profile = config.profile
         self.config = config
@@ -61,8 +63,8 @@ class VehicleMission:
         self.sink = sink
         self.recovered = recovered or Recovered()
         self.clock = VehicleClock(floor=self.recovered.last_time)
-        self.core = SearchCore(profile, config.seed, config.vehicle)
         self.sensors = MavlinkSensorSource(link, len(profile.sensors))
+        self.core = core_for(config, lambda: self.sensors.signal, peers)
         self.fence = fence or Geofence.rectangle(profile.area.north, profile.area.east)
         self.guide = GuidanceConfig(
             speed=profile.fleet.speed,

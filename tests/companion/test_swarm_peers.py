@@ -87,9 +87,8 @@ async def _degraded(port: int) -> None:
     tasks.append(asyncio.create_task(sender.run()))
     try:
         await asyncio.wait_for(asyncio.gather(*(c.connected.wait() for c in channels)), 10)
-        report = PeerReport(100.0, (10.0, 20.0), 0.6, 0.6)
         while late.received == 0 or deaf.received == 0:
-            sender.post(report)
+            sender.post(100.0, (10.0, 20.0), 0.6, 0.6, [])
             await asyncio.sleep(0.05)
         assert sender.sent >= 1
         # Sent at vehicle time 100 s with a 30 s delay: not usable before 130 s.

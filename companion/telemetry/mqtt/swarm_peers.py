@@ -119,9 +119,12 @@ class SwarmPeers:
         await self._channel.publish(self.topic(self.vehicle), report.encode(), qos=0)
         self.sent += 1
 
-    def post(self, report: PeerReport) -> None:
-        """Queue ``report`` for ``run``; a newer one replaces one not yet sent."""
-        self._outgoing = report
+    def post(
+        self, time: float, best: tuple[float, float], fitness: float, current: float,
+        known: list[tuple[float, float]],
+    ) -> None:  # fmt: skip
+        """Queue this vehicle's report for ``run``; a newer one replaces one not yet sent."""
+        self._outgoing = PeerReport(time, best, fitness, current, tuple(known))
         self._ready.set()
 
     async def run(self) -> None:
