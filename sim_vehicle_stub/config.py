@@ -37,6 +37,12 @@ class EmulatorConfig:
     """Physics step, sim s (the lag model is discretised exactly, so this only sets latency)."""
     telemetry_hz: float = 10.0
     """Rate of position/attitude streams and sensor readings, per sim second."""
+    lockstep: bool = False
+    """Hold sim time at each telemetry tick until every vehicle flown in the external mode
+    (OFFBOARD / GUIDED) by a streaming client has a setpoint from after the tick before: a
+    loaded host then slows the sim instead of letting the vehicles fly on stale setpoints. A
+    client silent for ``lockstep_wall`` wall s is not waited for (the failsafes act)."""
+    lockstep_wall: float = 0.25
     seed: int = 0
     events: Path | None = None
     battery_endurance: float = 7200.0

@@ -6,6 +6,7 @@ import asyncio
 import contextlib
 import functools
 import logging
+import math
 import socket
 import struct
 import time
@@ -35,6 +36,7 @@ from sim_vehicle_stub.handlers import MessageHandler
 from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.node import VehicleNode
 from sim_vehicle_stub.personas import ProfileFacts, create_persona
+from sim_vehicle_stub.personas.base import Behaviour
 from sim_vehicle_stub.sensing import Reading, SensorWorld
 from sim_vehicle_stub.telemetry import Telemetry
 from sim_vehicle_stub.vehicle import Vehicle
@@ -110,6 +112,11 @@ class Emulator:
         """Messages skipped because a value did not fit its field."""
         self._task: asyncio.Task[None] | None = None
         self._stop = asyncio.Event()
+        self._setpoint_in = asyncio.Event()
+        self._setpoint_wall = [-math.inf] * n
+        """Wall time (monotonic) of each vehicle's last setpoint (lockstep)."""
+        self.lockstep_waits = 0
+        """Ticks at which lockstep held sim time for a client's setpoint."""
 
     def _now(self) -> float:
         return self.clock.now
@@ -190,12 +197,16 @@ class Emulator:
 
     # ----- receive path
     def _deliver(self, node: VehicleNode, msgs: list[Any]) -> None:
+        before = node.vehicle.setpoint
         for msg in msgs:
             try:
                 self.handler.handle(node, msg)
             except Exception:  # never let one message take the emulator down
                 node.stats.malformed += 1
                 log.exception("vehicle %d: error handling %s", node.vehicle.index, msg.get_type())
+        if node.vehicle.setpoint is not before:
+            self._setpoint_wall[node.vehicle.index] = time.monotonic()
+            self._setpoint_in.set()
         self._flush_state(node)
 
     def _flush_state(self, node: VehicleNode) -> None:
@@ -229,6 +240,8 @@ class Emulator:
                     if self.tick_errors % 100 == 1:
                         log.exception("tick at t=%.2f failed (%d so far)", self.clock.now,
                                       self.tick_errors)  # fmt: skip
+                if cfg.lockstep:
+                    await self._await_setpoints(period)
             wait = self.clock.wait_time()
             # epoll sleeps in whole milliseconds, so shorter waits are run ahead instead (the
             # clock is absolute, so this never drifts); the endpoints get the loop every tick.
@@ -236,6 +249,38 @@ class Emulator:
                 await asyncio.sleep(wait)
             elif k == 0:
                 await asyncio.sleep(0)
+
+    def _behind(self, period: float) -> bool:
+        """A vehicle flown in the external mode whose streaming client has not answered the
+        previous tick yet (no setpoint received after it)."""
+        since = self.clock.now - period - 1e-6
+        recent = time.monotonic() - self.config.lockstep_wall
+        for node in self.nodes:
+            v = node.vehicle
+            sp = v.setpoint
+            if (
+                sp is not None
+                and sp.t < since
+                and v.mode.behaviour is Behaviour.EXTERNAL
+                and self._setpoint_wall[v.index] > recent
+            ):
+                return True
+        return False
+
+    async def _await_setpoints(self, period: float) -> None:
+        """Lockstep: hold sim time until every streaming client answered the previous tick, at
+        most ``lockstep_wall`` wall s (a client that stopped streaming is not waited for)."""
+        if not self._behind(period):
+            return
+        self.lockstep_waits += 1
+        deadline = time.monotonic() + self.config.lockstep_wall
+        while self._behind(period) and not self._stop.is_set():
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return
+            self._setpoint_in.clear()
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._setpoint_in.wait(), remaining)
 
     def _tick(self, dt: float) -> None:
         t = self.clock.now
