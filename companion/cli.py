@@ -18,6 +18,8 @@ from companion.fence_from_profile import fence_for
 from companion.fleet.cli_args import add_fleet_parser
 from companion.link.factory import BACKENDS, Backend, make_link
 from companion.mission import MissionConfig, VehicleMission
+from companion.mission.core_for import core_for, is_swarm
+from companion.mission.swarm_core import SwarmCore
 from companion.telemetry import EventSink, MissionLog, read_log
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
 from companion.telemetry.tee_sink import TeeSink
@@ -104,6 +106,8 @@ def run_command(args: argparse.Namespace) -> int:
     if args.connect is None and site is not None and site.connect:
         url = site.connect.format(port=port)
     mqtt = mqtt_spec(args, profile.mqtt)
+    if mqtt is None and is_swarm(config):
+        core_for(config, lambda: 0.0, None)  # raises: the swarm kinds need a broker
     signing_key = load_signing_key(args.signing_key_file)
     fly = _fly(config, url, args.backend, tlog=not args.no_tlog, mqtt=mqtt, signing_key=signing_key)
     if args.backend == "mavsdk":
@@ -159,15 +163,37 @@ async def _fly(
         telemetry = VehicleTelemetry.open(mqtt, profile_name=config.profile.name,
                                           vehicle=config.vehicle, log_dir=config.log_dir)  # fmt: skip
         sink = TeeSink(mission_log, telemetry)
+    peers = None
+    if telemetry is not None and is_swarm(config):
+        from companion.telemetry.mqtt.swarm_peers import SwarmPeers
+
+        swarm = config.profile.policy.swarm
+        peers = SwarmPeers(telemetry.channel, telemetry.topics.prefix, config.vehicle,
+                           config.profile.fleet.vehicles, delay=swarm.message_delay,
+                           drop=swarm.message_drop, seed=config.seed)  # fmt: skip
     mission = VehicleMission(config, link, sink, recovered=recovered,
-                             fence=fence_for(config.profile))  # fmt: skip
+                             fence=fence_for(config.profile), peers=peers)  # fmt: skip
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, mission.operator_stop)
     loop.add_signal_handler(signal.SIGUSR1, _dump_tasks)
     try:
         async with telemetry.running(mission) if telemetry else contextlib.nullcontext():
-            return await mission.run()
+            if peers is None:
+                return await mission.run()
+            sender = asyncio.create_task(peers.run(), name=f"v{config.vehicle}-swarm")
+            try:
+                return await mission.run()
+            finally:
+                sender.cancel()
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(peers.flush(), 2.0)
+                core = mission.core
+                assert isinstance(core, SwarmCore)
+                mission.emit("swarm", sent=peers.sent, received=peers.received,
+                             dropped=peers.dropped, rejected=peers.rejected,
+                             iterations=core.iterations,
+                             peer_bests_used=core.peer_bests_used)  # fmt: skip
     except asyncio.CancelledError:
         return "stopped by a second signal"
     finally:

@@ -16,6 +16,7 @@ from pathlib import Path
 from companion.fleet.progress import progress_line, read_progress
 from companion.fleet.scoring import FleetResult, score
 from companion.link.factory import check_signing_support
+from companion.search.pso import VARIANTS
 from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
 from mavlink_signing import load_signing_key
 from mdm_profiles import MissionProfile, load_profile
@@ -45,6 +46,10 @@ class FleetOptions:
     signing_key_file: Path | None = None
     """MAVLink signing passphrase file for the emulator and the companions (they also inherit
     $MDM_MAVLINK_KEY)."""
+    lockstep: bool = True
+    """The emulator holds sim time until every companion answered the last position
+    (sim-vehicle --lockstep): a loaded host slows the run instead of the vehicles flying on
+    stale setpoints, so setpoints stay at the telemetry rate (10 Hz) in vehicle time."""
 
 
 def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
@@ -59,6 +64,7 @@ def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
         "--bind-port-base", str(o.base_port + 200),
         "--seed", str(o.seed),
         "--events", str(o.out / "emulator-events.jsonl"),
+        *(["--lockstep"] if o.lockstep else []),
         *_signing_args(o),
     ]  # fmt: skip
 
@@ -158,7 +164,13 @@ def _stop(p: subprocess.Popen[bytes]) -> None:
 def fleet_command(args: argparse.Namespace) -> int:
     """`companion fleet`: run, then print a summary (or JSON)."""
     out = args.out or Path("runs") / time.strftime("fleet-%Y%m%d-%H%M%S")
-    mqtt_spec(args, load_profile(args.profile).mqtt)  # bad --mqtt* flags fail here, not N times
+    profile = load_profile(args.profile)
+    # Bad --mqtt* flags, or a swarm kind without a broker, fail here, not N times.
+    if mqtt_spec(args, profile.mqtt) is None and profile.policy.kind in VARIANTS:
+        raise ValueError(
+            f"profile {profile.name!r}: policy.kind {profile.policy.kind!r} shares the swarm's "
+            "bests over MQTT; configure a broker (--mqtt HOST[:PORT] or the profile's mqtt:)"
+        )
     opts = FleetOptions(
         profile=args.profile, out=out, vehicles=args.vehicles, speedup=args.speedup,
         duration=args.duration, backend=args.backend, persona=args.persona,

@@ -126,6 +126,8 @@ class SwarmCore:
         iterate = time >= self.next_update
         if iterate:
             self._iterate(time, position)
+        elif confirmed:
+            self._publish(time)  # at once: the mission may end before the next iteration
         return Decision(level=0, previous_level=0, detected=False, confirmed=confirmed,
                         fell_back=False, new_waypoint=iterate)  # fmt: skip
 
@@ -162,8 +164,7 @@ class SwarmCore:
             attribute(heard, self.spec.signal_radius, known, self.tolerance),
             np.broadcast_to(is_known[:, None, :], (*heard.fitness.shape, is_known.shape[-1])),
         )
-        self.peers.post(time, (float(self.own.position[0, 0]), float(self.own.position[0, 1])),
-                        float(self.own.fitness[0]), fitness, list(self.known))  # fmt: skip
+        self._publish(time)
         if self.config.variant == "spso":
             self.links, self.local_fitness = refresh_informants(
                 self.own, heard, self.links, self.local_fitness, self._draw_informants
@@ -184,6 +185,11 @@ class SwarmCore:
         self.iterations += 1
         self.peer_bests_used += int(from_peer[0])
         self.next_update = time + self.spec.update_interval
+
+    def _publish(self, time: float) -> None:
+        best = (float(self.own.position[0, 0]), float(self.own.position[0, 1]))
+        self.peers.post(time, best, float(self.own.fitness[0]), float(self.current[0]),
+                        list(self.known))  # fmt: skip
 
     @property
     def _acceptance(self) -> float:

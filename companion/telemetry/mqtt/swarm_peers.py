@@ -133,13 +133,17 @@ class SwarmPeers:
         while True:
             await self._ready.wait()
             self._ready.clear()
-            report, self._outgoing = self._outgoing, None
-            if report is None or not self._channel.connected.is_set():
-                continue
-            try:
-                await self.publish(report)
-            except aiomqtt.MqttError as exc:
-                log.debug("swarm report not sent: %s", exc)
+            await self.flush()
+
+    async def flush(self) -> None:
+        """Send the report ``post`` queued, if any (the last one, at the end of a mission)."""
+        report, self._outgoing = self._outgoing, None
+        if report is None or not self._channel.connected.is_set():
+            return
+        try:
+            await self.publish(report)
+        except aiomqtt.MqttError as exc:
+            log.debug("swarm report not sent: %s", exc)
 
     def heard(self, now: float) -> tuple[Best, np.ndarray]:
         """Last best and current fitness of every vehicle usable at vehicle time ``now``: Best
