@@ -43,8 +43,12 @@ class MissionResults:
 
     @property
     def has_ts(self) -> bool:
-        """False for PSO/SPSO/ARPSO: simulated only up to the mission duration (T_nc), no T_S."""
-        return self.profile.policy.kind not in SWARM_KINDS
+        """False where runs stopped at the mission duration (ts_cap <= duration): T_nc only.
+
+        reproduce does that for the swarm baselines, for which the paper prints no T_S.
+        """
+        mission = self.profile.mission
+        return mission.ts_cap > mission.duration
 
     def ts(self) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """T_S of every run (capped at mission.ts_cap) and which runs were capped."""

@@ -54,10 +54,10 @@ def test_reproduce_applies_set_to_every_row_and_writes_the_report(
 
 
 def test_swarm_rows_have_no_completion_time(capsys: pytest.CaptureFixture[str]) -> None:
-    # PSO is simulated up to the mission duration only: no T_S, not "every run capped".
-    assert (
-        main(["run", "--profile", "paper-fixed", "--method", "PSO", "--runs", "8", "--json"]) == 0
-    )
+    # Runs stopped at the mission duration (as reproduce does for PSO) have no T_S, not
+    # "every run capped".
+    argv = ["run", "--profile", "paper-fixed", "--method", "PSO", "--runs", "8", "--json"]
+    assert main([*argv, "--set", "mission.ts_cap=1000"]) == 0
     (row,) = _json_rows(capsys)
     assert (row["ts_mean_s"], row["ts_std_s"], row["capped"], row["aisc_pct"]) == (None,) * 4
     assert row["method"] == "PSO"
