@@ -39,8 +39,8 @@ class EmulatorConfig:
     """Rate of position/attitude streams and sensor readings, per sim second."""
     lockstep: bool = False
     """Hold sim time at each telemetry tick until every vehicle flown in the external mode
-    (OFFBOARD / GUIDED) by a streaming client has a setpoint from after the tick before: a
-    loaded host then slows the sim instead of letting the vehicles fly on stale setpoints. A
+    (OFFBOARD / GUIDED) by a streaming client has answered that tick's telemetry: a loaded
+    host then slows the sim instead of letting the vehicles fly on stale setpoints. A
     client silent for ``lockstep_wall`` wall s is not waited for (the failsafes act)."""
     lockstep_wall: float = 0.25
     seed: int = 0

@@ -241,7 +241,7 @@ class Emulator:
                         log.exception("tick at t=%.2f failed (%d so far)", self.clock.now,
                                       self.tick_errors)  # fmt: skip
                 if cfg.lockstep:
-                    await self._await_setpoints(period)
+                    await self._await_setpoints()
             wait = self.clock.wait_time()
             # epoll sleeps in whole milliseconds, so shorter waits are run ahead instead (the
             # clock is absolute, so this never drifts); the endpoints get the loop every tick.
@@ -250,10 +250,11 @@ class Emulator:
             elif k == 0:
                 await asyncio.sleep(0)
 
-    def _behind(self, period: float) -> bool:
-        """A vehicle flown in the external mode whose streaming client has not answered the
-        previous tick yet (no setpoint received after it)."""
-        since = self.clock.now - period - 1e-6
+    def _behind(self) -> bool:
+        """A vehicle flown in the external mode whose streaming client has not answered this
+        tick's telemetry yet (sim time stands still meanwhile, so an answer has ``t == now``):
+        one setpoint per tick, none computed from an older position than the last."""
+        since = self.clock.now - 1e-6
         recent = time.monotonic() - self.config.lockstep_wall
         for node in self.nodes:
             v = node.vehicle
@@ -267,14 +268,14 @@ class Emulator:
                 return True
         return False
 
-    async def _await_setpoints(self, period: float) -> None:
-        """Lockstep: hold sim time until every streaming client answered the previous tick, at
-        most ``lockstep_wall`` wall s (a client that stopped streaming is not waited for)."""
-        if not self._behind(period):
+    async def _await_setpoints(self) -> None:
+        """Lockstep: hold sim time until every streaming client answered this tick, at most
+        ``lockstep_wall`` wall s (a client that stopped streaming is not waited for)."""
+        if not self._behind():
             return
         self.lockstep_waits += 1
         deadline = time.monotonic() + self.config.lockstep_wall
-        while self._behind(period) and not self._stop.is_set():
+        while self._behind() and not self._stop.is_set():
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 return
