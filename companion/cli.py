@@ -173,6 +173,8 @@ async def _fly(
                            drop=swarm.message_drop, seed=config.seed)  # fmt: skip
     mission = VehicleMission(config, link, sink, recovered=recovered,
                              fence=fence_for(config.profile), peers=peers)  # fmt: skip
+    if isinstance(mission.core, SwarmCore):
+        mission.core.emit = mission.emit  # swarm_follow events in the mission log
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, mission.operator_stop)

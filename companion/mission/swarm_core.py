@@ -13,14 +13,21 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
 from companion.mission.search_core import Decision
 from companion.search import SearchPolicy
 from companion.search.from_profile import policy_config, swarm_config
-from companion.search.pso import Best, BoolArray, FloatArray, forget, random_informants
+from companion.search.pso import (
+    Best,
+    BoolArray,
+    FloatArray,
+    forget,
+    random_informants,
+    swarm_best,
+)
 from companion.search.signal_reading import attribute, fitness_from_signal
 from companion.search.swarm_iteration import (
     choose_move,
@@ -86,6 +93,10 @@ class SwarmCore:
         self._explore_to = np.zeros((1, 2))
         self._target = np.zeros((1, 2))
         self._last_position: FloatArray | None = None
+        self.emit: Callable[..., Any] | None = None
+        """Where to log (event name, fields) what the swarm does; set by the companion to the
+        mission log's emit (VehicleMission.emit). Logged: ``swarm_follow`` for an iteration
+        that follows a peer's best (own position, the best's position, fitness and peer)."""
 
     def start(self, position: FloatArray, time: float, memory: list[tuple[float, float]]) -> None:
         """First exploration waypoint at ``position``; ``memory``: targets confirmed earlier."""
@@ -184,12 +195,22 @@ class SwarmCore:
         self._last_position = here
         self.iterations += 1
         self.peer_bests_used += int(from_peer[0])
+        if from_peer[0] and self.emit is not None:
+            self._log_follow(heard, position)
         self.next_update = time + self.spec.update_interval
 
     def _publish(self, time: float) -> None:
         best = (float(self.own.position[0, 0]), float(self.own.position[0, 1]))
         self.peers.post(time, best, float(self.own.fitness[0]), float(self.current[0]),
                         list(self.known))  # fmt: skip
+
+    def _log_follow(self, heard: Best, position: FloatArray) -> None:
+        social, _ = swarm_best(self.own, heard, self.links)
+        peer = int(np.argmax(np.where(self.links, heard.fitness, -np.inf)[0]))
+        assert self.emit is not None
+        self.emit("swarm_follow", peer=peer, fitness=round(float(social.fitness[0]), 4),
+                  best=[round(float(v), 1) for v in social.position[0]],
+                  pos=[round(float(v), 1) for v in position])  # fmt: skip
 
     @property
     def _acceptance(self) -> float:
