@@ -113,6 +113,7 @@ class Emulator:
         self._task: asyncio.Task[None] | None = None
         self._stop = asyncio.Event()
         self._setpoint_in = asyncio.Event()
+        self._holding = False
         self._setpoint_wall = [-math.inf] * n
         """Wall time (monotonic) of each vehicle's last setpoint (lockstep)."""
         self.lockstep_waits = 0
@@ -206,7 +207,8 @@ class Emulator:
                 log.exception("vehicle %d: error handling %s", node.vehicle.index, msg.get_type())
         if node.vehicle.setpoint is not before:
             self._setpoint_wall[node.vehicle.index] = time.monotonic()
-            self._setpoint_in.set()
+            if self._holding and not self._behind():
+                self._setpoint_in.set()  # the last answer the held tick waited for
         self._flush_state(node)
 
     def _flush_state(self, node: VehicleNode) -> None:
@@ -275,13 +277,17 @@ class Emulator:
             return
         self.lockstep_waits += 1
         deadline = time.monotonic() + self.config.lockstep_wall
-        while self._behind() and not self._stop.is_set():
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                return
-            self._setpoint_in.clear()
-            with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._setpoint_in.wait(), remaining)
+        self._holding = True
+        try:
+            while self._behind() and not self._stop.is_set():
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    return
+                self._setpoint_in.clear()
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(self._setpoint_in.wait(), remaining)
+        finally:
+            self._holding = False
 
     def _tick(self, dt: float) -> None:
         t = self.clock.now
