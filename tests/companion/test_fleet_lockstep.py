@@ -1,0 +1,18 @@
+"""`companion fleet` asks the emulator for lockstep when told to, and always flat out."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from companion.fleet.runner import FleetOptions, emulator_command
+
+
+def _lockstep(**kw: object) -> bool:
+    options = FleetOptions(profile="paper-fixed", out=Path("runs/x"), **kw)  # type: ignore[arg-type]
+    return "--lockstep" in emulator_command(options, 12)
+
+
+def test_lockstep_only_when_asked_or_flat_out() -> None:
+    assert not _lockstep(speedup=100.0)
+    assert _lockstep(speedup=100.0, lockstep=True)
+    assert _lockstep(speedup=0.0)
