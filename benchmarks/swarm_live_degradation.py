@@ -1,0 +1,157 @@
+"""Live PSO under message loss and delay, beside the Monte-Carlo engine on the same profile.
+
+Live: ``companion fleet --json --mqtt 127.0.0.1 ...`` (emulator + one companion per vehicle,
+bests shared through the broker, the delay/drop knob applied by each receiver), ``--seeds``
+runs per setting, one fleet at a time. Engine: mdm_montecarlo.runner.run_missions, ``--runs``
+missions per setting (what ``mdm-montecarlo run --profile FILE --method PSO --set
+policy.swarm.message_drop=P`` runs; its ``tnc_mean`` is the T_nc column here).
+
+The profile is the one of tests/companion/test_swarm_live.py (2.5 km square, one real target in
+the middle, one false target, 3 UAVs, 900 m signal, 400 s). Printed per setting: mean T_nc,
+how many runs confirmed the real target, the mean time (search seconds) to its first
+confirmation over the runs that confirmed it (± standard deviation), and for live runs the mean
+number of iterations per vehicle that followed a peer's best. The engine is also run on the profile without the false
+target (its signal sensor reads false targets, the live confirmation sensor does not: see
+docs/model.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from mdm_montecarlo.runner import run_missions
+from mdm_profiles.loader import load_profile
+from mdm_profiles.overrides import apply_overrides
+
+PROFILE = """
+name: swarm-live-bench
+area: {north: 2500.0, east: 2500.0}
+targets:
+  - {north: 1250.0, east: 1250.0}
+  - {north: 300.0, east: 2200.0, false_target: true}
+fleet: {vehicles: 3, speed: 20.0, tau: 0.33, altitude: 30.0, altitude_step: 5.0}
+sensors:
+  - {name: detection, radius: 1000.0}
+  - {name: confirmation, radius: 100.0}
+policy:
+  kind: pso
+  levels: [{distribution: US, step: 2500.0}]
+  swarm: {signal_radius: 900.0, update_interval: 2.0}
+mission: {duration: 400.0, ts_cap: 400.0}
+"""
+NO_FALSE = "\n".join(line for line in PROFILE.splitlines() if "false_target" not in line)
+
+SETTINGS = ((0.0, 0.0), (0.5, 0.0), (1.0, 0.0), (0.0, 30.0))
+"""(message_drop, message_delay s)."""
+
+
+@dataclass
+class Row:
+    tnc: float
+    confirmed: int
+    runs: int
+    ts: float
+    """Mean time to the real target's first confirmation, over the runs that confirmed it."""
+    ts_sd: float
+    """Its standard deviation over those runs."""
+    followed: float = math.nan
+    """Live: mean iterations per vehicle that followed a peer's best."""
+
+
+def _sets(drop: float, delay: float) -> list[str]:
+    return [f"policy.swarm.message_drop={drop}", f"policy.swarm.message_delay={delay}"]
+
+
+def engine(path: Path, drop: float, delay: float, runs: int, seed: int, workers: int) -> Row:
+    profile = apply_overrides(load_profile(path), _sets(drop, delay))
+    result = run_missions(profile, runs=runs, seed=seed, workers=workers)
+    real = result.team_times[:, result.real].min(axis=1)
+    hit = real <= profile.mission.duration
+    ts = float(real[hit].mean()) if hit.any() else math.nan
+    sd = float(real[hit].std(ddof=1)) if hit.sum() > 1 else math.nan
+    return Row(float(result.tnc.mean()), int(hit.sum()), runs, ts, sd)
+
+
+def live(path: Path, drop: float, delay: float, seeds: list[int], speedup: float) -> Row:
+    text = path.read_text()
+    tnc: list[int] = []
+    times: list[float] = []
+    followed: list[int] = []
+    with tempfile.TemporaryDirectory(prefix="swarm-live-") as tmp:
+        knob = Path(tmp) / "profile.yaml"
+        knob.write_text(
+            text.replace(
+                "update_interval: 2.0}",
+                f"update_interval: 2.0, message_drop: {drop}, message_delay: {delay}}}",
+            )
+        )
+        for seed in seeds:
+            out = Path(tmp) / f"run-{seed}"
+            cmd = [str(Path(sys.executable).parent / "companion"), "fleet", "--profile", str(knob), "--json",
+                   "--quiet", "--mqtt", "127.0.0.1", "--mqtt-prefix",
+                   f"mdm/bench-{os.getpid()}-{drop}-{delay}-{seed}", "--speedup", str(speedup),
+                   "--duration", "400", "--seed", str(seed), "--base-port", "35900",
+                   "--out", str(out)]  # fmt: skip
+            done = subprocess.run(cmd, capture_output=True, text=True, check=True)
+            result = json.loads(done.stdout.strip().splitlines()[-1])
+            tnc.append(int(result["tnc"]))
+            first = result["first_confirmation"][0]
+            if first is not None:
+                times.append(float(first))
+            for log in sorted(out.glob("mission-*.jsonl")):
+                for line in log.read_text().splitlines():
+                    rec = json.loads(line)
+                    if rec.get("event") == "swarm":
+                        followed.append(int(rec["peer_bests_used"]))
+    ts = statistics.fmean(times) if times else math.nan
+    sd = statistics.stdev(times) if len(times) > 1 else math.nan
+    return Row(statistics.fmean(tnc), len(times), len(seeds), ts, sd, statistics.fmean(followed))
+
+
+def _fmt(row: Row) -> str:
+    ts = "-" if math.isnan(row.ts) else f"{row.ts:5.1f} ± {row.ts_sd:4.1f}"
+    followed = "" if math.isnan(row.followed) else f"{row.followed:9.1f}"
+    return f"{row.tnc:6.3f} {row.confirmed:5d}/{row.runs:<5d} {ts:>12} {followed}"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=6, help="live runs per setting (seeds 1..N)")
+    ap.add_argument("--runs", type=int, default=1000, help="engine runs per setting")
+    ap.add_argument("--seed", type=int, default=2024, help="engine master seed")
+    ap.add_argument("--workers", type=int, default=2, help="engine worker processes")
+    ap.add_argument("--speedup", type=float, default=50.0, help="live sim s per wall s")
+    ap.add_argument("--no-live", action="store_true", help="engine only")
+    args = ap.parse_args()
+    seeds = list(range(1, args.seeds + 1))
+    with tempfile.TemporaryDirectory(prefix="swarm-bench-") as tmp:
+        path, no_false = Path(tmp) / "profile.yaml", Path(tmp) / "no-false.yaml"
+        path.write_text(PROFILE)
+        no_false.write_text(NO_FALSE)
+        print(f"PSO, 3 UAVs, 2.5 km square, 400 s; live {len(seeds)} seeds at {args.speedup:g}x, "
+              f"engine {args.runs} runs seed {args.seed}")  # fmt: skip
+        head = f"{'T_nc':>6} {'conf/runs':<11} {'ts s ± sd':>12}"
+        print(f"{'drop':>4} {'delay':>5} | live {head} {'followed':>9} | engine {head} "
+              f"| engine, no false target {head}")  # fmt: skip
+        for drop, delay in SETTINGS:
+            started = time.monotonic()
+            e = engine(path, drop, delay, args.runs, args.seed, args.workers)
+            e_nf = engine(no_false, drop, delay, args.runs, args.seed, args.workers)
+            lv = "-" if args.no_live else _fmt(live(path, drop, delay, seeds, args.speedup))
+            print(f"{drop:4.1f} {delay:5.0f} | live {lv} | engine {_fmt(e)} "
+                  f"| engine, no false target {_fmt(e_nf)}   ({time.monotonic() - started:.0f} s)",
+                  flush=True)  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
