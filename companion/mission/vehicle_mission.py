@@ -86,6 +86,8 @@ class VehicleMission:
         self._own_mode_change = False
         self._setpoint_time = -np.inf
         """Vehicle time of the position our last setpoint answered."""
+        self._received_time = -np.inf
+        """Vehicle time of the newest position received (acted on or not)."""
         self._guided_seen = False
         self._climbing_by_command = False
         self._main: asyncio.Task[object] | None = None
@@ -229,6 +231,10 @@ class VehicleMission:
         batch = [first]
         while not events.empty():
             batch.append(events.get_nowait())
+        # How far the vehicle's clock has run, for a HOLD queued before the newest position.
+        self._received_time = max(
+            [self._received_time] + [e.time for e in batch if isinstance(e, LocalPosition)]
+        )
         newest = max(i for i, e in enumerate(batch) if isinstance(e, LocalPosition) or i == 0)
         for i, event in enumerate(batch):
             if i == newest or not isinstance(event, LocalPosition):
@@ -280,6 +286,7 @@ class VehicleMission:
             self._set_phase(Phase.PAUSED)
 
     def _on_position(self, pos: LocalPosition) -> None:
+        self._received_time = max(self._received_time, pos.time)
         prev = self.position
         t = self.clock.update(pos.time)
         if prev is not None and pos.time > prev.time:
@@ -396,20 +403,29 @@ class VehicleMission:
                 return False
             # If the autopilot's takeoff stops short (its own takeoff altitude), setpoints
             # finish the climb: wait for the altitude or for the climb to stall airborne.
-            await self._until(self._climb_done_or_stalled, self.config.climb_timeout)
+            # A fall-back HOLD during the climb sends the phase back to PREPARE: retry from there.
+            await self._until(
+                lambda: self._climb_done_or_stalled() or not self._in(Phase.CLIMB),
+                self.config.climb_timeout,
+            )
             self._climbing_by_command = False
         try:
             ok = await self._until(
                 lambda: (
-                    self.position is not None and -self.position.down > 0.95 * self.config.altitude
+                    not self._in(Phase.CLIMB)
+                    or (
+                        self.position is not None
+                        and -self.position.down > 0.95 * self.config.altitude
+                    )
                 ),
                 self.config.climb_timeout,
             )
         finally:
             self._climbing_by_command = False
-        if not ok or not self._in(Phase.CLIMB):
-            if not ok:
-                self.request_end("climb timeout")
+        if not self._in(Phase.CLIMB):
+            return False
+        if not ok:
+            self.request_end("climb timeout")
             return False
         return True
 
@@ -515,9 +531,8 @@ class VehicleMission:
             self._set_phase(Phase.PAUSED)  # a pilot has it
 
     def _setpoints_stalled(self) -> bool:
-        """The newest position is _SETPOINT_GAP_S or more past the one our last setpoint answered."""
-        pos = self.position
-        return pos is not None and pos.time - self._setpoint_time >= _SETPOINT_GAP_S
+        """The vehicle's clock ran _SETPOINT_GAP_S or more past our last setpoint's position."""
+        return bool(self._received_time - self._setpoint_time >= _SETPOINT_GAP_S)
 
     def _hold_mode(self, hb: Heartbeat) -> bool:
         ap = self.link.autopilot

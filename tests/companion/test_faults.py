@@ -294,3 +294,24 @@ def test_pilot_hold_on_px4_is_not_taken_back(
     assert modes[-1] == "HOLD", f"companion fought the pilot: modes {modes}"
     phases = [r["phase"] for r in records(_log(tmp_path)) if r.get("event") == "phase"]
     assert phases[-1] == "paused", phases
+
+
+@pytest.mark.timeout(120)
+def test_fallback_hold_during_the_climb_is_retried_not_ended(
+    procs: Procs, small_profile: str, tmp_path: Path
+) -> None:
+    """A companion that stalls mid-climb (SIGSTOP) gets PX4's setpoint-loss HOLD; it climbs again."""
+    procs.emulator(small_profile, 34790, persona="px4", speedup=4.0)
+    companion = procs.companion(small_profile, 0, 34790, duration=3000)
+    wait_for(lambda: has(_log(tmp_path), "phase", phase="climb"), 60, "climb")
+    companion.send_signal(signal.SIGSTOP)
+    time.sleep(1.5)  # 6 vehicle s without setpoints: COM_OF_LOSS_T is 1 s
+    companion.send_signal(signal.SIGCONT)
+    wait_for(lambda: has(_log(tmp_path), "phase", phase="search"), 60, "search after the stall")
+    causes = [e.get("cause") for e in records(tmp_path / "emulator-events.jsonl")
+              if e["event"] == "failsafe"]  # fmt: skip
+    assert causes, "the vehicle saw no failsafe while its companion was stopped"
+    phases = [r["phase"] for r in records(_log(tmp_path)) if r.get("event") == "phase"]
+    climb = phases.index("climb")
+    assert "prepare" in phases[climb:], f"no retry after the fall-back HOLD: {phases}"
+    assert not has(_log(tmp_path), "end"), "the mission ended instead of climbing again"
