@@ -26,6 +26,10 @@ def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
     p.add_argument("--base-port", type=int, default=14540)
     p.add_argument("--out", type=Path, help="run directory (default runs/fleet-<time>)")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
+    p.add_argument("--lockstep", action=argparse.BooleanOptionalAction, default=True,
+                   help="sim time waits for every companion's setpoint each tick, so setpoints "
+                   "stay at 10 Hz in vehicle time on a busy host (default); --no-lockstep runs "
+                   "at the requested speed-up and companions skip stale positions")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no live progress lines")
     p.add_argument("--signing-key-file", type=Path,
                    help="MAVLink 2 signing passphrase file for the emulator and every companion "

@@ -178,7 +178,7 @@ def fleet_command(args: argparse.Namespace) -> int:
         duration=args.duration, backend=args.backend, persona=args.persona,
         setpoints=args.setpoints, seed=args.seed, base_port=args.base_port,
         quiet=args.quiet or args.json, mqtt_args=tuple(mqtt_argv(args)),
-        signing_key_file=args.signing_key_file,
+        signing_key_file=args.signing_key_file, lockstep=args.lockstep,
     )  # fmt: skip
     started = time.perf_counter()
     result = run_fleet(opts)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from companion.cli import build_parser
 from companion.fleet.runner import FleetOptions, emulator_command
 
 
@@ -16,3 +17,9 @@ def test_lockstep_only_when_asked_or_flat_out() -> None:
     assert not _lockstep(speedup=100.0)
     assert _lockstep(speedup=100.0, lockstep=True)
     assert _lockstep(speedup=0.0)
+
+
+def test_the_fleet_command_runs_in_lockstep_unless_told_not_to() -> None:
+    parser = build_parser()
+    assert parser.parse_args(["fleet"]).lockstep
+    assert not parser.parse_args(["fleet", "--no-lockstep"]).lockstep
