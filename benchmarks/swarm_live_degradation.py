@@ -6,7 +6,7 @@ runs per setting, one fleet at a time. Engine: mdm_montecarlo.runner.run_mission
 missions per setting (what ``mdm-montecarlo run --profile FILE --method PSO --set
 policy.swarm.message_drop=P`` runs; its ``tnc_mean`` is the T_nc column here).
 
-The profile is the one of tests/companion/test_swarm_live.py (2.5 km square, one real target in
+The profile is the built-in swarm-small, also flown by tests/companion/test_swarm_live.py (2.5 km square, one real target in
 the middle, one false target, 3 UAVs, 900 m signal, 400 s). Printed per setting: mean T_nc,
 how many runs confirmed the real target, the mean time (search seconds) to its first
 confirmation over the runs that confirmed it (± standard deviation), and for live runs the mean
@@ -29,27 +29,10 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from companion.telemetry import read_records
 from mdm_montecarlo.runner import run_missions
-from mdm_profiles.loader import load_profile
+from mdm_profiles import MissionProfile, builtin_profile, write_profile
 from mdm_profiles.overrides import apply_overrides
-
-PROFILE = """
-name: swarm-live-bench
-area: {north: 2500.0, east: 2500.0}
-targets:
-  - {north: 1250.0, east: 1250.0}
-  - {north: 300.0, east: 2200.0, false_target: true}
-fleet: {vehicles: 3, speed: 20.0, tau: 0.33, altitude: 30.0, altitude_step: 5.0}
-sensors:
-  - {name: detection, radius: 1000.0}
-  - {name: confirmation, radius: 100.0}
-policy:
-  kind: pso
-  levels: [{distribution: US, step: 2500.0}]
-  swarm: {signal_radius: 900.0, update_interval: 2.0}
-mission: {duration: 400.0, ts_cap: 400.0}
-"""
-NO_FALSE = "\n".join(line for line in PROFILE.splitlines() if "false_target" not in line)
 
 SETTINGS = ((0.0, 0.0), (0.5, 0.0), (1.0, 0.0), (0.0, 30.0))
 """(message_drop, message_delay s)."""
@@ -72,8 +55,10 @@ def _sets(drop: float, delay: float) -> list[str]:
     return [f"policy.swarm.message_drop={drop}", f"policy.swarm.message_delay={delay}"]
 
 
-def engine(path: Path, drop: float, delay: float, runs: int, seed: int, workers: int) -> Row:
-    profile = apply_overrides(load_profile(path), _sets(drop, delay))
+def engine(
+    base: MissionProfile, drop: float, delay: float, runs: int, seed: int, workers: int
+) -> Row:
+    profile = apply_overrides(base, _sets(drop, delay))
     result = run_missions(profile, runs=runs, seed=seed, workers=workers)
     real = result.team_times[:, result.real].min(axis=1)
     hit = real <= profile.mission.duration
@@ -82,19 +67,13 @@ def engine(path: Path, drop: float, delay: float, runs: int, seed: int, workers:
     return Row(float(result.tnc.mean()), int(hit.sum()), runs, ts, sd)
 
 
-def live(path: Path, drop: float, delay: float, seeds: list[int], speedup: float) -> Row:
-    text = path.read_text()
+def live(base: MissionProfile, drop: float, delay: float, seeds: list[int], speedup: float) -> Row:
     tnc: list[int] = []
     times: list[float] = []
     followed: list[int] = []
     with tempfile.TemporaryDirectory(prefix="swarm-live-") as tmp:
         knob = Path(tmp) / "profile.yaml"
-        knob.write_text(
-            text.replace(
-                "update_interval: 2.0}",
-                f"update_interval: 2.0, message_drop: {drop}, message_delay: {delay}}}",
-            )
-        )
+        write_profile(apply_overrides(base, _sets(drop, delay)), knob)
         for seed in seeds:
             out = Path(tmp) / f"run-{seed}"
             cmd = [str(Path(sys.executable).parent / "companion"), "fleet", "--profile", str(knob), "--json",
@@ -109,10 +88,9 @@ def live(path: Path, drop: float, delay: float, seeds: list[int], speedup: float
             if first is not None:
                 times.append(float(first))
             for log in sorted(out.glob("mission-*.jsonl")):
-                for line in log.read_text().splitlines():
-                    rec = json.loads(line)
-                    if rec.get("event") == "swarm":
-                        followed.append(int(rec["peer_bests_used"]))
+                followed += [
+                    int(r["peer_bests_used"]) for r in read_records(log) if r["event"] == "swarm"
+                ]
     ts = statistics.fmean(times) if times else math.nan
     sd = statistics.stdev(times) if len(times) > 1 else math.nan
     return Row(statistics.fmean(tnc), len(times), len(seeds), ts, sd, statistics.fmean(followed))
@@ -134,23 +112,22 @@ def main() -> None:
     ap.add_argument("--no-live", action="store_true", help="engine only")
     args = ap.parse_args()
     seeds = list(range(1, args.seeds + 1))
-    with tempfile.TemporaryDirectory(prefix="swarm-bench-") as tmp:
-        path, no_false = Path(tmp) / "profile.yaml", Path(tmp) / "no-false.yaml"
-        path.write_text(PROFILE)
-        no_false.write_text(NO_FALSE)
-        print(f"PSO, 3 UAVs, 2.5 km square, 400 s; live {len(seeds)} seeds at {args.speedup:g}x, "
-              f"engine {args.runs} runs seed {args.seed}")  # fmt: skip
-        head = f"{'T_nc':>6} {'conf/runs':<11} {'ts s ± sd':>12}"
-        print(f"{'drop':>4} {'delay':>5} | live {head} {'followed':>9} | engine {head} "
-              f"| engine, no false target {head}")  # fmt: skip
-        for drop, delay in SETTINGS:
-            started = time.monotonic()
-            e = engine(path, drop, delay, args.runs, args.seed, args.workers)
-            e_nf = engine(no_false, drop, delay, args.runs, args.seed, args.workers)
-            lv = "-" if args.no_live else _fmt(live(path, drop, delay, seeds, args.speedup))
-            print(f"{drop:4.1f} {delay:5.0f} | live {lv} | engine {_fmt(e)} "
-                  f"| engine, no false target {_fmt(e_nf)}   ({time.monotonic() - started:.0f} s)",
-                  flush=True)  # fmt: skip
+    profile = builtin_profile("swarm-small")
+    real = [t for t in profile.targets if not t.false_target]
+    no_false = profile.model_copy(update={"targets": real})
+    print(f"PSO, 3 UAVs, 2.5 km square, 400 s; live {len(seeds)} seeds at {args.speedup:g}x, "
+          f"engine {args.runs} runs seed {args.seed}")  # fmt: skip
+    head = f"{'T_nc':>6} {'conf/runs':<11} {'ts s ± sd':>12}"
+    print(f"{'drop':>4} {'delay':>5} | live {head} {'followed':>9} | engine {head} "
+          f"| engine, no false target {head}")  # fmt: skip
+    for drop, delay in SETTINGS:
+        started = time.monotonic()
+        e = engine(profile, drop, delay, args.runs, args.seed, args.workers)
+        e_nf = engine(no_false, drop, delay, args.runs, args.seed, args.workers)
+        lv = "-" if args.no_live else _fmt(live(profile, drop, delay, seeds, args.speedup))
+        print(f"{drop:4.1f} {delay:5.0f} | live {lv} | engine {_fmt(e)} "
+              f"| engine, no false target {_fmt(e_nf)}   ({time.monotonic() - started:.0f} s)",
+              flush=True)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -1,6 +1,12 @@
 """Mission profiles: the validated schema and the YAML loader, shared by every layer."""
 
-from mdm_profiles.loader import ProfileError, builtin_profile, builtin_profiles, load_profile
+from mdm_profiles.loader import (
+    ProfileError,
+    builtin_profile,
+    builtin_profiles,
+    load_profile,
+    write_profile,
+)
 from mdm_profiles.schema import (
     DecayIndexSpec,
     DistributionParams,
@@ -31,4 +37,5 @@ __all__ = [
     "builtin_profile",
     "builtin_profiles",
     "load_profile",
+    "write_profile",
 ]

@@ -79,6 +79,11 @@ def load_profile(path: str | Path) -> MissionProfile:
     return parse_profile(p.read_text(encoding="utf-8"), str(p))
 
 
+def write_profile(profile: MissionProfile, path: Path) -> None:
+    """Write ``profile`` as YAML that :func:`load_profile` reads back equal (e.g. after --set)."""
+    path.write_text(yaml.safe_dump(profile.model_dump(mode="json"), sort_keys=False))
+
+
 def _builtin_dir() -> Path:
     return Path(str(resources.files("mdm_profiles") / "builtin"))
 

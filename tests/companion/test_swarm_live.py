@@ -14,34 +14,21 @@ import pytest
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.fleet.scoring import FleetResult
 from companion.telemetry import read_records
+from mdm_profiles import builtin_profile, write_profile
+from mdm_profiles.overrides import apply_overrides
 
 VEHICLES = 3
-PROFILE = """
-name: swarm-live-test
-area: {north: 2500.0, east: 2500.0}
-targets:
-  - {north: 1250.0, east: 1250.0}
-  - {north: 300.0, east: 2200.0, false_target: true}
-fleet: {vehicles: 3, speed: 20.0, tau: 0.33, altitude: 30.0, altitude_step: 5.0}
-sensors:
-  - {name: detection, radius: 1000.0}
-  - {name: confirmation, radius: 100.0}
-policy:
-  kind: pso
-  levels: [{distribution: US, step: 2500.0}]
-  swarm: {signal_radius: 900.0, update_interval: 2.0, message_drop: DROP}
-mission: {duration: 400.0, ts_cap: 400.0}
-mqtt: {host: 127.0.0.1, port: 1883, topic_prefix: PREFIX}
-"""
 
 
 def _fly(tmp_path: Path, drop: float) -> tuple[FleetResult, list[list[dict[str, Any]]]]:
     profile = tmp_path / f"profile-{drop}.yaml"
-    prefix = f"mdm/test-{os.getpid()}-swarm-{drop}"
-    profile.write_text(PROFILE.replace("DROP", str(drop)).replace("PREFIX", prefix))
+    knob = [f"policy.swarm.message_drop={drop}"]
+    write_profile(apply_overrides(builtin_profile("swarm-small"), knob), profile)
+    mqtt = ("--mqtt", "127.0.0.1:1883", "--mqtt-prefix", f"mdm/test-{os.getpid()}-swarm-{drop}")
     out = tmp_path / f"run-{drop}"
     result = run_fleet(FleetOptions(profile=str(profile), out=out, speedup=50.0, duration=400.0,
-                                    base_port=35640, seed=11, wall_limit=60))  # fmt: skip
+                                    base_port=35640, seed=11, wall_limit=60,
+                                    mqtt_args=mqtt))  # fmt: skip
     logs = [list(read_records(out / f"mission-{i}.jsonl")) for i in range(VEHICLES)]
     return result, logs
 

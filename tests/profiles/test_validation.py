@@ -15,7 +15,9 @@ from mdm_profiles import (
     builtin_profile,
     builtin_profiles,
     load_profile,
+    write_profile,
 )
+from mdm_profiles.overrides import apply_overrides
 
 REPO = Path(__file__).resolve().parents[2]
 SHIPPED = sorted((REPO / "mission_profiles").glob("*.yaml"))
@@ -183,3 +185,12 @@ def test_missing_file_lists_the_builtin_profiles(tmp_path: Path) -> None:
 def test_unknown_builtin_name_lists_the_builtin_profiles() -> None:
     with pytest.raises(ProfileError, match="paper-popup"):
         builtin_profile("paper-nothing")
+
+
+@pytest.mark.parametrize("name", builtin_profiles())
+def test_a_written_profile_loads_back_equal(name: str, tmp_path: Path) -> None:
+    changed = apply_overrides(builtin_profile(name), ["mission.duration=123.0"])
+    write_profile(changed, tmp_path / "p.yaml")
+    again = load_profile(tmp_path / "p.yaml")
+    assert again == changed
+    assert again.mission.duration == 123.0
