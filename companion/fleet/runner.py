@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from companion.fleet.progress import progress_line, read_progress
-from companion.fleet.scoring import FleetResult, score
+from companion.fleet.scoring import EMULATOR_EVENTS, FleetResult, score
 from companion.link.factory import check_signing_support
 from companion.search.pso import VARIANTS
 from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
@@ -64,7 +64,7 @@ def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
         "--base-port", str(o.base_port),
         "--bind-port-base", str(o.base_port + 200),
         "--seed", str(o.seed),
-        "--events", str(o.out / "emulator-events.jsonl"),
+        "--events", str(o.out / EMULATOR_EVENTS),
         # flat out, the emulator would outrun the companions at unscaled failsafe time-outs
         *(["--lockstep"] if o.lockstep or o.speedup <= 0 else []),
         *_signing_args(o),
