@@ -4,10 +4,11 @@ Between two events a vehicle flies a straight line at constant speed (the tau-la
 a 0.33 s loop shifts a 4 km leg by under 7 m; ``reference.py`` checks the result against dt-stepping
 of the full dynamics). An event is the earliest of: the waypoint is reached, the active sensor's
 disc around an eligible target is entered (solved in closed form by
-``sim_vehicle_stub.world.first_entry_time``), the level's decaying index runs out, a node of the
-dynamic targets' path grid, the run's stop time. The policy (companion.search) is stepped at
-every event with the sensor contacts the world reports, so a lane is exactly what a live vehicle
-would do, only with time jumping from event to event.
+``sim_vehicle_stub.world.first_entry_time``, piece by piece between the nodes of a dynamic
+target's path grid), the level's decaying index runs out, the run's stop time. The policy
+(companion.search) is stepped at every event with the sensor contacts the world reports, so a
+lane is exactly what a live vehicle would do, only with time jumping from event to event. Which
+targets a vehicle remembers confirming (its memory) is checked at the start of each leg.
 
 Vehicles do not communicate, so lanes of one run only share the targets; the team's result is
 the minimum over its vehicles of each target's first confirmation time.
@@ -25,10 +26,13 @@ from numpy.typing import NDArray
 
 from companion.search import Observation, SearchPolicy
 from companion.search.from_profile import policy_config
+from companion.search.planar import length
 from mdm_profiles import MissionProfile
-from sim_vehicle_stub.world import Scenario, first_entry_time
+from sim_vehicle_stub.world import Scenario, TargetTracks, first_entry_time
 
 FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+IntArray = NDArray[np.intp]
 BLOCK_RUNS = 500
 _EPS = 1e-9
 
@@ -89,26 +93,25 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         x = position[idx]
         t = time[idx]
         offset = state.waypoint[idx] - x
-        dist = np.linalg.norm(offset, axis=1)
+        dist = length(offset)
         unit = np.where(dist[:, None] > 0, offset / np.where(dist > 0, dist, 1.0)[:, None], 0.0)
         leg = dist / speed
         deadline = policy.deadline(state)[idx] - t
-        horizon = np.minimum.reduce([leg, deadline, tracks.next_node_time(t) - t, stop[runs] - t])
-        horizon = np.maximum(horizon, 0.0)
+        horizon = np.maximum(np.minimum.reduce([leg, deadline, stop[runs] - t]), 0.0)
 
         target_pos, target_vel = tracks.motion(runs, t)
         confirms = policy.uses_confirmation_sensor(state)[idx]
         eligible = ~policy.known(state, idx, target_pos) if tracks.moving else unknown[idx]
         eligible &= ~(confirms[:, None] & targets.false_mask[None, :])
-        entry = first_entry_time(
-            x,
-            unit * speed,
-            horizon,
-            target_pos,
-            target_vel,
+        entry = _entry_along_path(
+            tracks,
+            runs,
+            t,
+            Leg(x, unit * speed, horizon),
+            (target_pos, target_vel),
             policy.sensor_radius(state)[idx],
             eligible,
-            appear[None, :] - t[:, None],
+            appear,
         )
         soonest = entry.min(axis=1)
         hit = soonest <= horizon
@@ -124,14 +127,16 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         )
         reached = ~hit & (horizon >= leg)
         contacts = hit[:, None] & (entry <= soonest[:, None] + _EPS)
+        if tracks.moving and hit.any():
+            # Where the contacted targets are when they come into the sensor.
+            target_pos[hit] = tracks.positions(runs[hit], new_t[hit])
 
         obs = Observation(
             time=new_t,
             position=new_x,
             reached=reached,
             contacts=contacts,
-            # Targets move linearly until the next grid node, which bounds the step.
-            contact_positions=target_pos + target_vel * (new_t - t)[:, None, None],
+            contact_positions=target_pos,
         )
         outcome = policy.step(state, idx, obs, rng_policy)
         if not tracks.moving and outcome.confirmed.any():
@@ -152,6 +157,56 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
 
     per_vehicle = first.reshape(n_runs, n_vehicles, m)
     return BlockResult(block, per_vehicle, events, float(time.sum()))
+
+
+@dataclass(frozen=True)
+class Leg:
+    """Straight flight of each lane from the current event: start, velocity, seconds."""
+
+    start: FloatArray
+    velocity: FloatArray
+    duration: FloatArray
+
+
+def _entry_along_path(
+    tracks: TargetTracks,
+    runs: IntArray,
+    t: FloatArray,
+    leg: Leg,
+    motion_now: tuple[FloatArray, FloatArray],
+    radius: FloatArray,
+    eligible: BoolArray,
+    appear: FloatArray,
+) -> FloatArray:
+    """(n, m) seconds after t at which each lane first enters each target's sensor disc.
+
+    Moving targets go straight between the nodes of their path grid, so a leg that crosses
+    nodes is solved piece by piece, stopping at the first piece with a contact (only the
+    earliest contacts count). ``motion_now``: the targets' positions and velocities at t.
+    """
+    position, velocity = motion_now
+    out = np.full(eligible.shape, np.inf)
+    rows = np.arange(len(t))
+    begin = np.zeros(len(t))
+    while rows.size:
+        now = t[rows] + begin
+        end = np.minimum(tracks.next_node_time(now) - t[rows], leg.duration[rows])
+        piece = first_entry_time(
+            leg.start[rows] + leg.velocity[rows] * begin[:, None],
+            leg.velocity[rows],
+            end - begin,
+            position,
+            velocity,
+            radius[rows],
+            eligible[rows],
+            appear[None, :] - now[:, None],
+        )
+        out[rows] = piece + begin[:, None]
+        more = ~np.isfinite(piece).any(axis=1) & (end < leg.duration[rows])
+        rows, begin = rows[more], end[more]
+        if rows.size:
+            position, velocity = tracks.motion(runs[rows], t[rows] + begin)
+    return out
 
 
 def _stop_times(

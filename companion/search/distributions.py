@@ -13,6 +13,8 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from companion.search.planar import length
+
 FloatArray = NDArray[np.float64]
 DistributionName = Literal["LS", "BS", "US"]
 
@@ -105,6 +107,6 @@ class Uniform:
 def directions(sampler: Sampler, rng: np.random.Generator, n: int) -> FloatArray:
     """n unit vectors (n, 2): two samples per vector, normalised (section III, eq. 7)."""
     raw = sampler.draw(rng, (n, 2))
-    norm = np.linalg.norm(raw, axis=1, keepdims=True)
+    norm = length(raw)[:, None]
     # A zero vector has probability zero for these laws; fall back to north to stay finite.
     return np.where(norm > 0, raw / np.where(norm > 0, norm, 1.0), np.array([1.0, 0.0]))

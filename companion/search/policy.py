@@ -20,11 +20,14 @@ from numpy.typing import NDArray
 
 from companion.search.distributions import directions, symmetric_stable
 from companion.search.levels import PolicyConfig
+from companion.search.planar import length
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 IntArray = NDArray[np.intp]
 _REDRAWS = 16
+_BATCH = 64
+"""Redraw candidates drawn per call once few lanes are left (see SearchPolicy._draw)."""
 
 
 @dataclass
@@ -134,31 +137,39 @@ class SearchPolicy:
         return state
 
     def remember(self, state: PolicyState, lanes: IntArray, positions: FloatArray) -> None:
-        """Add one confirmed target position per given lane to that lane's memory."""
-        needed = int(state.memory_count[lanes].max(initial=0)) + 1
+        """Add confirmed target positions (k, 2) to the memory of ``lanes`` (k,).
+
+        A lane may appear several times; its positions are stored in the order given.
+        """
+        order = np.argsort(lanes, kind="stable")
+        by_lane = lanes[order]
+        rank = np.empty(len(lanes), dtype=np.intp)
+        rank[order] = np.arange(len(lanes)) - np.searchsorted(by_lane, by_lane)
+        slot = state.memory_count[lanes] + rank
+        needed = int(slot.max(initial=-1)) + 1
         if needed > state.memory.shape[1]:
             grow = max(needed, 2 * state.memory.shape[1]) - state.memory.shape[1]
             state.memory = np.concatenate([state.memory, np.zeros((state.size, grow, 2))], axis=1)
-        state.memory[lanes, state.memory_count[lanes]] = positions
-        state.memory_count[lanes] += 1
+        state.memory[lanes, slot] = positions
+        np.add.at(state.memory_count, lanes, 1)
 
     def known(self, state: PolicyState, lanes: IntArray, positions: FloatArray) -> BoolArray:
         """(len(lanes), m): True where a position lies within memory_radius of a remembered target."""
         out = np.zeros(positions.shape[:2], dtype=bool)
         counts = state.memory_count[lanes]
+        radius2 = self.config.memory_radius**2
         rows = np.flatnonzero(counts > 0)
         if rows.size == 0:
             return out
-        memory = state.memory[lanes[rows]]
-        points = positions[rows]
-        hit = np.zeros((rows.size, positions.shape[1]), dtype=bool)
-        radius2 = self.config.memory_radius**2
-        # One memory slot at a time: (rows, m) work per slot instead of a (rows, m, K, 2) block.
-        for k in range(int(counts[rows].max())):
-            north = points[:, :, 0] - memory[:, k, None, 0]
-            east = points[:, :, 1] - memory[:, k, None, 1]
-            hit |= (north * north + east * east <= radius2) & (counts[rows] > k)[:, None]
-        out[rows] = hit
+        # Every (row, used slot) pair once, grouped by row: sum(counts) x m work in all.
+        per_row = counts[rows]
+        owner = np.repeat(rows, per_row)
+        starts = np.cumsum(per_row) - per_row
+        slot = np.arange(owner.size) - np.repeat(starts, per_row)
+        remembered = state.memory[lanes[owner], slot]
+        north = positions[owner, :, 0] - remembered[:, 0, None]
+        east = positions[owner, :, 1] - remembered[:, 1, None]
+        out[rows] = np.logical_or.reduceat(north * north + east * east <= radius2, starts, axis=0)
         return out
 
     def step(
@@ -180,11 +191,10 @@ class SearchPolicy:
         detected = has & (level < last)
         confirmed = has & (level == last)
         new_confirmations = new & confirmed[:, None]
-        for j in range(new.shape[1]):
+        rows, cols = np.nonzero(new_confirmations)
+        if rows.size:
             # One memory row per newly confirmed target (several may be seen at once).
-            rows = np.flatnonzero(new_confirmations[:, j])
-            if rows.size:
-                self.remember(state, lanes[rows], obs.contact_positions[rows, j])
+            self.remember(state, lanes[rows], obs.contact_positions[rows, cols])
 
         next_level = np.where(detected, level + 1, level)
         next_level = np.where(confirmed, 0, next_level)
@@ -224,30 +234,45 @@ class SearchPolicy:
     def _draw(
         self, k: int, origin: FloatArray, anchor: FloatArray, rng: np.random.Generator
     ) -> FloatArray:
-        cfg = self.config.levels[k]
+        """P_q + delta_k D(S_t) from each origin; with the 'redraw' rule, the first of up to
+        1 + _REDRAWS candidates that lies in the area (the last one clipped if none does)."""
         n = len(origin)
         points = np.empty((n, 2))
         pending = np.arange(n)
-        for attempt in range(_REDRAWS + 1):
-            step = np.full(len(pending), cfg.step)
-            if cfg.step_law == "levy":
-                size = np.abs(symmetric_stable(rng, cfg.step_index, 1.0, (len(pending),)))
-                step = cfg.step * np.minimum(size, cfg.step_cap)
-            candidate = origin[pending] + step[:, None] * directions(cfg.sampler, rng, len(pending))
-            if k > 0 and self.config.confine_to_detection:
-                candidate = _fold_into_disc(candidate, anchor[pending], self._radii[k - 1])
-            inside = np.all((candidate >= 0) & (candidate <= self._area), axis=1)
-            redraw = self.config.out_of_area == "redraw" and attempt < _REDRAWS
-            if redraw:
-                points[pending[inside]] = candidate[inside]
-                pending = pending[~inside]
-                if pending.size == 0:
-                    break
-                continue
-            rule = "clip" if self.config.out_of_area != "reflect" else "reflect"
-            points[pending] = _fold_into_area(candidate, self._area, rule)
-            break
+        left = _REDRAWS + 1 if self.config.out_of_area == "redraw" else 1
+        while pending.size:
+            # Few lanes left: draw several of their candidates in one call (the same sequence of
+            # independent candidates a draw-check-redraw loop would see, fewer numpy calls).
+            per_lane = min(left, max(1, _BATCH // len(pending)))
+            lanes = np.repeat(pending, per_lane)
+            candidate = self._candidates(k, origin[lanes], anchor[lanes], rng)
+            candidate = candidate.reshape(len(pending), per_lane, 2)
+            left -= per_lane
+            inside = np.all((candidate >= 0) & (candidate <= self._area), axis=-1)
+            if left == 0:
+                rule = "reflect" if self.config.out_of_area == "reflect" else "clip"
+                inside[:, -1] = True
+                candidate[:, -1] = _fold_into_area(candidate[:, -1], self._area, rule)
+            found = inside.any(axis=1)
+            first = inside.argmax(axis=1)
+            points[pending[found]] = candidate[found, first[found]]
+            pending = pending[~found]
         return points
+
+    def _candidates(
+        self, k: int, origin: FloatArray, anchor: FloatArray, rng: np.random.Generator
+    ) -> FloatArray:
+        """One candidate waypoint per origin (n, 2), confined to the detection disc if set."""
+        cfg = self.config.levels[k]
+        n = len(origin)
+        step = np.full(n, cfg.step)
+        if cfg.step_law == "levy":
+            size = np.abs(symmetric_stable(rng, cfg.step_index, 1.0, (n,)))
+            step = cfg.step * np.minimum(size, cfg.step_cap)
+        candidate = origin + step[:, None] * directions(cfg.sampler, rng, n)
+        if k > 0 and self.config.confine_to_detection:
+            candidate = _fold_into_disc(candidate, anchor, self._radii[k - 1])
+        return candidate
 
 
 def _fold_into_area(points: FloatArray, size: FloatArray, rule: str) -> FloatArray:
@@ -261,7 +286,7 @@ def _fold_into_area(points: FloatArray, size: FloatArray, rule: str) -> FloatArr
 def _fold_into_disc(points: FloatArray, centre: FloatArray, radius: float) -> FloatArray:
     """Mirror points that lie outside the disc back across its rim (radially)."""
     offset = points - centre
-    dist = np.linalg.norm(offset, axis=1, keepdims=True)
+    dist = length(offset)[:, None]
     # Triangle wave of the distance: mirror at the rim, again at the centre, and so on.
     folded = np.mod(dist, 2 * radius)
     folded = np.where(folded > radius, 2 * radius - folded, folded)

@@ -17,6 +17,8 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 THRESHOLD = float(np.exp(-1.0))
+_REACH_SLACK = 1e-6
+"""Metres added to the reach bound so rounding never drops a pair the exact test keeps."""
 
 
 @dataclass(frozen=True)
@@ -75,12 +77,39 @@ def first_entry_time(
     Both vehicle (n, 2) and targets (n, m, 2) move linearly for ``duration`` (n,) seconds.
     Returns (n, m) times from the start of the interval, inf where the disc is not reached or the
     target is not eligible. The time returned is the boundary crossing itself (distance = r).
+
+    Only pairs that can meet are solved: a vehicle closes on a target at most at the sum of
+    their speeds, so a target farther than r + (|v| + |v_target|) * duration is out of reach.
     """
-    rel0 = start[:, None, :] - target_start
-    rel_v = velocity[:, None, :] - target_velocity
-    a = np.einsum("nmk,nmk->nm", rel_v, rel_v)
-    b = np.einsum("nmk,nmk->nm", rel0, rel_v)
-    c = np.einsum("nmk,nmk->nm", rel0, rel0) - radius[:, None] ** 2
+    north = start[:, 0, None] - target_start[..., 0]
+    east = start[:, 1, None] - target_start[..., 1]
+    dist2 = north * north + east * east
+    lo = np.maximum(np.broadcast_to(not_before, dist2.shape), 0.0)
+    # Closing speed bound: the vehicle's speed plus the fastest target's.
+    vehicle_speed = np.sqrt(velocity[:, 0] ** 2 + velocity[:, 1] ** 2)
+    target_speed = np.sqrt(float(np.max(target_velocity**2, initial=0.0)) * 2.0)
+    reach = radius + (vehicle_speed + target_speed) * duration + _REACH_SLACK
+    reach = reach[:, None]
+    candidate = eligible & (dist2 <= reach * reach) & (lo <= duration[:, None])
+    out = np.full(dist2.shape, np.inf)
+    rows, cols = np.nonzero(candidate)
+    if rows.size:
+        out[rows, cols] = _solve_entry(
+            np.stack([north[rows, cols], east[rows, cols]], axis=-1),
+            velocity[rows] - target_velocity[rows, cols],
+            dist2[rows, cols] - radius[rows] ** 2,
+            lo[rows, cols],
+            duration[rows],
+        )
+    return out
+
+
+def _solve_entry(
+    rel0: FloatArray, rel_v: FloatArray, c: FloatArray, lo: FloatArray, duration: FloatArray
+) -> FloatArray:
+    """First time in [lo, duration] at which |rel0 + rel_v s| <= r, given c = |rel0|^2 - r^2."""
+    a = np.einsum("ik,ik->i", rel_v, rel_v)
+    b = np.einsum("ik,ik->i", rel0, rel_v)
     disc = b * b - a * c
     moving = a > 1e-12
     root = np.sqrt(np.maximum(disc, 0.0))
@@ -88,7 +117,6 @@ def first_entry_time(
         s1 = np.where(moving, (-b - root) / np.where(moving, a, 1.0), -np.inf)
         s2 = np.where(moving, (-b + root) / np.where(moving, a, 1.0), np.inf)
     hit = np.where(moving, disc > 0, c < 0)
-    lo = np.maximum(not_before, 0.0)
     first = np.maximum(s1, lo)
-    ok = eligible & hit & (first < s2) & (first <= duration[:, None])
+    ok = hit & (first < s2) & (first <= duration)
     return np.where(ok, first, np.inf)

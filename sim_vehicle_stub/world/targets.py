@@ -88,11 +88,15 @@ class TargetTracks:
     walk: RandomWalk | None = None
     grid_dt: float = 10.0
     _nodes: FloatArray = field(init=False, repr=False)
+    """(runs, nodes, m, 2) positions at the grid nodes."""
+    _velocity: FloatArray = field(init=False, repr=False)
+    """(runs, nodes - 1, m, 2) velocity on each segment between nodes."""
     _free: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         start = np.broadcast_to(self.spec.positions, (self.n_runs, self.spec.count, 2))
         self._nodes = np.array(start, dtype=float)[:, None]
+        self._velocity = np.zeros((self.n_runs, 0, self.spec.count, 2))
         self._free = np.array(start, dtype=float)
         if self.walk is not None:
             steps = self.grid_dt / self.walk.sample_time
@@ -120,17 +124,20 @@ class TargetTracks:
         return pos
 
     def motion(self, run: IntArray, t: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Positions and velocities (n, m, 2) at t; both hold until ``next_node_time(t)``."""
+        """Positions and velocities (n, m, 2) at t; both hold until ``next_node_time(t)``.
+
+        Fixed targets give read-only broadcast views (no copy per call); moving ones new arrays.
+        """
+        shape = (len(run), self.spec.count, 2)
         if self.walk is None:
-            return self.positions(run, t), np.zeros((len(run), self.spec.count, 2))
+            return np.broadcast_to(self.spec.positions, shape), np.broadcast_to(0.0, shape)
         return self._interpolate(run, t)
 
     def _interpolate(self, run: IntArray, t: FloatArray) -> tuple[FloatArray, FloatArray]:
         k = np.floor(t / self.grid_dt + 1e-9).astype(np.intp)
         self._ensure(int(k.max(initial=0)) + 1)
         a = self._nodes[run, k]
-        b = self._nodes[run, k + 1]
-        vel = (b - a) / self.grid_dt
+        vel = self._velocity[run, k]
         frac = (t - k * self.grid_dt)[:, None, None]
         return a + vel * frac, vel
 
@@ -150,22 +157,34 @@ class TargetTracks:
             mean, std = walk.step_moments(steps)
             increments = self.rng.normal(mean, std, size=shape)
         increments = np.broadcast_to(increments, (*shape[:3], 2))
-        block = np.empty((self.n_runs, _BLOCK_NODES, self.spec.count, 2))
-        current = self._nodes[:, -1]
-        for i in range(_BLOCK_NODES):
-            current = self._advance(current, increments[:, i])
-            block[:, i] = current
+        last = self._nodes[:, -1:]
+        block = self._walk(last[:, 0], increments)
+        self._velocity = np.concatenate(
+            [self._velocity, np.diff(np.concatenate([last, block], axis=1), axis=1) / self.grid_dt],
+            axis=1,
+        )
         self._nodes = np.concatenate([self._nodes, block], axis=1)
 
-    def _advance(self, current: FloatArray, step: FloatArray) -> FloatArray:
+    def _walk(self, current: FloatArray, increments: FloatArray) -> FloatArray:
+        """Positions (runs, k, m, 2) after each of the k increments from ``current``."""
         assert self.walk is not None
         rule = self.walk.boundary
-        if rule == "free":
-            return current + step
-        if rule == "clamp":
-            return np.clip(current + step, 0.0, self.area.size)
-        if rule == "reflect":
-            return self.area.fold(current + step, "reflect")
-        # bounce: the target's free path folded into the area, so its walk reverses at a wall.
-        self._free = self._free + step
-        return self.area.fold(self._free, "reflect")
+        if rule in ("free", "bounce"):
+            # The free path is a running sum (added in order, as a loop would); bounce folds it.
+            origin = current if rule == "free" else self._free
+            free = np.cumsum(np.concatenate([origin[:, None], increments], axis=1), axis=1)[:, 1:]
+            if rule == "free":
+                return free
+            self._free = free[:, -1]
+            return self.area.fold(free, "reflect")
+        out = np.empty(increments.shape)
+        size = self.area.size
+        for i in range(increments.shape[1]):
+            current = current + increments[:, i]
+            outside = (current < 0.0) | (current > size)
+            if outside.any():
+                # Only points past a wall need the fold (clip or mirror); the rest are inside.
+                folded = self.area.fold(current, "clip" if rule == "clamp" else "reflect")
+                current = np.where(outside, folded, current)
+            out[:, i] = current
+        return out
