@@ -185,27 +185,29 @@ def _entry_along_path(
     earliest contacts count). ``motion_now``: the targets' positions and velocities at t.
     """
     position, velocity = motion_now
-    out = np.full(eligible.shape, np.inf)
-    rows = np.arange(len(t))
-    begin = np.zeros(len(t))
+    end = np.minimum(tracks.next_node_time(t) - t, leg.duration)
+    out = first_entry_time(
+        leg.start, leg.velocity, end, position, velocity, radius, eligible, appear - t[:, None]
+    )
+    rows = np.flatnonzero(~np.isfinite(out).any(axis=1) & (end < leg.duration))
     while rows.size:
+        # The rest of the leg from the node just passed, with the targets' next segment.
+        begin = end[rows]
         now = t[rows] + begin
-        end = np.minimum(tracks.next_node_time(now) - t[rows], leg.duration[rows])
+        position, velocity = tracks.motion(runs[rows], now)
+        end[rows] = np.minimum(tracks.next_node_time(now) - t[rows], leg.duration[rows])
         piece = first_entry_time(
             leg.start[rows] + leg.velocity[rows] * begin[:, None],
             leg.velocity[rows],
-            end - begin,
+            end[rows] - begin,
             position,
             velocity,
             radius[rows],
             eligible[rows],
-            appear[None, :] - now[:, None],
+            appear - now[:, None],
         )
         out[rows] = piece + begin[:, None]
-        more = ~np.isfinite(piece).any(axis=1) & (end < leg.duration[rows])
-        rows, begin = rows[more], end[more]
-        if rows.size:
-            position, velocity = tracks.motion(runs[rows], t[rows] + begin)
+        rows = rows[~np.isfinite(piece).any(axis=1) & (end[rows] < leg.duration[rows])]
     return out
 
 

@@ -5,7 +5,7 @@ nodes ``grid_dt`` apart and is linear between nodes. With ``grid_dt`` equal to t
 sampling time kappa_s every node is one step of eq. (2) with R(a, b) uniform; with a coarser grid
 the increment over ``k`` steps is drawn from the normal law with the exact mean and variance of a
 sum of ``k`` such steps (Irwin-Hall is within 1e-3 of normal for k >= 10). The grid grows on
-demand, in fixed blocks, so the random stream does not depend on who asks for what.
+demand, in fixed chunks, so the random stream does not depend on who asks for what.
 """
 
 from __future__ import annotations
@@ -21,7 +21,8 @@ from sim_vehicle_stub.world.area import Area
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 WalkBoundary = Literal["reflect", "clamp", "bounce", "free"]
-_BLOCK_NODES = 256
+_CHUNK_NODES = 32
+"""Path nodes drawn at a time (the random stream does not depend on how far runs go)."""
 
 
 @dataclass(frozen=True)
@@ -87,16 +88,22 @@ class TargetTracks:
     rng: np.random.Generator
     walk: RandomWalk | None = None
     grid_dt: float = 10.0
-    _nodes: FloatArray = field(init=False, repr=False)
-    """(runs, nodes, m, 2) positions at the grid nodes."""
+    _starts: FloatArray = field(init=False, repr=False)
+    """(runs, capacity, m, 2): where segment k of each run's path starts (a grid node)."""
     _velocity: FloatArray = field(init=False, repr=False)
-    """(runs, nodes - 1, m, 2) velocity on each segment between nodes."""
+    """(runs, capacity, m, 2): the targets' velocity along segment k."""
+    _filled: int = field(init=False, repr=False)
+    """Segments drawn so far (the rest of the buffer is unused)."""
+    _last: FloatArray = field(init=False, repr=False)
+    """(runs, m, 2) the node that ends the last segment drawn."""
     _free: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         start = np.broadcast_to(self.spec.positions, (self.n_runs, self.spec.count, 2))
-        self._nodes = np.array(start, dtype=float)[:, None]
-        self._velocity = np.zeros((self.n_runs, 0, self.spec.count, 2))
+        self._starts = np.empty((self.n_runs, 0, self.spec.count, 2))
+        self._velocity = np.empty((self.n_runs, 0, self.spec.count, 2))
+        self._filled = 0
+        self._last = np.array(start, dtype=float)
         self._free = np.array(start, dtype=float)
         if self.walk is not None:
             steps = self.grid_dt / self.walk.sample_time
@@ -135,21 +142,24 @@ class TargetTracks:
 
     def _interpolate(self, run: IntArray, t: FloatArray) -> tuple[FloatArray, FloatArray]:
         k = np.floor(t / self.grid_dt + 1e-9).astype(np.intp)
-        self._ensure(int(k.max(initial=0)) + 1)
-        a = self._nodes[run, k]
-        vel = self._velocity[run, k]
-        frac = (t - k * self.grid_dt)[:, None, None]
-        return a + vel * frac, vel
-
-    def _ensure(self, node: int) -> None:
-        while self._nodes.shape[1] <= node:
+        while self._filled <= int(k.max(initial=0)):
             self._grow()
+        # Whole rows of the flattened (run, segment) axis: a plain take, no strided gather.
+        row = run * self._starts.shape[1] + k
+        width = self.spec.count * 2
+        start = np.take(self._starts.reshape(-1, width), row, axis=0).reshape(
+            -1, self.spec.count, 2
+        )
+        vel = np.take(self._velocity.reshape(-1, width), row, axis=0).reshape(start.shape)
+        position = vel * (t - k * self.grid_dt)[:, None, None]
+        position += start
+        return position, vel
 
     def _grow(self) -> None:
         assert self.walk is not None
         walk = self.walk
         steps = round(self.grid_dt / walk.sample_time)
-        shape = (self.n_runs, _BLOCK_NODES, self.spec.count, 1 if walk.shared_axes else 2)
+        shape = (self.n_runs, _CHUNK_NODES, self.spec.count, 1 if walk.shared_axes else 2)
         if steps == 1:
             r = self.rng.uniform(walk.low, walk.high, size=shape)
             increments = r * walk.speed * walk.sample_time
@@ -157,13 +167,21 @@ class TargetTracks:
             mean, std = walk.step_moments(steps)
             increments = self.rng.normal(mean, std, size=shape)
         increments = np.broadcast_to(increments, (*shape[:3], 2))
-        last = self._nodes[:, -1:]
-        block = self._walk(last[:, 0], increments)
-        self._velocity = np.concatenate(
-            [self._velocity, np.diff(np.concatenate([last, block], axis=1), axis=1) / self.grid_dt],
-            axis=1,
-        )
-        self._nodes = np.concatenate([self._nodes, block], axis=1)
+        nodes = np.concatenate([self._last[:, None], self._walk(self._last, increments)], axis=1)
+        end = self._filled + _CHUNK_NODES
+        if end > self._starts.shape[1]:
+            self._starts = self._resized(self._starts, end)
+            self._velocity = self._resized(self._velocity, end)
+        self._starts[:, self._filled : end] = nodes[:, :-1]
+        self._velocity[:, self._filled : end] = np.diff(nodes, axis=1) / self.grid_dt
+        self._filled = end
+        self._last = nodes[:, -1]
+
+    def _resized(self, buffer: FloatArray, needed: int) -> FloatArray:
+        """The buffer with room for ``needed`` segments (doubling), the drawn ones kept."""
+        grown = np.empty((self.n_runs, max(needed, 2 * buffer.shape[1]), self.spec.count, 2))
+        grown[:, : self._filled] = buffer[:, : self._filled]
+        return grown
 
     def _walk(self, current: FloatArray, increments: FloatArray) -> FloatArray:
         """Positions (runs, k, m, 2) after each of the k increments from ``current``."""
