@@ -152,7 +152,8 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
             rows, cols = np.nonzero(confirmed)
             lanes = idx[rows]
             first[lanes, cols] = np.minimum(first[lanes, cols], new_t[rows])
-            stop = _stop_times(first, run_of, n_runs, n_vehicles, real, duration, cap)
+            changed = np.unique(run_of[lanes])
+            stop[changed] = _stop_times(first, changed, n_vehicles, real, duration, cap)
         active[idx] = new_t < stop[runs] - _EPS
 
     per_vehicle = first.reshape(n_runs, n_vehicles, m)
@@ -213,14 +214,13 @@ def _entry_along_path(
 
 def _stop_times(
     first: FloatArray,
-    run_of: NDArray[np.intp],
-    n_runs: int,
+    runs: IntArray,
     n_vehicles: int,
-    real: NDArray[np.bool_],
+    real: BoolArray,
     duration: float,
     cap: float,
 ) -> FloatArray:
-    """Latest time a run still needs: past it no confirmation can change T_nc or T_S."""
-    team = first.reshape(n_runs, n_vehicles, -1).min(axis=1)[:, real]
+    """Latest time each given run still needs: past it no confirmation can change T_nc or T_S."""
+    team = first.reshape(-1, n_vehicles, first.shape[1])[runs].min(axis=1)[:, real]
     bound = team.max(axis=1)
     return np.asarray(np.clip(bound, duration, cap), dtype=np.float64)

@@ -62,6 +62,15 @@ def simulate_block(profile: MissionProfile, seed: int, block: int, n_runs: int) 
     return run_block(profile, seed, block, n_runs)
 
 
+def _relative_cost(profile: MissionProfile) -> float:
+    """Rough CPU cost of one run (ordering only): swarms step every update interval; moving
+    targets cost about twice fixed ones."""
+    mission = profile.mission
+    if profile.policy.kind in SWARM_KINDS:
+        return 4.0 * mission.duration / 1000.0
+    return 2.0 if profile.target_motion is not None else 1.0
+
+
 def _blocks(runs: int, block_runs: int) -> Iterator[tuple[int, int]]:
     for b, first in enumerate(range(0, runs, block_runs)):
         yield b, min(block_runs, runs - first)
@@ -107,6 +116,8 @@ def run_many(
     if runs < 1:
         raise ValueError(f"runs must be >= 1, got {runs}")
     jobs = [(i, b, n) for i in range(len(profiles)) for b, n in _blocks(runs, block_runs)]
+    # Longest first, so no worker is left alone with a long block at the end.
+    jobs.sort(key=lambda job: _relative_cost(profiles[job[0]]) * job[2], reverse=True)
     blocks: dict[int, list[BlockResult]] = {i: [] for i in range(len(profiles))}
     done = progress or (lambda _n: None)
     if scheduler is not None:
