@@ -153,7 +153,9 @@ def _reproduce(args: argparse.Namespace) -> int:
         f"{args.runs} runs per row, seed {args.seed}, {len(cases)} configurations, "
         f"{wall:.1f} s wall time. Paper numbers from data/paper_tables.csv.{changed}"
     )
-    path = write_report(Path(args.out), rows, measured, results, header)
+    path = write_report(
+        Path(args.out), rows, measured, results, header, workers=_workers(args.workers)
+    )
     _emit(measured, args.json)
     if not args.json:
         print(f"\nreport: {path} ({wall:.1f} s)", file=sys.stderr)

@@ -33,7 +33,7 @@ from sim_vehicle_stub.world import Scenario, TargetTracks, first_entry_time
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 IntArray = NDArray[np.intp]
-BLOCK_RUNS = 500
+BLOCK_RUNS = 1000
 _EPS = 1e-9
 
 

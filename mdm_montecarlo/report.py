@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import csv
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -87,9 +90,14 @@ def write_report(
     measured: list[MeasuredRow],
     results: dict[Case, MissionResults],
     header: str,
+    workers: int = 1,
 ) -> Path:
-    """Write report.md, results.csv and PNGs into ``folder``; returns the report path."""
+    """Write report.md, results.csv and PNGs into ``folder``; returns the report path.
+
+    ``workers`` > 1 draws the plots in that many processes.
+    """
     folder.mkdir(parents=True, exist_ok=True)
+    plots: list[tuple[Callable[..., None], tuple[Any, ...]]] = []
     write_csv(folder / "results.csv", measured)
     lines = [
         "# Section IV reproduced",
@@ -115,15 +123,27 @@ def write_report(
         for scenario in dict.fromkeys(r.case.scenario for r in rows if r.table == table):
             png = f"{table}-{scenario}.png"
             if table == "scaling":
-                plot_scaling(folder / png, scenario, rows, results)
+                plots.append((plot_scaling, (folder / png, scenario, rows, results)))
             else:
                 cases = list(
                     dict.fromkeys(
                         r.case for r in rows if r.table == table and r.case.scenario == scenario
                     )
                 )
-                plot_table(folder / png, f"{table} {scenario}", cases, results)
+                of_plot = {c: results[c] for c in cases}
+                plots.append((plot_table, (folder / png, f"{table} {scenario}", cases, of_plot)))
             lines += [f"![{table} {scenario}]({png})", ""]
+    _draw(plots, workers)
     path = folder / "report.md"
     path.write_text("\n".join(lines), encoding="utf-8")
     return path
+
+
+def _draw(plots: list[tuple[Callable[..., None], tuple[Any, ...]]], workers: int) -> None:
+    if workers <= 1 or len(plots) <= 1:
+        for plot, args in plots:
+            plot(*args)
+        return
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        for done in [pool.submit(plot, *args) for plot, args in plots]:
+            done.result()
