@@ -188,7 +188,15 @@ def _entry_along_path(
     position, velocity = motion_now
     end = np.minimum(tracks.next_node_time(t) - t, leg.duration)
     out = first_entry_time(
-        leg.start, leg.velocity, end, position, velocity, radius, eligible, appear - t[:, None]
+        leg.start,
+        leg.velocity,
+        end,
+        position,
+        velocity,
+        radius,
+        eligible,
+        appear - t[:, None],
+        tracks.max_speed,
     )
     rows = np.flatnonzero(~np.isfinite(out).any(axis=1) & (end < leg.duration))
     while rows.size:
@@ -206,6 +214,7 @@ def _entry_along_path(
             radius[rows],
             eligible[rows],
             appear - now[:, None],
+            tracks.max_speed,
         )
         out[rows] = piece + begin[:, None]
         rows = rows[~np.isfinite(piece).any(axis=1) & (end[rows] < leg.duration[rows])]

@@ -71,6 +71,7 @@ def first_entry_time(
     radius: FloatArray,
     eligible: BoolArray,
     not_before: FloatArray,
+    target_speed: float | None = None,
 ) -> FloatArray:
     """Earliest s in [not_before, duration] at which a vehicle moving linearly is within radius.
 
@@ -80,6 +81,7 @@ def first_entry_time(
 
     Only pairs that can meet are solved: a vehicle closes on a target at most at the sum of
     their speeds, so a target farther than r + (|v| + |v_target|) * duration is out of reach.
+    ``target_speed``: a bound on every target's speed, if the caller knows one (else computed).
     """
     north = start[:, 0, None] - target_start[..., 0]
     east = start[:, 1, None] - target_start[..., 1]
@@ -87,7 +89,8 @@ def first_entry_time(
     lo = np.maximum(np.broadcast_to(not_before, dist2.shape), 0.0)
     # Closing speed bound: the vehicle's speed plus the fastest target's.
     vehicle_speed = np.sqrt(velocity[:, 0] ** 2 + velocity[:, 1] ** 2)
-    target_speed = np.sqrt(float(np.max(target_velocity**2, initial=0.0)) * 2.0)
+    if target_speed is None:
+        target_speed = float(np.sqrt(np.max(target_velocity**2, initial=0.0) * 2.0))
     reach = radius + (vehicle_speed + target_speed) * duration + _REACH_SLACK
     reach = reach[:, None]
     candidate = eligible & (dist2 <= reach * reach) & (lo <= duration[:, None])

@@ -97,6 +97,7 @@ class TargetTracks:
     _last: FloatArray = field(init=False, repr=False)
     """(runs, m, 2) the node that ends the last segment drawn."""
     _free: FloatArray = field(init=False, repr=False)
+    _max_speed: float = field(init=False, repr=False, default=0.0)
 
     def __post_init__(self) -> None:
         start = np.broadcast_to(self.spec.positions, (self.n_runs, self.spec.count, 2))
@@ -116,6 +117,11 @@ class TargetTracks:
     @property
     def moving(self) -> bool:
         return self.walk is not None
+
+    @property
+    def max_speed(self) -> float:
+        """The highest target speed on any path segment drawn so far (0 for fixed targets)."""
+        return self._max_speed
 
     def next_node_time(self, t: FloatArray) -> FloatArray:
         """The first grid node strictly after t (inf for fixed targets)."""
@@ -173,7 +179,10 @@ class TargetTracks:
             self._starts = self._resized(self._starts, end)
             self._velocity = self._resized(self._velocity, end)
         self._starts[:, self._filled : end] = nodes[:, :-1]
-        self._velocity[:, self._filled : end] = np.diff(nodes, axis=1) / self.grid_dt
+        velocity = np.diff(nodes, axis=1) / self.grid_dt
+        self._velocity[:, self._filled : end] = velocity
+        speed2 = float(np.max(velocity[..., 0] ** 2 + velocity[..., 1] ** 2, initial=0.0))
+        self._max_speed = max(self._max_speed, float(np.sqrt(speed2)))
         self._filled = end
         self._last = nodes[:, -1]
 
