@@ -107,6 +107,11 @@ class Uniform:
 def directions(sampler: Sampler, rng: np.random.Generator, n: int) -> FloatArray:
     """n unit vectors (n, 2): two samples per vector, normalised (section III, eq. 7)."""
     raw = sampler.draw(rng, (n, 2))
-    norm = length(raw)[:, None]
-    # A zero vector has probability zero for these laws; fall back to north to stay finite.
-    return np.where(norm > 0, raw / np.where(norm > 0, norm, 1.0), np.array([1.0, 0.0]))
+    norm = length(raw)
+    zero = norm == 0.0
+    if zero.any():
+        # Probability zero for these laws; fall back to north to stay finite.
+        raw[zero] = (1.0, 0.0)
+        norm[zero] = 1.0
+    raw /= norm[:, None]
+    return raw

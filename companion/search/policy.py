@@ -236,10 +236,11 @@ class SearchPolicy:
     ) -> FloatArray:
         """P_q + delta_k D(S_t) from each origin; with the 'redraw' rule, the first of up to
         1 + _REDRAWS candidates that lies in the area (the last one clipped if none does)."""
-        n = len(origin)
-        points = np.empty((n, 2))
-        pending = np.arange(n)
-        left = _REDRAWS + 1 if self.config.out_of_area == "redraw" else 1
+        points = self._candidates(k, origin, anchor, rng)
+        if self.config.out_of_area != "redraw":
+            return _fold_into_area(points, self._area, self.config.out_of_area)
+        pending = np.flatnonzero(~self._inside(points))
+        left = _REDRAWS
         while pending.size:
             # Few lanes left: draw several of their candidates in one call (the same sequence of
             # independent candidates a draw-check-redraw loop would see, fewer numpy calls).
@@ -248,16 +249,18 @@ class SearchPolicy:
             candidate = self._candidates(k, origin[lanes], anchor[lanes], rng)
             candidate = candidate.reshape(len(pending), per_lane, 2)
             left -= per_lane
-            inside = np.all((candidate >= 0) & (candidate <= self._area), axis=-1)
+            inside = self._inside(candidate)
             if left == 0:
-                rule = "reflect" if self.config.out_of_area == "reflect" else "clip"
                 inside[:, -1] = True
-                candidate[:, -1] = _fold_into_area(candidate[:, -1], self._area, rule)
+                candidate[:, -1] = _fold_into_area(candidate[:, -1], self._area, "clip")
             found = inside.any(axis=1)
             first = inside.argmax(axis=1)
             points[pending[found]] = candidate[found, first[found]]
             pending = pending[~found]
         return points
+
+    def _inside(self, points: FloatArray) -> BoolArray:
+        return np.asarray(((points >= 0.0) & (points <= self._area)).all(axis=-1))
 
     def _candidates(
         self, k: int, origin: FloatArray, anchor: FloatArray, rng: np.random.Generator
@@ -265,11 +268,14 @@ class SearchPolicy:
         """One candidate waypoint per origin (n, 2), confined to the detection disc if set."""
         cfg = self.config.levels[k]
         n = len(origin)
-        step = np.full(n, cfg.step)
         if cfg.step_law == "levy":
             size = np.abs(symmetric_stable(rng, cfg.step_index, 1.0, (n,)))
-            step = cfg.step * np.minimum(size, cfg.step_cap)
-        candidate = origin + step[:, None] * directions(cfg.sampler, rng, n)
+            step = directions(cfg.sampler, rng, n)
+            step *= (cfg.step * np.minimum(size, cfg.step_cap))[:, None]
+        else:
+            step = directions(cfg.sampler, rng, n)
+            step *= cfg.step
+        candidate = origin + step
         if k > 0 and self.config.confine_to_detection:
             candidate = _fold_into_disc(candidate, anchor, self._radii[k - 1])
         return candidate
@@ -286,9 +292,12 @@ def _fold_into_area(points: FloatArray, size: FloatArray, rule: str) -> FloatArr
 def _fold_into_disc(points: FloatArray, centre: FloatArray, radius: float) -> FloatArray:
     """Mirror points that lie outside the disc back across its rim (radially)."""
     offset = points - centre
-    dist = length(offset)[:, None]
-    # Triangle wave of the distance: mirror at the rim, again at the centre, and so on.
-    folded = np.mod(dist, 2 * radius)
-    folded = np.where(folded > radius, 2 * radius - folded, folded)
-    scale = np.where(dist > radius, folded / np.where(dist > 0, dist, 1.0), 1.0)
-    return centre + offset * scale
+    dist = length(offset)
+    out = np.array(points)
+    far = np.flatnonzero(dist > radius)
+    if far.size:
+        # Triangle wave of the distance: mirror at the rim, again at the centre, and so on.
+        folded = np.mod(dist[far], 2 * radius)
+        folded = np.where(folded > radius, 2 * radius - folded, folded)
+        out[far] = centre[far] + offset[far] * (folded / dist[far])[:, None]
+    return out
