@@ -95,13 +95,15 @@ def first_entry_time(
     reach = reach[:, None]
     candidate = eligible & (dist2 <= reach * reach) & (lo <= duration[:, None])
     out = np.full(dist2.shape, np.inf)
-    rows, cols = np.nonzero(candidate)
-    if rows.size:
-        out[rows, cols] = _solve_entry(
-            np.stack([north[rows, cols], east[rows, cols]], axis=-1),
-            velocity[rows] - target_velocity[rows, cols],
-            dist2[rows, cols] - radius[rows] ** 2,
-            lo[rows, cols],
+    pairs = np.flatnonzero(candidate)
+    if pairs.size:
+        rows = pairs // dist2.shape[1]
+        rel_v = velocity[rows] - target_velocity[rows, pairs - rows * dist2.shape[1]]
+        out.ravel()[pairs] = _solve_entry(
+            np.stack([north.ravel()[pairs], east.ravel()[pairs]], axis=-1),
+            rel_v,
+            dist2.ravel()[pairs] - radius[rows] ** 2,
+            lo.ravel()[pairs],
             duration[rows],
         )
     return out
