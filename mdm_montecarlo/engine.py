@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from companion.search import Observation, SearchPolicy
 from companion.search.from_profile import policy_config
 from companion.search.planar import length
+from mdm_montecarlo.remembered import RememberedTargets
 from mdm_profiles import MissionProfile
 from sim_vehicle_stub.world import Scenario, TargetTracks, first_entry_time
 
@@ -82,8 +83,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     active = np.ones(n, dtype=bool)
     events = 0
     appear = targets.appear_times
-    # Fixed targets: which targets each lane has not confirmed itself (policy.known, cached).
-    unknown = np.ones((n, m), dtype=bool)
+    remembered = RememberedTargets(policy, tracks, n, m)
 
     while True:
         idx = np.flatnonzero(active)
@@ -101,7 +101,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
 
         target_pos, target_vel = tracks.motion(runs, t)
         confirms = policy.uses_confirmation_sensor(state)[idx]
-        eligible = ~policy.known(state, idx, target_pos) if tracks.moving else unknown[idx]
+        eligible = ~remembered.known(state, idx, t, target_pos)
         eligible &= ~(confirms[:, None] & targets.false_mask[None, :])
         entry = _entry_along_path(
             tracks,
@@ -139,10 +139,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
             contact_positions=target_pos,
         )
         outcome = policy.step(state, idx, obs, rng_policy)
-        if not tracks.moving and outcome.confirmed.any():
-            # Memory changes only on a confirmation; fixed targets never move.
-            lanes = idx[outcome.confirmed]
-            unknown[lanes] = ~policy.known(state, lanes, obs.contact_positions[outcome.confirmed])
+        remembered.forget(idx[outcome.confirmed])
         events += 1
         position[idx] = new_x
         time[idx] = new_t

@@ -155,9 +155,17 @@ class SearchPolicy:
 
     def known(self, state: PolicyState, lanes: IntArray, positions: FloatArray) -> BoolArray:
         """(len(lanes), m): True where a position lies within memory_radius of a remembered target."""
-        out = np.zeros(positions.shape[:2], dtype=bool)
+        return np.asarray(
+            self.memory_distance2(state, lanes, positions) <= self.config.memory_radius**2
+        )
+
+    def memory_distance2(
+        self, state: PolicyState, lanes: IntArray, positions: FloatArray
+    ) -> FloatArray:
+        """(len(lanes), m) squared distance from each position to the nearest target the lane
+        remembers confirming (inf for a lane that remembers none)."""
+        out = np.full(positions.shape[:2], np.inf)
         counts = state.memory_count[lanes]
-        radius2 = self.config.memory_radius**2
         rows = np.flatnonzero(counts > 0)
         if rows.size == 0:
             return out
@@ -169,7 +177,7 @@ class SearchPolicy:
         remembered = state.memory[lanes[owner], slot]
         north = positions[owner, :, 0] - remembered[:, 0, None]
         east = positions[owner, :, 1] - remembered[:, 1, None]
-        out[rows] = np.logical_or.reduceat(north * north + east * east <= radius2, starts, axis=0)
+        out[rows] = np.minimum.reduceat(north * north + east * east, starts, axis=0)
         return out
 
     def step(
