@@ -10,12 +10,20 @@ companion.search.swarm_iteration, shared with the live companion):
 2. the step is flown as a straight segment at most speed x interval long (clipped to the area);
    a real target whose r_2 disc the segment enters is confirmed (closed form,
    sim_vehicle_stub.world.first_entry_time) and becomes known to that vehicle;
-3. each vehicle reads its signal sensor (sim_vehicle_stub.world.contacts, exp(-d / r) within the
-   signal radius) and keeps the strongest signal of a target it does not know to be confirmed
-   as its fitness; personal bests from confirmed targets are forgotten;
+3. each vehicle reads its signal sensor (exp(-d / r) within the signal radius, as
+   sim_vehicle_stub.world.contacts reads it) and keeps the strongest signal of a target it does
+   not know to be confirmed as its fitness; personal bests from confirmed targets are forgotten;
 4. each vehicle publishes (personal best, current fitness, targets it knows confirmed); a message
    reaches each other vehicle ``message_delay`` seconds later unless lost (``message_drop``).
    A receiver keeps the last message it got from each sender.
+
+Cost: the vehicles of a run share its targets, so target positions are read per run. The
+squared vehicle-target distances are computed once per iteration, at the end of the step; the
+signal reading of that iteration and the confirmations of the next (same positions, same time)
+both use them: the closed form is solved only for the pairs close enough to meet within the
+step, strengths only for the pairs within the signal radius. A delivery touches only the runs
+whose message or losses changed since the last one (a few per cent of them per iteration).
+All of this gives bit-for-bit the results of solving every pair and delivering everywhere.
 
 Randomness: SeedSequence([seed, block]) as in engine.py, drawn in a fixed order over the whole
 block, so results are identical for any number of workers.
@@ -23,14 +31,17 @@ block, so results are identical for any number of workers.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from companion.search import SearchPolicy
 from companion.search.from_profile import policy_config, swarm_config
+from companion.search.planar import length
 from companion.search.pso import Best, forget, random_informants, signal_fitness
 from companion.search.swarm_iteration import (
     choose_move,
@@ -40,10 +51,12 @@ from companion.search.swarm_iteration import (
 )
 from mdm_montecarlo.engine import BlockResult, block_rngs
 from mdm_profiles import MissionProfile
-from sim_vehicle_stub.world import Scenario, contacts, first_entry_time
+from sim_vehicle_stub.world import Scenario, TargetTracks, first_entry_time
+from sim_vehicle_stub.world.sensors import THRESHOLD
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
+IntArray = NDArray[np.intp]
 SWARM_KINDS = ("pso", "spso", "arpso")
 
 
@@ -55,8 +68,192 @@ class Message:
     """(runs, vehicles) personal bests."""
     current: FloatArray
     """(runs, vehicles) fitness read this iteration."""
-    known: BoolArray
-    """(runs, vehicles, targets) targets the sender knows to be confirmed."""
+    known: NDArray[np.float32]
+    """(runs, vehicles, targets) 1 where the sender knows the target to be confirmed, else 0
+    (float32: receivers count the senders that know a target with a matrix product)."""
+
+
+@dataclass(frozen=True)
+class _Sensors:
+    """The targets as the vehicles of a block sense them; the vehicles of a run share them."""
+
+    tracks: TargetTracks
+    runs: IntArray
+    """Every run of the block, 0 .. runs - 1."""
+    real: BoolArray
+    """(targets,) True for real targets (the only ones that can be confirmed)."""
+    appear: FloatArray
+    """(targets,) appearance times, s."""
+    confirm_radius: float
+    signal_radius: float
+    dt: float
+    """Update interval, s."""
+
+    def squared_gaps(self, position: FloatArray, t: float) -> FloatArray:
+        """Squared distances (runs, vehicles, targets) from ``position`` (runs, vehicles, 2) to
+        the targets at time t, rounded as sim_vehicle_stub.world.contacts rounds them."""
+        target = self.tracks.positions(self.runs, np.full(len(self.runs), t))
+        dx = target[:, None, :, 0] - position[:, :, None, 0]
+        dy = target[:, None, :, 1] - position[:, :, None, 1]
+        dx *= dx
+        dy *= dy
+        dx += dy
+        return np.asarray(dx)
+
+    def confirm(
+        self,
+        position: FloatArray,
+        step: FloatArray,
+        gaps: FloatArray,
+        t: float,
+        first: FloatArray,
+        known: BoolArray,
+    ) -> None:
+        """Confirm the real targets whose disc the segments ``position`` -> ``position + step``
+        (runs, vehicles, 2), flown from t to t + dt, enter: ``first`` and ``known`` (runs,
+        vehicles, targets) are updated in place. ``gaps``: squared_gaps(position, t).
+
+        The closed form (sim_vehicle_stub.world.first_entry_time) is solved only for the
+        vehicle x target pairs that can meet in the interval: those no farther apart than
+        confirm_radius + the longest step + the farthest a target moves in dt.
+        """
+        target, velocity = self.tracks.motion(self.runs, np.full(len(self.runs), t))
+        travel = _length_bound(step) + self.dt * _length_bound(velocity)
+        # The slack covers the rounding of the closed form; it only adds pairs to solve.
+        reach = self.confirm_radius + travel + _SLACK
+        run, lane, index = _nonzero(gaps <= reach * reach)
+        open_pair = self.real[index] & ~known[run, lane, index]
+        run, lane, index = run[open_pair], lane[open_pair], index[open_pair]
+        pairs = len(run)
+        entry = first_entry_time(
+            position[run, lane],
+            step[run, lane] / self.dt,
+            np.full(pairs, self.dt),
+            target[run, index][:, None, :],
+            velocity[run, index][:, None, :],
+            np.full(pairs, self.confirm_radius),
+            np.ones((pairs, 1), dtype=bool),
+            (self.appear[index] - t)[:, None],
+        )[:, 0]
+        hit = entry <= self.dt
+        run, lane, index = run[hit], lane[hit], index[hit]
+        first[run, lane, index] = np.minimum(first[run, lane, index], t + entry[hit])
+        known[run, lane, index] = True
+
+    def fitness(self, gaps: FloatArray, t: float, known: BoolArray) -> tuple[FloatArray, IntArray]:
+        """Every vehicle's fitness and its source (companion.search.pso.signal_fitness) at time
+        t, ``gaps`` = squared_gaps(position, t): the signal sensor's strongest exp(-d / R) of a
+        present target within R that the vehicle does not know to be confirmed (as
+        sim_vehicle_stub.world.contacts reads it). Strengths are computed only for the pairs
+        nearer than R (a superset from the squared distances)."""
+        radius = self.signal_radius
+        run, lane, index = _nonzero(gaps < radius * radius * _NEAR)
+        distance = np.sqrt(gaps[run, lane, index])
+        strength = np.exp(-distance / radius)
+        usable = (
+            (distance < radius)
+            & (strength > THRESHOLD)
+            & (self.appear[index] <= t)
+            & ~known[run, lane, index]
+        )
+        table = np.zeros(gaps.shape)
+        table[run[usable], lane[usable], index[usable]] = strength[usable]
+        return signal_fitness(table, table > 0)
+
+
+@dataclass
+class _Inbox:
+    """What every receiver of a block last heard from every sender, as (runs, receivers,
+    senders) tables updated in place."""
+
+    heard: Best
+    current: FloatArray
+    """Each sender's fitness read in the iteration of the message (ARPSO)."""
+    last: tuple[Message, BoolArray] | None = None
+    """The message delivered last and which receivers got it."""
+
+    @classmethod
+    def empty(cls, shape: tuple[int, int], n_vehicles: int) -> _Inbox:
+        """Nothing heard yet: fitness 0, no source."""
+        heard = Best(
+            np.zeros((*shape, n_vehicles, 2)),
+            np.zeros((*shape, n_vehicles)),
+            np.full((*shape, n_vehicles), -1, dtype=np.intp),
+        )
+        return cls(heard, np.zeros((*shape, n_vehicles)))
+
+    def deliver(self, message: Message, got: BoolArray, known: BoolArray) -> None:
+        """Receiver i takes sender j's message where got[run, i, j]; the targets the senders
+        know are added to ``known`` (runs, receivers, targets) in place.
+
+        Runs whose message and losses are those of the last delivery are skipped: taking it
+        again would change nothing (a best dropped by ``forget`` since stays dropped, as
+        ``known`` only grows).
+        """
+        runs = _changed_runs(message, got, self.last)
+        self.last = (message, got)
+        got = got[runs]
+        sent = message.best
+        _take_sent(_as_complex(self.heard.position), runs, got, _as_complex(sent.position))
+        _take_sent(self.heard.fitness, runs, got, sent.fitness)
+        _take_sent(self.heard.source, runs, got, sent.source)
+        _take_sent(self.current, runs, got, message.current)
+        # How many received senders know each target (exact: small integers in float32).
+        known[runs] |= np.matmul(got.astype(np.float32), message.known[runs]) > 0
+
+    def forget(self, known: BoolArray) -> None:
+        """companion.search.pso.forget for the heard bests, in place: a receiver drops the
+        bests whose source target it knows (``known`` (runs, receivers, targets)) to be
+        confirmed. Only the bests that have a source are looked at."""
+        heard = self.heard
+        sourced = _nonzero(heard.source >= 0)
+        kept = forget(
+            Best(heard.position[sourced], heard.fitness[sourced], heard.source[sourced]),
+            known[sourced[:2]],
+        )
+        heard.fitness[sourced] = kept.fitness
+        heard.source[sourced] = kept.source
+
+
+def _changed_runs(
+    message: Message, got: BoolArray, last: tuple[Message, BoolArray] | None
+) -> IntArray:
+    """The runs whose message or losses differ from those of ``last`` (all if None)."""
+    if last is None:
+        return np.arange(len(got))
+    before, got_before = last
+    same = (
+        (message.best.fitness == before.best.fitness)
+        & (message.best.source == before.best.source)
+        & (message.current == before.current)
+        & (message.best.position == before.best.position).all(axis=-1)
+        & (message.known == before.known).all(axis=-1)
+    ).all(axis=-1)
+    same &= (got == got_before).all(axis=(1, 2))
+    return np.flatnonzero(~same)
+
+
+def _take_sent(table: NDArray[Any], runs: IntArray, got: BoolArray, sent: NDArray[Any]) -> None:
+    """table[run, i, j] = sent[run, j] where got (rows of ``runs``), in place."""
+    table[runs] = np.where(got, sent[runs][:, None, :], table[runs])
+
+
+_SLACK = 1.0
+"""Metres added to the reach of a confirmation step (rounding margin, far above it)."""
+_NEAR = 1.0 + 1e-9
+"""Relative margin on R^2 so that the pairs nearer than R are all kept despite rounding."""
+
+
+def _length_bound(vectors: FloatArray) -> float:
+    """An upper bound of the lengths of vectors (..., 2): sqrt(2) x the largest coordinate."""
+    return math.sqrt(2.0) * float(np.abs(vectors).max(initial=0.0))
+
+
+def _nonzero(mask: BoolArray) -> tuple[IntArray, IntArray, IntArray]:
+    """np.nonzero of a 3-D mask, from its flat indices (several times faster when sparse)."""
+    rest, k = np.divmod(np.flatnonzero(mask), mask.shape[2])
+    i, j = np.divmod(rest, mask.shape[1])
+    return i, j, k
 
 
 def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
@@ -71,28 +268,25 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
     n = n_runs * n_vehicles
     dt = spec.update_interval
     speed = profile.fleet.speed
-    tracks = scenario.tracks(n_runs, rng_targets)
-    position = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
-    lanes_run = np.repeat(np.arange(n_runs), n_vehicles)
-
     targets = scenario.targets
-    m = targets.count
     real = ~targets.false_mask
-    appear = targets.appear_times
+    sensors = _Sensors(
+        tracks=scenario.tracks(n_runs, rng_targets),
+        runs=np.arange(n_runs),
+        real=real,
+        appear=targets.appear_times,
+        confirm_radius=scenario.confirmation.radius,
+        signal_radius=spec.signal_radius,
+        dt=dt,
+    )
+    position = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
+    m = targets.count
     area = scenario.area.size
-    r_confirm = np.full(n, scenario.confirmation.radius)
-    r_signal = np.full(n, spec.signal_radius)
-    no_confirm = np.zeros(n, dtype=bool)
 
     first = np.full((*shape, m), np.inf)
     known = np.zeros((*shape, m), dtype=bool)
     own = Best(position.copy(), np.zeros(shape), np.full(shape, -1, dtype=np.intp))
-    heard = Best(
-        np.zeros((*shape, n_vehicles, 2)),
-        np.zeros((*shape, n_vehicles)),
-        np.full((*shape, n_vehicles), -1, dtype=np.intp),
-    )
-    heard_current = np.zeros((*shape, n_vehicles))
+    inbox = _Inbox.empty(shape, n_vehicles)
     current = np.zeros(shape)
     previous_best = np.zeros(shape)
     others = ~np.eye(n_vehicles, dtype=bool)
@@ -103,6 +297,7 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
     outbox: deque[Message] = deque(maxlen=delay + 1)
 
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
+    gaps = sensors.squared_gaps(position, 0.0)
     step = np.zeros((*shape, 2))
     guided = np.zeros(shape, dtype=bool)
     social_fitness = np.zeros(shape)
@@ -120,8 +315,8 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
             waypoint=waypoint,
             guided=guided,
             own=own,
-            heard=heard,
-            heard_current=heard_current,
+            heard=inbox.heard,
+            heard_current=inbox.current,
             current=current,
             previous_best=previous_best,
             links=links,
@@ -133,56 +328,31 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
         guided = follow
 
         # Confirmations along the straight segment flown in this iteration.
-        target_pos, target_vel = tracks.motion(lanes_run, np.full(n, t))
-        eligible = real[None, :] & ~known.reshape(n, m)
-        entry = first_entry_time(
-            position.reshape(n, 2),
-            step.reshape(n, 2) / dt,
-            np.full(n, dt),
-            target_pos,
-            target_vel,
-            r_confirm,
-            eligible,
-            appear[None, :] - t,
-        ).reshape(*shape, m)
-        hit = entry <= dt
-        first = np.where(hit, np.minimum(first, t + entry), first)
-        known |= hit
+        sensors.confirm(position, step, gaps, t, first, known)
         position = new_position
         t += dt
         steps += 1
 
-        reached = ~follow & (np.linalg.norm(waypoint - position, axis=-1) <= 1e-6)
+        reached = ~follow & (length(waypoint - position) <= 1e-6)
         if reached.any():
             waypoint[reached] = explore(explorer, position[reached], rng)
 
         # Fitness: the signal sensor, targets known to be confirmed left out.
-        now = np.full(n, t)
-        present = np.broadcast_to(appear[None, :] <= t, (n, m))
-        within, strength = contacts(
-            r_signal,
-            no_confirm,
-            position.reshape(n, 2),
-            tracks.positions(lanes_run, now),
-            present,
-            targets.false_mask,
-        )
-        current, source = signal_fitness(
-            strength.reshape(*shape, m), within.reshape(*shape, m) & ~known
-        )
+        gaps = sensors.squared_gaps(position, t)
+        current, source = sensors.fitness(gaps, t, known)
         own, previous_best = read_into_best(own, known, position, current, source)
 
-        outbox.append(Message(own.copy(), current.copy(), known.copy()))
+        outbox.append(Message(own.copy(), current.copy(), known.astype(np.float32)))
         # Drawn every iteration, so the random stream does not depend on delay or drop.
         got = (rng.random((*shape, n_vehicles)) >= spec.message_drop) & others
         if len(outbox) > delay:
-            heard, heard_current, known = _deliver(outbox[0], heard, heard_current, known, got)
+            inbox.deliver(outbox[0], got, known)
         own = forget(own, known)
-        heard = forget(heard, np.broadcast_to(known[:, :, None, :], (*shape, n_vehicles, m)))
+        inbox.forget(known)
         if config.variant == "spso":
             links, social_fitness = refresh_informants(
                 own,
-                heard,
+                inbox.heard,
                 links,
                 social_fitness,
                 lambda: random_informants(rng, (n_runs,), n_vehicles, spec.informants),
@@ -193,23 +363,10 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
     return BlockResult(block, first, steps * n, float(t * n))
 
 
-def _deliver(
-    message: Message, heard: Best, heard_current: FloatArray, known: BoolArray, got: BoolArray
-) -> tuple[Best, FloatArray, BoolArray]:
-    """Receiver i takes sender j's message where got[run, i, j].
-
-    Returns what every receiver has heard from every sender and the targets it now knows.
-    """
-    sent = message.best
-    gotp = got[..., None]
-    heard = Best(
-        np.where(gotp, sent.position[:, None, :, :], heard.position),
-        np.where(got, sent.fitness[:, None, :], heard.fitness),
-        np.where(got, sent.source[:, None, :], heard.source).astype(np.intp),
-    )
-    heard_current = np.where(got, message.current[:, None, :], heard_current)
-    known = known | np.any(got[..., None] & message.known[:, None, :, :], axis=2)
-    return heard, heard_current, known
+def _as_complex(points: FloatArray) -> NDArray[np.complex128]:
+    """Points (..., 2) as one complex number each (a view), so that a selection moves both
+    coordinates at once."""
+    return points.view(np.complex128)[..., 0]
 
 
 def _all_confirmed(first: FloatArray, real: BoolArray) -> bool:

@@ -25,10 +25,12 @@ Update rules, in metres per iteration (sources and choices in docs/model.md):
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
+
+from companion.search.planar import length
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -81,7 +83,7 @@ def signal_fitness(strength: FloatArray, usable: BoolArray) -> tuple[FloatArray,
     """Fitness (strongest usable signal, 0 if none) and its source target, over the last axis."""
     masked = np.where(usable, strength, 0.0)
     source = np.argmax(masked, axis=-1)
-    fitness = np.take_along_axis(masked, source[..., None], axis=-1)[..., 0]
+    fitness = _take_last(masked, source)
     return fitness, np.where(fitness > 0, source, -1).astype(np.intp)
 
 
@@ -100,8 +102,7 @@ def forget(best: Best, known: BoolArray) -> Best:
 
     ``known`` has the shape of ``best.fitness`` plus a last axis over targets.
     """
-    index = np.maximum(best.source, 0)[..., None]
-    stale = (best.source >= 0) & np.take_along_axis(known, index, axis=-1)[..., 0]
+    stale = (best.source >= 0) & _take_last(known, np.maximum(best.source, 0))
     return Best(
         best.position,
         np.where(stale, 0.0, best.fitness),
@@ -118,10 +119,10 @@ def swarm_best(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArra
     """
     candidates = np.where(links, heard.fitness, -np.inf)
     slot = np.argmax(candidates, axis=-1)
-    other = np.take_along_axis(candidates, slot[..., None], axis=-1)[..., 0]
+    other = _take_last(candidates, slot)
     mine = own.fitness >= other
-    position = np.take_along_axis(heard.position, slot[..., None, None], axis=-2)[..., 0, :]
-    source = np.take_along_axis(heard.source, slot[..., None], axis=-1)[..., 0]
+    position = _take_point(heard.position, slot)
+    source = _take_last(heard.source, slot)
     best = Best(
         np.where(mine[..., None], own.position, position),
         np.where(mine, own.fitness, other),
@@ -130,14 +131,29 @@ def swarm_best(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArra
     return best, mine
 
 
+def _take_last(values: NDArray[Any], index: IntArray) -> NDArray[Any]:
+    """values[..., index] at every leading position: values (..., k) (leading axes broadcast
+    to those of index), index (...) in [0, k). One flat gather."""
+    k = values.shape[-1]
+    flat = np.ascontiguousarray(np.broadcast_to(values, (*index.shape, k))).reshape(-1)
+    return flat[np.arange(0, index.size * k, k).reshape(index.shape) + index]
+
+
+def _take_point(points: FloatArray, slot: IntArray) -> FloatArray:
+    """points[..., slot, :] of points (..., k, 2), shape (..., 2); each point is taken as one
+    complex number."""
+    as_complex = np.ascontiguousarray(points, dtype=np.float64).view(np.complex128)[..., 0]
+    return _take_last(as_complex, slot)[..., None].view(np.float64)
+
+
 def clamp(step: FloatArray, max_step: float, constant_speed: bool = False) -> FloatArray:
     """Steps (..., 2) scaled to at most (constant_speed: exactly) ``max_step`` metres, same
     direction. A zero step stays zero."""
-    length = np.linalg.norm(step, axis=-1, keepdims=True)
-    scaled = max_step / np.where(length > 0, length, 1.0)
-    too_long = length > max_step
+    size = length(step)[..., None]
+    scaled = max_step / np.where(size > 0, size, 1.0)
+    too_long = size > max_step
     if constant_speed:
-        too_long = length > 0
+        too_long = size > 0
     return np.asarray(step * np.where(too_long, scaled, 1.0))
 
 
@@ -173,9 +189,9 @@ def spso_step(
     with_local = position + c * (personal + local - 2.0 * position) / 3.0
     alone = position + c * (personal - position) / 2.0
     centre = np.where(own_is_local[..., None], alone, with_local)
-    radius = np.linalg.norm(centre - position, axis=-1)
+    radius = length(centre - position)
     direction = rng.standard_normal(position.shape)
-    norm = np.linalg.norm(direction, axis=-1, keepdims=True)
+    norm = length(direction)[..., None]
     direction = direction / np.where(norm > 0, norm, 1.0)
     reach = radius * np.sqrt(rng.random(radius.shape))
     sample = centre + direction * reach[..., None]
@@ -214,15 +230,16 @@ def random_informants(
     """Adaptive random topology: (*shape, n, n) links, row i = the k particles i listens to.
 
     Every particle draws ``k`` informants other than itself uniformly without replacement
-    (all others when k >= n - 1).
+    (all others when k >= n - 1): the k with the smallest of n uniform keys (ties between keys
+    have probability 0), its own key set to inf.
     """
     keys = rng.random((*shape, n, n))
     keys[..., np.arange(n), np.arange(n)] = np.inf
     k = min(k, n - 1)
-    order = np.argsort(keys, axis=-1)[..., :k]
-    links = np.zeros((*shape, n, n), dtype=bool)
-    np.put_along_axis(links, order, True, axis=-1)
-    return links
+    if k == 0:
+        return np.zeros((*shape, n, n), dtype=bool)
+    kth = np.partition(keys, k - 1, axis=-1)[..., k - 1, None]
+    return np.asarray(keys <= kth)
 
 
 def next_step(

@@ -15,6 +15,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from companion.search.planar import length
 from companion.search.policy import SearchPolicy
 from companion.search.pso import (
     Best,
@@ -47,11 +48,12 @@ def arpso_weights(
     readings (None for PSO and SPSO, which do not use it)."""
     if config.variant != "arpso":
         return None
-    shape = current.shape
-    reads = np.concatenate([current[..., None], heard_current], axis=-1)
-    counted = np.concatenate([np.ones((*shape, 1), dtype=bool), links], axis=-1)
-    now_best = np.where(counted, reads, 0.0).max(axis=-1)
-    now_mean = np.where(counted, reads, 0.0).sum(axis=-1) / counted.sum(axis=-1)
+    # The particle's own reading, then its linked peers' (0 for the others).
+    reads = np.zeros((*current.shape, 1 + heard_current.shape[-1]))
+    reads[..., 0] = current
+    np.copyto(reads[..., 1:], heard_current, where=links)
+    now_best = reads.max(axis=-1)
+    now_mean = reads.sum(axis=-1) / (1 + links.sum(axis=-1))
     return arpso_inertia(
         previous_best,
         own.fitness,
@@ -96,7 +98,7 @@ def choose_move(
     if lost.any():
         waypoint[lost] = explore(explorer, position[lost], rng)
     to_waypoint = waypoint - position
-    gap = np.linalg.norm(to_waypoint, axis=-1, keepdims=True)
+    gap = length(to_waypoint)[..., None]
     explore_move = to_waypoint * np.minimum(1.0, distance / np.maximum(gap, 1e-12))
     move = np.where(follow[..., None], swarm_move, explore_move)
     return move, follow, follow & ~own_is_social
