@@ -1,10 +1,11 @@
 """Throughput of the Monte-Carlo engine, and its agreement with the dt = 0.1 s reference.
 
     .venv/bin/python benchmarks/montecarlo_throughput.py [--runs 4000] [--ref-runs 100]
+    .venv/bin/python benchmarks/montecarlo_throughput.py --profile paper-dynamic --workers 2
 
-1. Engine: paper-fixed flown with MDM (LS+BS) and the single-sensor searches US, BS, LS,
-   ``--runs`` missions each (full T_S runs, up to the profile's ts_cap), with 1 and 2 local
-   workers: wall time, missions per second, simulated UAV-seconds per wall second.
+1. Engine: paper-fixed (or ``--profile``) flown with MDM (LS+BS) and the single-sensor searches
+   US, BS, LS, ``--runs`` missions each (full T_S runs, up to the profile's ts_cap), with 1 and 2
+   local workers: wall time, missions per second, simulated UAV-seconds per wall second.
 2. Reference (mdm_montecarlo.reference, full tau-lag dynamics, sensors read every dt) on
    ``--ref-runs`` missions at ``--ref-dt``: the same figures.
 3. Agreement of T_nc (targets confirmed in the mission duration) between the engine's runs of
@@ -69,6 +70,7 @@ def main() -> None:
     )
     parser.add_argument("--workers", default="1,2", help="comma-separated local worker counts")
     parser.add_argument("--seed", type=int, default=2024)
+    parser.add_argument("--profile", default="paper-fixed", help="built-in profile or YAML path")
     parser.add_argument(
         "--step-every-lane",
         action="store_true",
@@ -76,10 +78,10 @@ def main() -> None:
     )
     args = parser.parse_args()
     workers = [int(w) for w in args.workers.split(",")]
-    base = load_profile("paper-fixed")
+    base = load_profile(args.profile)
     vehicles = base.fleet.vehicles
 
-    print(f"paper-fixed, {vehicles} UAVs, duration {base.mission.duration:g} s, seed {args.seed}")
+    print(f"{base.name}, {vehicles} UAVs, duration {base.mission.duration:g} s, seed {args.seed}")
     print("\nEngine (event-driven), full runs to T_S (cap", f"{base.mission.ts_cap:g} s)")
     header = f"{'method':<10} {'workers':>7} {'runs':>6} {'wall s':>8} {'missions/s':>11}"
     print(header + f" {'UAV-s/s':>12} {'mean T_nc':>9}")
