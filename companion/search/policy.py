@@ -276,13 +276,13 @@ class SearchPolicy:
         """One candidate waypoint per origin (n, 2), confined to the detection disc if set."""
         cfg = self.config.levels[k]
         n = len(origin)
+        scale: FloatArray | float = cfg.step
         if cfg.step_law == "levy":
+            # Drawn before the direction (the order of the random stream).
             size = np.abs(symmetric_stable(rng, cfg.step_index, 1.0, (n,)))
-            step = directions(cfg.sampler, rng, n)
-            step *= (cfg.step * np.minimum(size, cfg.step_cap))[:, None]
-        else:
-            step = directions(cfg.sampler, rng, n)
-            step *= cfg.step
+            scale = (cfg.step * np.minimum(size, cfg.step_cap))[:, None]
+        step = directions(cfg.sampler, rng, n)
+        step *= scale
         candidate = origin + step
         if k > 0 and self.config.confine_to_detection:
             candidate = _fold_into_disc(candidate, anchor, self._radii[k - 1])
