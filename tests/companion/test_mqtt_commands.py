@@ -16,7 +16,7 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from companion.telemetry.mqtt.testing import Subscriber, publish
+from companion.telemetry.mqtt.testing import Subscriber, publish, wait_until
 
 PROFILE = """
 name: mqtt-command-test
@@ -37,14 +37,6 @@ policy:
       index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 150.0}
 mission: {duration: 5000.0, ts_cap: 5000.0}
 """
-
-
-def _wait(predicate: Any, timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.1)
 
 
 @pytest.mark.timeout(120)
@@ -74,12 +66,12 @@ def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> No
     try:
         sub.ready(1883, f"{prefix}/probe")
         fleet.start()
-        _wait(lambda: phase(0) == "search" and phase(1) == "search", 60, "both searching")
+        wait_until(lambda: phase(0) == "search" and phase(1) == "search", 60, "both searching")
         command("uav1", "not json")
         command("uav1", {"command": "explode"})
         command("uav0", {"command": "pause", "id": "p1"})
         command("uav1", {"command": "abort", "id": "a1"})
-        _wait(lambda: phase(0) == "paused", 10, "vehicle 0 paused")
+        wait_until(lambda: phase(0) == "paused", 10, "vehicle 0 paused")
         held_from = len(states(0))
         time.sleep(1.5)  # about 75 sim s at 50x: 1.5 km of flight if it were still searching
         held = [s for s in states(0)[held_from:] if s["phase"] == "paused"]
@@ -88,9 +80,9 @@ def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> No
                     for a in held for b in held)  # fmt: skip
         assert drift < 5.0, f"vehicle 0 moved {drift:.1f} m while paused"
         command("uav0", {"command": "resume", "id": "r1"})
-        _wait(lambda: phase(0) == "search", 20, "vehicle 0 searching again")
+        wait_until(lambda: phase(0) == "search", 20, "vehicle 0 searching again")
         here = held[-1]
-        _wait(lambda: math.dist((here["north"], here["east"]),
+        wait_until(lambda: math.dist((here["north"], here["east"]),
                                 (states(0)[-1]["north"], states(0)[-1]["east"])) > 50.0,
               20, "vehicle 0 moving again")  # fmt: skip
         command("all", {"command": "land", "id": "l1"})

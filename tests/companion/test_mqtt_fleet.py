@@ -5,7 +5,6 @@ state messages at the profile's rate, and a retained online/offline status."""
 from __future__ import annotations
 
 import os
-import time
 from pathlib import Path
 from typing import Any
 
@@ -13,7 +12,7 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from companion.telemetry.mqtt.testing import Subscriber
+from companion.telemetry.mqtt.testing import Subscriber, wait_until
 
 PROFILE = """
 name: mqtt-fleet-test
@@ -37,14 +36,6 @@ policy:
 mission: {duration: 600.0, ts_cap: 5000.0}
 mqtt: {host: 127.0.0.1, port: 1883, topic_prefix: PREFIX, state_rate: 5.0}
 """
-
-
-def _wait(predicate: Any, timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.1)
 
 
 def mqtt_events(sub: Subscriber, prefix: str, vehicle: int) -> list[dict[str, Any]]:
@@ -79,7 +70,7 @@ def test_fleet_publishes_every_event_in_order_state_and_status(tmp_path: Path) -
             status = [m.json() for m in sub.messages("status") if f"/uav{i}/" in m.topic]
             return bool(status) and status[-1] == {"vehicle": i, "state": "offline", "clean": True}
 
-        _wait(lambda: offline(0) and offline(1), 15, "both vehicles' clean offline status")
+        wait_until(lambda: offline(0) and offline(1), 15, "both vehicles' clean offline status")
     finally:
         sub.stop()
     for i in range(2):

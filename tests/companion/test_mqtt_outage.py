@@ -14,7 +14,7 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from companion.telemetry.mqtt.testing import Broker, Subscriber, publish
+from companion.telemetry.mqtt.testing import Broker, Subscriber, publish, wait_until
 
 # False targets all over the area: detections, level switches and fallbacks keep coming,
 # and the one real target (50 m confirmation radius, in a corner) is not found in the test.
@@ -44,14 +44,6 @@ PREFIX = "mdm/outage"
 OUTAGE = 30.0
 
 
-def _wait(predicate: Any, timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.1)
-
-
 @pytest.mark.timeout(180)
 def test_events_survive_a_30_s_broker_outage_complete_and_in_order(tmp_path: Path) -> None:
     profile = tmp_path / "profile.yaml"
@@ -75,7 +67,7 @@ def test_events_survive_a_30_s_broker_outage_complete_and_in_order(tmp_path: Pat
     try:
         sub.ready(broker.port, f"{PREFIX}/probe")
         fleet.start()
-        _wait(lambda: all(any(r.get("phase") == "search" for r in logged(i)) for i in (0, 1))
+        wait_until(lambda: all(any(r.get("phase") == "search" for r in logged(i)) for i in (0, 1))
               and all(len(arrived(i)) == len(logged(i)) for i in (0, 1)), 60,
               "both vehicles searching, their events delivered")  # fmt: skip
         broker.stop()
@@ -84,12 +76,12 @@ def test_events_survive_a_30_s_broker_outage_complete_and_in_order(tmp_path: Pat
         at_restart = [len(logged(i)) for i in (0, 1)]
         received_during = [len(set(arrived(i))) for i in (0, 1)]
         broker.start()
-        _wait(lambda: all(len(set(arrived(i))) >= at_restart[i] for i in (0, 1)), 30,
+        wait_until(lambda: all(len(set(arrived(i))) >= at_restart[i] for i in (0, 1)), 30,
               "the events of the outage delivered")  # fmt: skip
         assert publish(broker.port, f"{PREFIX}/all/cmd", '{"command": "abort"}').returncode == 0
         fleet.join(60)
         assert not fleet.is_alive(), "the fleet did not end after abort"
-        _wait(lambda: all(len(set(arrived(i))) == len(logged(i)) for i in (0, 1)), 15,
+        wait_until(lambda: all(len(set(arrived(i))) == len(logged(i)) for i in (0, 1)), 15,
               "the last events delivered")  # fmt: skip
     finally:
         sub.stop()

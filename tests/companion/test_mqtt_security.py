@@ -7,15 +7,13 @@ from __future__ import annotations
 import json
 import subprocess
 import threading
-import time
 from pathlib import Path
-from typing import Any
 
 import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from companion.telemetry.mqtt.testing import Broker, Subscriber, publish
+from companion.telemetry.mqtt.testing import Broker, Subscriber, publish, wait_until
 
 ACL = Path(__file__).resolve().parents[2] / "docker" / "mosquitto" / "acl"
 PROFILE = """
@@ -38,14 +36,6 @@ mission: {duration: 5000.0, ts_cap: 5000.0}
 """
 PREFIX = "mdm/secure"
 PASSWORDS = {"operator": "op-secret", "uav0": "uav0-secret", "uav1": "uav1-secret"}
-
-
-def _wait(predicate: Any, timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.1)
 
 
 def _password_file(path: Path) -> None:
@@ -88,7 +78,7 @@ def test_only_the_operator_commands_and_vehicles_publish_only_their_own(tmp_path
         sub.ready(broker.port, f"{PREFIX}/probe/cmd", user="operator",
                   password=PASSWORDS["operator"])  # fmt: skip
         fleet.start()
-        _wait(lambda: phase() == "search", 60, "vehicle 0 searching (its account publishes)")
+        wait_until(lambda: phase() == "search", 60, "vehicle 0 searching (its account publishes)")
 
         anonymous = pause()
         assert anonymous.returncode != 0
@@ -104,7 +94,7 @@ def test_only_the_operator_commands_and_vehicles_publish_only_their_own(tmp_path
         assert publish(broker.port, f"{PREFIX}/uav0/status", forged, **uav1).returncode == 0
 
         assert pause(**op).returncode == 0
-        _wait(lambda: phase() == "paused", 10, "vehicle 0 paused by the operator")
+        wait_until(lambda: phase() == "paused", 10, "vehicle 0 paused by the operator")
         assert (
             publish(broker.port, f"{PREFIX}/all/cmd", '{"command": "abort"}', **op).returncode == 0
         )
