@@ -1,0 +1,39 @@
+"""Fixtures shared by every test folder."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests import sitl
+
+
+def _sitl_factory(kind: sitl.Kind, tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:
+    if sitl.sitl_dir(kind) is None:
+        pytest.skip(sitl.skip_reason(kind))
+    started: list[sitl.SitlInstance] = []
+
+    def start(**options: Any) -> sitl.SitlInstance:
+        instance = sitl.start(kind, tmp_path / f"{kind}-{len(started)}", **options)
+        started.append(instance)
+        return instance
+
+    yield start
+    for instance in started:
+        instance.stop()
+
+
+@pytest.fixture
+def arducopter(tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:
+    """Start stock ArduCopter SITL instances (``arducopter(home=..., speedup=...)``); skips
+    with the reason where no binary is found; every instance is ended at teardown."""
+    yield from _sitl_factory("arducopter", tmp_path)
+
+
+@pytest.fixture
+def px4(tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:
+    """Start stock PX4 SITL (SIH) instances (``px4(home=...)``); as ``arducopter``."""
+    yield from _sitl_factory("px4", tmp_path)

@@ -1,0 +1,193 @@
+"""Real autopilot SITL instances (ArduCopter, PX4 SIH) for tests that fly real flight code.
+
+The binaries are test fixtures beside the project, not part of it: they are found in
+``../shared/sitl/`` next to the repository, or where ``MDM_ARDUCOPTER_SITL`` /
+``MDM_PX4_SITL`` point (the folder holding ``start-arducopter`` / ``start-px4``). Without one,
+tests that need it skip and say which variable to set (README "Tests").
+
+Each instance runs in its own process group (ended by group id at teardown) and takes the first
+instance index, from ``MDM_SITL_INSTANCE_BASE`` (default 0) up, whose ports are all free, so
+parallel runs on one machine do not collide.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+Kind = Literal["arducopter", "px4"]
+
+REPO = Path(__file__).resolve().parents[1]
+_ENV = {"arducopter": "MDM_ARDUCOPTER_SITL", "px4": "MDM_PX4_SITL"}
+_SHARED = {
+    "arducopter": REPO.parent / "shared" / "sitl" / "ardupilot",
+    "px4": REPO.parent / "shared" / "sitl" / "px4",
+}
+_SCRIPT = {"arducopter": "start-arducopter", "px4": "start-px4"}
+INSTANCE_BASE_ENV = "MDM_SITL_INSTANCE_BASE"
+# PX4 sends its offboard link to UDP 14540+i, and i = 10 would be the GCS port 14550.
+_MAX_INSTANCE = {"arducopter": 40, "px4": 9}
+
+
+def sitl_dir(kind: Kind) -> Path | None:
+    """The folder holding ``kind``'s start script, or None where there is none."""
+    where = os.environ.get(_ENV[kind])
+    folder = Path(where) if where else _SHARED[kind]
+    return folder if (folder / _SCRIPT[kind]).is_file() else None
+
+
+def skip_reason(kind: Kind) -> str:
+    """Why a test that needs ``kind`` cannot run here."""
+    return (
+        f"no {kind} SITL: set {_ENV[kind]} to the folder holding {_SCRIPT[kind]} "
+        f"(looked in {os.environ.get(_ENV[kind]) or _SHARED[kind]}; README 'Tests')"
+    )
+
+
+def _ports(kind: Kind, index: int) -> tuple[list[int], list[int]]:
+    """(TCP, UDP) ports instance ``index`` of ``kind`` binds or is sent to."""
+    if kind == "arducopter":
+        base = 5760 + 10 * index
+        return [base, base + 2, base + 3], [5501 + 10 * index]
+    return [], [14540 + index, 14580 + index, 18570 + index]
+
+
+def _free(tcp: list[int], udp: list[int]) -> bool:
+    for kind, ports in ((socket.SOCK_STREAM, tcp), (socket.SOCK_DGRAM, udp)):
+        for port in ports:
+            with socket.socket(socket.AF_INET, kind) as s:
+                try:
+                    s.bind(("0.0.0.0", port))
+                except OSError:
+                    return False
+    return True
+
+
+@dataclass
+class SitlInstance:
+    """One running SITL process and the addresses a companion and an observer use."""
+
+    kind: Kind
+    index: int
+    process: subprocess.Popen[bytes]
+    workdir: Path
+
+    @property
+    def sysid(self) -> int:
+        return self.index + 1
+
+    @property
+    def companion_url(self) -> str:
+        """The vehicle's primary link: ArduCopter SERIAL0 (TCP), PX4's offboard link (UDP)."""
+        if self.kind == "arducopter":
+            return f"tcp:127.0.0.1:{5760 + 10 * self.index}"
+        return f"udpin:0.0.0.0:{14540 + self.index}"
+
+    @property
+    def observer_url(self) -> str:
+        """A second, independent link: ArduCopter SERIAL1, PX4's GCS link (it answers the sender)."""
+        if self.kind == "arducopter":
+            return f"tcp:127.0.0.1:{5762 + 10 * self.index}"
+        return f"udpout:127.0.0.1:{18570 + self.index}"
+
+    def log(self) -> str:
+        """What the autopilot printed so far (for a failing test's message)."""
+        path = self.workdir / "sitl.log"
+        return path.read_text(errors="replace")[-4000:] if path.exists() else ""
+
+    def stop(self) -> None:
+        """End the whole process group; idempotent."""
+        if self.process.poll() is None:
+            for sig in (signal.SIGTERM, signal.SIGKILL):
+                try:
+                    os.killpg(self.process.pid, sig)
+                except ProcessLookupError:
+                    break
+                try:
+                    self.process.wait(timeout=5)
+                    break
+                except subprocess.TimeoutExpired:
+                    continue
+
+
+def start(
+    kind: Kind,
+    workdir: Path,
+    *,
+    home: str | None = None,
+    speedup: float | None = None,
+    defaults: Path | None = None,
+) -> SitlInstance:
+    """Start one instance of ``kind`` in ``workdir`` on the first free instance index.
+
+    ``home`` is ``LAT,LON,ALT[,HDG]``; ``speedup`` and ``defaults`` (an extra .parm file) are
+    ArduCopter only. Returns once the process runs; readiness (GPS, EKF) is the caller's to await.
+    """
+    folder = sitl_dir(kind)
+    if folder is None:
+        raise FileNotFoundError(skip_reason(kind))
+    index = int(os.environ.get(INSTANCE_BASE_ENV, "0"))
+    while not _free(*_ports(kind, index)):
+        index += 1
+        if index > _MAX_INSTANCE[kind]:
+            raise RuntimeError(f"no free {kind} SITL instance index (ports of 0..{index - 1} busy)")
+    workdir.mkdir(parents=True, exist_ok=True)
+    cmd = [str(_script(kind, folder, workdir)), str(index), "--dir", str(workdir / "run")]
+    if home is not None:
+        cmd += ["--home", home]
+    if speedup is not None:
+        cmd += ["--speedup", str(speedup)]
+    if defaults is not None:
+        cmd += ["--defaults", str(defaults)]
+    with (workdir / "sitl.log").open("wb") as out:
+        process = subprocess.Popen(
+            cmd, stdout=out, stderr=subprocess.STDOUT, start_new_session=True
+        )
+    instance = SitlInstance(kind, index, process, workdir)
+    if kind == "arducopter":
+        _await_tcp(instance, 5760 + 10 * index)
+    return instance
+
+
+def _script(kind: Kind, folder: Path, workdir: Path) -> Path:
+    """The start script to run. PX4's start-up scripts call its modules through ``px4-NAME``
+    aliases (symlinks to ``px4``) beside the binary; where a copy of the folder lost them (plain
+    3-byte files), a private copy of the folder with the aliases restored is used instead."""
+    if kind == "arducopter" or os.access(folder / "bin" / "px4-param", os.X_OK):
+        return folder / _SCRIPT[kind]
+    private = workdir / "px4"
+    (private / "bin").mkdir(parents=True, exist_ok=True)
+    shutil.copy2(folder / "bin" / "px4", private / "bin" / "px4")
+    for alias in (folder / "bin").glob("px4-*"):
+        target = private / "bin" / alias.name
+        if alias.name.endswith(".sh"):
+            shutil.copy2(alias, target)
+        elif not target.exists():
+            target.symlink_to("px4")
+    for name in ("etc", _SCRIPT[kind]):
+        if not (private / name).exists():
+            (private / name).symlink_to(folder / name)
+    return private / _SCRIPT[kind]
+
+
+def _await_tcp(instance: SitlInstance, port: int, timeout: float = 30.0) -> None:
+    """Wait until the instance listens on ``port`` (seen as the port turning busy: a probing
+    connection would take the autopilot's one client slot on that serial port)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if instance.process.poll() is not None:
+            raise RuntimeError(f"{instance.kind} SITL exited: {instance.log()}")
+        if not _free([port], []):
+            return
+        time.sleep(0.2)
+    instance.stop()
+    raise RuntimeError(
+        f"{instance.kind} SITL did not open TCP {port} in {timeout} s: {instance.log()}"
+    )
