@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from mdm_montecarlo import metrics
+from mdm_core import metrics
 from mdm_montecarlo.reference import run_reference
 from mdm_montecarlo.runner import MissionResults, run_missions
 from mdm_montecarlo.variants import with_method

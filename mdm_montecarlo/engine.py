@@ -4,9 +4,9 @@ Between two events a vehicle flies a straight line at constant speed (the tau-la
 a 0.33 s loop shifts a 4 km leg by under 7 m; ``reference.py`` checks the result against dt-stepping
 of the full dynamics). An event is the earliest of: the waypoint is reached, the active sensor's
 disc around an eligible target is entered (solved in closed form by
-``sim_vehicle_stub.world.first_entry_time``, piece by piece between the nodes of a dynamic
+``mdm_core.world.first_entry_time``, piece by piece between the nodes of a dynamic
 target's path grid), the level's decaying index runs out, the run's stop time. The policy
-(companion.search) is stepped at every event with the sensor contacts the world reports, so a
+(mdm_core.search) is stepped at every event with the sensor contacts the world reports, so a
 lane is exactly what a live vehicle would do, only with time jumping from event to event. Which
 targets a vehicle remembers confirming (its memory) is checked at the start of each leg.
 
@@ -24,12 +24,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from companion.search import Observation, SearchPolicy
-from companion.search.from_profile import policy_config
-from companion.search.planar import length
+from mdm_core.search import Observation, SearchPolicy
+from mdm_core.search.from_profile import policy_config
+from mdm_core.search.planar import length
+from mdm_core.world import Scenario, TargetTracks, first_entry_time
 from mdm_montecarlo.remembered import RememberedTargets
 from mdm_profiles import MissionProfile
-from sim_vehicle_stub.world import Scenario, TargetTracks, first_entry_time
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

@@ -8,7 +8,7 @@ fixed step ``dt``:
 2. dynamics: ``lag_step`` (exact tau-lag discretisation, reference held over the step) with
    ``fleet.tau``;
 3. the waypoint counts as reached within ``fleet.acceptance_radius``;
-4. sensors: ``sim_vehicle_stub.world.contacts`` with the active sensor of each lane
+4. sensors: ``mdm_core.world.contacts`` with the active sensor of each lane
    (``policy.sensor_radius``, ``policy.uses_confirmation_sensor``) against the targets that
    have appeared (``appear_times <= t``), at the targets' positions at t;
 5. the same ``SearchPolicy`` is stepped for every lane, every step.
@@ -29,12 +29,12 @@ import math
 
 import numpy as np
 
-from companion.search import Observation, SearchPolicy
-from companion.search.from_profile import policy_config
+from mdm_core.dynamics import LagModel, lag_step, pursuit_reference
+from mdm_core.search import Observation, SearchPolicy
+from mdm_core.search.from_profile import policy_config
+from mdm_core.world import Scenario, contacts
 from mdm_montecarlo.engine import BlockResult, block_rngs
 from mdm_profiles import MissionProfile
-from sim_vehicle_stub.dynamics import LagModel, lag_step, pursuit_reference
-from sim_vehicle_stub.world import Scenario, contacts
 
 DEFAULT_DT = 0.1
 

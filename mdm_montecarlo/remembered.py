@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from companion.search import SearchPolicy
-from companion.search.policy import PolicyState
-from sim_vehicle_stub.world import TargetTracks
+from mdm_core.search import SearchPolicy
+from mdm_core.search.policy import PolicyState
+from mdm_core.world import TargetTracks
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_montecarlo import metrics
+from mdm_core import metrics
 from mdm_montecarlo.engine import BLOCK_RUNS, BlockResult, run_block
 from mdm_montecarlo.social_engine import SWARM_KINDS, run_swarm_block
 from mdm_profiles import MissionProfile

@@ -2,16 +2,16 @@
 
 Unlike MDM, particles share state, so a run is stepped as a whole at the swarm's update interval,
 batched over (runs, vehicles). One iteration (the per-particle parts are
-companion.search.swarm_iteration, shared with the live companion):
+mdm_core.search.swarm_iteration, shared with the live companion):
 
 1. every vehicle with a best to follow (its own or one it heard of, fitness > 0) takes the PSO
-   step of its variant (companion.search.pso); the others fly the single-sensor exploration of
-   the profile's level 1 (companion.search.SearchPolicy, US with delta_1 by default);
+   step of its variant (mdm_core.search.pso); the others fly the single-sensor exploration of
+   the profile's level 1 (mdm_core.search.SearchPolicy, US with delta_1 by default);
 2. the step is flown as a straight segment at most speed x interval long (clipped to the area);
    a real target whose r_2 disc the segment enters is confirmed (closed form,
-   sim_vehicle_stub.world.first_entry_time) and becomes known to that vehicle;
+   mdm_core.world.first_entry_time) and becomes known to that vehicle;
 3. each vehicle reads its signal sensor (exp(-d / r) within the signal radius, as
-   sim_vehicle_stub.world.contacts reads it) and keeps the strongest signal of a target it does
+   mdm_core.world.contacts reads it) and keeps the strongest signal of a target it does
    not know to be confirmed as its fitness; personal bests from confirmed targets are forgotten;
 4. each vehicle publishes (personal best, current fitness, targets it knows confirmed); a message
    reaches each other vehicle ``message_delay`` seconds later unless lost (``message_drop``).
@@ -39,20 +39,20 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from companion.search import SearchPolicy
-from companion.search.from_profile import policy_config, swarm_config
-from companion.search.planar import length
-from companion.search.pso import Best, forget, random_informants, signal_fitness
-from companion.search.swarm_iteration import (
+from mdm_core.search import SearchPolicy
+from mdm_core.search.from_profile import policy_config, swarm_config
+from mdm_core.search.planar import length
+from mdm_core.search.pso import Best, forget, random_informants, signal_fitness
+from mdm_core.search.swarm_iteration import (
     choose_move,
     explore,
     read_into_best,
     refresh_informants,
 )
+from mdm_core.world import Scenario, TargetTracks, first_entry_time
+from mdm_core.world.sensors import THRESHOLD
 from mdm_montecarlo.engine import BlockResult, block_rngs
 from mdm_profiles import MissionProfile
-from sim_vehicle_stub.world import Scenario, TargetTracks, first_entry_time
-from sim_vehicle_stub.world.sensors import THRESHOLD
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -91,7 +91,7 @@ class _Sensors:
 
     def squared_gaps(self, position: FloatArray, t: float) -> FloatArray:
         """Squared distances (runs, vehicles, targets) from ``position`` (runs, vehicles, 2) to
-        the targets at time t, rounded as sim_vehicle_stub.world.contacts rounds them."""
+        the targets at time t, rounded as mdm_core.world.contacts rounds them."""
         target = self.tracks.positions(self.runs, np.full(len(self.runs), t))
         dx = target[:, None, :, 0] - position[:, :, None, 0]
         dy = target[:, None, :, 1] - position[:, :, None, 1]
@@ -113,7 +113,7 @@ class _Sensors:
         (runs, vehicles, 2), flown from t to t + dt, enter: ``first`` and ``known`` (runs,
         vehicles, targets) are updated in place. ``gaps``: squared_gaps(position, t).
 
-        The closed form (sim_vehicle_stub.world.first_entry_time) is solved only for the
+        The closed form (mdm_core.world.first_entry_time) is solved only for the
         vehicle x target pairs that can meet in the interval: those no farther apart than
         confirm_radius + the longest step + the farthest a target moves in dt.
         """
@@ -141,10 +141,10 @@ class _Sensors:
         known[run, lane, index] = True
 
     def fitness(self, gaps: FloatArray, t: float, known: BoolArray) -> tuple[FloatArray, IntArray]:
-        """Every vehicle's fitness and its source (companion.search.pso.signal_fitness) at time
+        """Every vehicle's fitness and its source (mdm_core.search.pso.signal_fitness) at time
         t, ``gaps`` = squared_gaps(position, t): the signal sensor's strongest exp(-d / R) of a
         present target within R that the vehicle does not know to be confirmed (as
-        sim_vehicle_stub.world.contacts reads it). Strengths are computed only for the pairs
+        mdm_core.world.contacts reads it). Strengths are computed only for the pairs
         nearer than R (a superset from the squared distances)."""
         radius = self.signal_radius
         run, lane, index = _nonzero(gaps < radius * radius * _NEAR)
@@ -202,7 +202,7 @@ class _Inbox:
         known[runs] |= np.matmul(got.astype(np.float32), message.known[runs]) > 0
 
     def forget(self, known: BoolArray) -> None:
-        """companion.search.pso.forget for the heard bests, in place: a receiver drops the
+        """mdm_core.search.pso.forget for the heard bests, in place: a receiver drops the
         bests whose source target it knows (``known`` (runs, receivers, targets)) to be
         confirmed. Only the bests that have a source are looked at."""
         heard = self.heard

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
-from mdm_montecarlo import metrics
+from mdm_core import metrics
 from mdm_montecarlo.runner import MissionResults
 from mdm_montecarlo.study import TNC_TOLERANCE, TS_TOLERANCE, Case, Row
 

@@ -15,10 +15,11 @@ from typing import Any
 import numpy as np
 
 from mavlink_signing import SigningState
+from mdm_core.dynamics import LagModel
+from mdm_core.world import Scenario
 from sim_vehicle_stub.clock import SimClock
 from sim_vehicle_stub.commands import CommandHandler
 from sim_vehicle_stub.config import EmulatorConfig
-from sim_vehicle_stub.dynamics import LagModel
 from sim_vehicle_stub.encoder import Encoder
 from sim_vehicle_stub.endpoints import GcsEndpoint, TcpServer, TokenBucket, UdpEndpoint
 from sim_vehicle_stub.events import EventLog
@@ -40,7 +41,6 @@ from sim_vehicle_stub.personas.base import Behaviour
 from sim_vehicle_stub.sensing import Reading, SensorWorld
 from sim_vehicle_stub.telemetry import Telemetry
 from sim_vehicle_stub.vehicle import Vehicle
-from sim_vehicle_stub.world import Scenario
 
 log = logging.getLogger(__name__)
 _RCVBUF = 1 << 20

@@ -8,9 +8,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from mdm_core.world import Area
 from sim_vehicle_stub.personas.base import Action, Behaviour
 from sim_vehicle_stub.vehicle import Vehicle
-from sim_vehicle_stub.world import Area
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

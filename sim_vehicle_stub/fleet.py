@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from sim_vehicle_stub.dynamics import LagModel, lag_step, pursuit_reference
+from mdm_core.dynamics import LagModel, lag_step, pursuit_reference
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from mdm_core.world import Scenario, contacts
 from sim_vehicle_stub.events import EventLog
-from sim_vehicle_stub.world import Scenario, contacts
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]

@@ -16,9 +16,9 @@ from pathlib import Path
 from companion.fleet.progress import progress_line, read_progress
 from companion.fleet.scoring import EMULATOR_EVENTS, FleetResult, score
 from companion.link.factory import check_signing_support
-from companion.search.pso import VARIANTS
 from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
 from mavlink_signing import load_signing_key
+from mdm_core.search.pso import VARIANTS
 from mdm_profiles import MissionProfile, load_profile
 
 log = logging.getLogger(__name__)

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from companion.telemetry.mission_log import read_records
-from mdm_montecarlo.metrics import confirmed_within, team_times, time_to_all
+from mdm_core.metrics import confirmed_within, team_times, time_to_all
 from mdm_profiles import MissionProfile
 
 

@@ -9,7 +9,7 @@ from typing import Protocol
 from companion.mission.config import MissionConfig
 from companion.mission.search_core import Decision, SearchCore
 from companion.mission.swarm_core import SwarmCore, SwarmExchange
-from companion.search.pso import VARIANTS, FloatArray
+from mdm_core.search.pso import VARIANTS, FloatArray
 
 
 class MissionCore(Protocol):

@@ -7,9 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from companion.search import Observation, SearchPolicy
-from companion.search.from_profile import policy_config, sensor_for_level
-from companion.search.policy import PolicyState
+from mdm_core.search import Observation, SearchPolicy
+from mdm_core.search.from_profile import policy_config, sensor_for_level
+from mdm_core.search.policy import PolicyState
 from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]

@@ -1,9 +1,9 @@
 """The live vehicle's adapter to the swarm baselines (PSO, SPSO, ARPSO): a particle of one.
 
 Same interface as SearchCore (what VehicleMission calls). Every ``policy.swarm.update_interval``
-vehicle seconds it runs one iteration of companion.search.swarm_iteration, the code the
+vehicle seconds it runs one iteration of mdm_core.search.swarm_iteration, the code the
 Monte-Carlo engine runs: the fitness is read from the confirmation sensor's SENS_SIG
-(companion.search.signal_reading), the peers' bests come from ``peers`` (MQTT, with the
+(mdm_core.search.signal_reading), the peers' bests come from ``peers`` (MQTT, with the
 profile's delay and loss), and the move is flown as a waypoint ``speed x interval`` away.
 Confirmations are the confirmation sensor's contacts (DEBUG_VECT 'CNF'), one per target; a
 target a peer reported confirmed is not confirmed again (as in the engine).
@@ -18,9 +18,9 @@ from typing import Any, Protocol
 import numpy as np
 
 from companion.mission.search_core import Decision
-from companion.search import SearchPolicy
-from companion.search.from_profile import policy_config, swarm_config
-from companion.search.pso import (
+from mdm_core.search import SearchPolicy
+from mdm_core.search.from_profile import policy_config, swarm_config
+from mdm_core.search.pso import (
     Best,
     BoolArray,
     FloatArray,
@@ -28,8 +28,8 @@ from companion.search.pso import (
     random_informants,
     swarm_best,
 )
-from companion.search.signal_reading import attribute, fitness_from_signal
-from companion.search.swarm_iteration import (
+from mdm_core.search.signal_reading import attribute, fitness_from_signal
+from mdm_core.search.swarm_iteration import (
     choose_move,
     explore,
     read_into_best,

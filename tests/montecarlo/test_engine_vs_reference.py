@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from mdm_montecarlo import metrics
+from mdm_core import metrics
 from mdm_montecarlo.engine import run_block
 from mdm_montecarlo.reference import run_reference, run_reference_block
 from mdm_montecarlo.runner import run_missions

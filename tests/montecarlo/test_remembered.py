@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from companion.search import SearchPolicy
-from companion.search.from_profile import policy_config
+from mdm_core.search import SearchPolicy
+from mdm_core.search.from_profile import policy_config
+from mdm_core.world import Scenario
 from mdm_montecarlo.remembered import RememberedTargets
 from mdm_profiles import builtin_profile
-from sim_vehicle_stub.world import Scenario
 
 RUNS = 40
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from companion.search.distributions import Brownian, Levy, Uniform
-from companion.search.levels import DecayIndex, Level, PolicyConfig
+from mdm_core.search.distributions import Brownian, Levy, Uniform
+from mdm_core.search.levels import DecayIndex, Level, PolicyConfig
 
 
 def test_index_starts_at_gamma_plus_max_minus_min() -> None:

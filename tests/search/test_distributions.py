@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from companion.search.distributions import (
+from mdm_core.search.distributions import (
     Brownian,
     Levy,
     Sampler,

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from companion.search.distributions import Brownian, Levy, Uniform
-from companion.search.from_profile import policy_config, sampler, sensor_for_level
+from mdm_core.search.distributions import Brownian, Levy, Uniform
+from mdm_core.search.from_profile import policy_config, sampler, sensor_for_level
 from mdm_profiles import builtin_profile
 from mdm_profiles.schema import DistributionParams, LevelSpec, PolicySpec
 

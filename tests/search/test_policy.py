@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from numpy.typing import ArrayLike
 
-from companion.search.distributions import Brownian, Levy, Uniform
-from companion.search.levels import DecayIndex, Level, OutOfArea, PolicyConfig, StepLaw
-from companion.search.policy import Observation, PolicyState, SearchPolicy
+from mdm_core.search.distributions import Brownian, Levy, Uniform
+from mdm_core.search.levels import DecayIndex, Level, OutOfArea, PolicyConfig, StepLaw
+from mdm_core.search.policy import Observation, PolicyState, SearchPolicy
 
 AREA = 20_000.0
 R1, R2 = 2000.0, 400.0

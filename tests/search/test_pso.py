@@ -1,11 +1,11 @@
-"""Update rules of the social-cognitive baselines (companion.search.pso)."""
+"""Update rules of the social-cognitive baselines (mdm_core.search.pso)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from companion.search.pso import (
+from mdm_core.search.pso import (
     Best,
     SwarmConfig,
     arpso_inertia,

@@ -1,10 +1,10 @@
-"""Batched gathers of companion.search.pso against plain per-particle loops."""
+"""Batched gathers of mdm_core.search.pso against plain per-particle loops."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from companion.search.pso import Best, forget, random_informants, swarm_best
+from mdm_core.search.pso import Best, forget, random_informants, swarm_best
 
 
 def _random_best(rng: np.random.Generator, shape: tuple[int, ...], targets: int) -> Best:

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mdm_core.world.area import Area
+from mdm_core.world.scenario import Scenario
 from mdm_profiles import builtin_profile
-from sim_vehicle_stub.world.area import Area
-from sim_vehicle_stub.world.scenario import Scenario
 
 
 def test_area_with_nonpositive_extent_is_rejected() -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim_vehicle_stub.dynamics import LagModel, lag_step, pursuit_reference
+from mdm_core.dynamics import LagModel, lag_step, pursuit_reference
 
 TAU = 0.33
 

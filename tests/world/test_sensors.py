@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim_vehicle_stub.world.sensors import THRESHOLD, Sensor, contacts, first_entry_time
+from mdm_core.world.sensors import THRESHOLD, Sensor, contacts, first_entry_time
 
 
 def _contacts_at(

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from sim_vehicle_stub.world.area import Area
-from sim_vehicle_stub.world.targets import RandomWalk, TargetSpec, TargetTracks, WalkBoundary
+from mdm_core.world.area import Area
+from mdm_core.world.targets import RandomWalk, TargetSpec, TargetTracks, WalkBoundary
 
 BIG = Area(1e7, 1e7)
 

@@ -9,7 +9,7 @@ Monte-Carlo engine. Payload (JSON)::
 
 ``known`` are the positions of the targets the sender knows to be confirmed (live, a target
 has no index: it is where it was confirmed). ``heard(now)`` returns the table that
-``companion.search.pso.swarm_best`` takes (one slot per vehicle of the fleet, the own slot
+``mdm_core.search.pso.swarm_best`` takes (one slot per vehicle of the fleet, the own slot
 empty), so the decision core never touches the network. The degradation knob of the
 Monte-Carlo engine acts on the receiving side: a report is lost with probability ``drop``
 (seeded) and used only ``delay`` vehicle seconds after the sender's time stamp (the fleet
@@ -28,8 +28,8 @@ from dataclasses import dataclass, field
 import aiomqtt
 import numpy as np
 
-from companion.search.pso import Best
 from companion.telemetry.mqtt.channel import MqttChannel, Received
+from mdm_core.search.pso import Best
 
 log = logging.getLogger(__name__)
 

@@ -13,7 +13,7 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from companion.search.planar import length
+from mdm_core.search.planar import length
 
 FloatArray = NDArray[np.float64]
 DistributionName = Literal["LS", "BS", "US"]

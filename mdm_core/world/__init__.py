@@ -1,9 +1,9 @@
 """The search world: area, targets (fixed, pop-up, dynamic, false) and the two sensors, batched."""
 
-from sim_vehicle_stub.world.area import Area, BoundaryRule
-from sim_vehicle_stub.world.scenario import Scenario
-from sim_vehicle_stub.world.sensors import Sensor, contacts, first_entry_time
-from sim_vehicle_stub.world.targets import RandomWalk, TargetSpec, TargetTracks
+from mdm_core.world.area import Area, BoundaryRule
+from mdm_core.world.scenario import Scenario
+from mdm_core.world.sensors import Sensor, contacts, first_entry_time
+from mdm_core.world.targets import RandomWalk, TargetSpec, TargetTracks
 
 __all__ = [
     "Area",

@@ -30,7 +30,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from companion.search.planar import length
+from mdm_core.search.planar import length
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

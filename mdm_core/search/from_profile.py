@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from companion.search.distributions import Brownian, Levy, Sampler, Uniform
-from companion.search.levels import DecayIndex, Level, PolicyConfig
-from companion.search.pso import VARIANTS, SwarmConfig
+from mdm_core.search.distributions import Brownian, Levy, Sampler, Uniform
+from mdm_core.search.levels import DecayIndex, Level, PolicyConfig
+from mdm_core.search.pso import VARIANTS, SwarmConfig
 from mdm_profiles import MissionProfile
 from mdm_profiles.schema import DistributionParams, LevelSpec
 

@@ -18,9 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from companion.search.distributions import directions, symmetric_stable
-from companion.search.levels import PolicyConfig
-from companion.search.planar import length
+from mdm_core.search.distributions import directions, symmetric_stable
+from mdm_core.search.levels import PolicyConfig
+from mdm_core.search.planar import length
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

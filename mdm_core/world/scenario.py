@@ -6,10 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mdm_core.world.area import Area
+from mdm_core.world.sensors import Sensor
+from mdm_core.world.targets import RandomWalk, TargetSpec, TargetTracks
 from mdm_profiles import MissionProfile
-from sim_vehicle_stub.world.area import Area
-from sim_vehicle_stub.world.sensors import Sensor
-from sim_vehicle_stub.world.targets import RandomWalk, TargetSpec, TargetTracks
 
 
 @dataclass(frozen=True)

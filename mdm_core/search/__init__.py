@@ -1,8 +1,8 @@
 """Pure MDM search decision core: distributions, levels, the batched policy."""
 
-from companion.search.distributions import Brownian, Levy, Sampler, Uniform, directions
-from companion.search.levels import DecayIndex, Level, PolicyConfig
-from companion.search.policy import Observation, PolicyState, SearchPolicy, StepOutcome
+from mdm_core.search.distributions import Brownian, Levy, Sampler, Uniform, directions
+from mdm_core.search.levels import DecayIndex, Level, PolicyConfig
+from mdm_core.search.policy import Observation, PolicyState, SearchPolicy, StepOutcome
 
 __all__ = [
     "Brownian",

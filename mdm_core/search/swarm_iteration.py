@@ -15,9 +15,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from companion.search.planar import length
-from companion.search.policy import SearchPolicy
-from companion.search.pso import (
+from mdm_core.search.planar import length
+from mdm_core.search.policy import SearchPolicy
+from mdm_core.search.pso import (
     Best,
     BoolArray,
     FloatArray,

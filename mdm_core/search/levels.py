@@ -7,7 +7,7 @@ from typing import Literal
 
 import numpy as np
 
-from companion.search.distributions import Sampler
+from mdm_core.search.distributions import Sampler
 
 StepLaw = Literal["fixed", "levy"]
 OutOfArea = Literal["reflect", "clip", "redraw"]

@@ -3,7 +3,7 @@ came from.
 
 SENS_SIG (docs/protocol.md, "Sensors") is the strongest exp(-d / r) of the active sensor over
 every present target it can see, with no range limit and confirmed targets included; r is that
-sensor's radius. The engine's fitness (companion.search.pso.signal_fitness) is exp(-d / R) of the
+sensor's radius. The engine's fitness (mdm_core.search.pso.signal_fitness) is exp(-d / R) of the
 nearest target within the swarm's signal radius R that the particle does not know to be
 confirmed. Inverting SENS_SIG gives d, the distance to the nearest target; live, a target has no
 index, only the position where it was confirmed, so a reading or a best is attributed to a known
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from companion.search.pso import Best, FloatArray
+from mdm_core.search.pso import Best, FloatArray
 
 
 def distance_from_strength(strength: FloatArray, radius: float) -> FloatArray:
@@ -46,7 +46,7 @@ def fitness_from_signal(
 
 def attribute(best: Best, signal_radius: float, known: FloatArray, tolerance: float) -> Best:
     """``best`` with ``source`` set to the index in ``known`` (k, 2) of the target at the
-    distance its fitness says (-1: none), for companion.search.pso.forget."""
+    distance its fitness says (-1: none), for mdm_core.search.pso.forget."""
     if len(known) == 0:
         return Best(best.position, best.fitness, np.full_like(best.source, -1))
     d = distance_from_strength(best.fitness, signal_radius)

@@ -16,7 +16,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from sim_vehicle_stub.world.area import Area
+from mdm_core.world.area import Area
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
