@@ -15,7 +15,7 @@ from companion.fleet.runner import FleetOptions, run_fleet
 from companion.link.messages import Heartbeat
 from companion.link.pymavlink_link import PymavlinkLink
 from mavlink_signing import passphrase_to_secret
-from sim_vehicle_stub.testing import make_config, running_emulator
+from tests.emulator_harness import make_config, running_emulator
 
 PASSPHRASE = "companion-signing-test"
 

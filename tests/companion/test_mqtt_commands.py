@@ -16,7 +16,7 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from companion.telemetry.mqtt.testing import Subscriber, publish, wait_until
+from tests.mqtt_harness import Subscriber, publish, wait_until
 
 PROFILE = """
 name: mqtt-command-test

@@ -12,7 +12,7 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from companion.telemetry.mqtt.testing import Subscriber, wait_until
+from tests.mqtt_harness import Subscriber, wait_until
 
 PROFILE = """
 name: mqtt-fleet-test

@@ -14,7 +14,7 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from companion.telemetry.mqtt.testing import Broker, Subscriber, publish, wait_until
+from tests.mqtt_harness import Broker, Subscriber, publish, wait_until
 
 # False targets all over the area: detections, level switches and fallbacks keep coming,
 # and the one real target (50 m confirmation radius, in a corner) is not found in the test.

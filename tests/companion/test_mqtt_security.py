@@ -13,7 +13,7 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from companion.telemetry.mqtt.testing import Broker, Subscriber, publish, wait_until
+from tests.mqtt_harness import Broker, Subscriber, publish, wait_until
 
 ACL = Path(__file__).resolve().parents[2] / "docker" / "mosquitto" / "acl"
 PROFILE = """

@@ -11,8 +11,8 @@ import numpy as np
 from companion.telemetry.mqtt.channel import MqttChannel
 from companion.telemetry.mqtt.settings import MqttSettings
 from companion.telemetry.mqtt.swarm_peers import PeerReport, SwarmPeers
-from companion.telemetry.mqtt.testing import Broker, publish
 from mdm_core.search.pso import Best, swarm_best
+from tests.mqtt_harness import Broker, publish
 
 PREFIX = "mdm/test"
 

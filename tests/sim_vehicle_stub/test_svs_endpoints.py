@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from sim_vehicle_stub.testing import Client, make_config, mavutil, running_emulator
+from tests.emulator_harness import Client, make_config, mavutil, running_emulator
 
 
 @pytest.mark.timeout(60)

@@ -8,7 +8,7 @@ from typing import Any
 
 import pytest
 
-from sim_vehicle_stub.testing import Client, make_config, running_emulator
+from tests.emulator_harness import Client, make_config, running_emulator
 
 PX4_HOLD, PX4_RTL, PX4_OFFBOARD = 0x3040000, 0x5040000, 0x60000
 AP_GUIDED, AP_RTL = 4, 6

@@ -18,7 +18,7 @@ from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from sim_vehicle_stub.framing import FrameDecoder, LinkStats
 from sim_vehicle_stub.fuzz import malformed_corpus
-from sim_vehicle_stub.testing import TAU, Client, fitted_tau, make_config, running_emulator
+from tests.emulator_harness import TAU, Client, fitted_tau, make_config, running_emulator
 
 log = logging.getLogger(__name__)
 BASE = 24840

@@ -7,7 +7,7 @@ import time
 
 import pytest
 
-from sim_vehicle_stub.testing import Client, make_config, running_emulator
+from tests.emulator_harness import Client, make_config, running_emulator
 
 PX4_OFFBOARD = 0x60000
 

@@ -12,7 +12,7 @@ from mavsdk.asyncio import Configuration, Mavsdk
 from mavsdk.asyncio.plugins.action import ActionAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
-from sim_vehicle_stub.testing import make_config, running_emulator
+from tests.emulator_harness import make_config, running_emulator
 
 VEHICLE_PORT = 24820
 CLIENT_PORT = 24830

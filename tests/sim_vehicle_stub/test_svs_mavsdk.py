@@ -16,7 +16,7 @@ from mavsdk.asyncio.plugins.offboard import OffboardAsync, PositionNedYaw, Veloc
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from sim_vehicle_stub.mavlink import dialect
-from sim_vehicle_stub.testing import TAU, fitted_tau, make_config, running_emulator, step_samples
+from tests.emulator_harness import TAU, fitted_tau, make_config, running_emulator, step_samples
 
 logger = logging.getLogger(__name__)
 N = 12

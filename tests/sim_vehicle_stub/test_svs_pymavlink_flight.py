@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from sim_vehicle_stub.testing import (
+from tests.emulator_harness import (
     TAU,
     Client,
     fitted_tau,

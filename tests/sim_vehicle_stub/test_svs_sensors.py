@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 
 from mdm_profiles import builtin_profile
-from sim_vehicle_stub.testing import Client, make_config, running_emulator
+from tests.emulator_harness import Client, make_config, running_emulator
 
 PROFILE = builtin_profile("paper-fixed-false")  # T3 (index 2) is false
 R_DET, R_CNF = 2000.0, 400.0

@@ -13,7 +13,7 @@ import pytest
 
 from mavlink_signing import passphrase_to_secret
 from sim_vehicle_stub.cli import main as sim_vehicle_main
-from sim_vehicle_stub.testing import Client, make_config, running_emulator
+from tests.emulator_harness import Client, make_config, running_emulator
 
 log = logging.getLogger(__name__)
 KEY = passphrase_to_secret("mdm-signing-test")

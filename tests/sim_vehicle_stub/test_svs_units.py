@@ -19,7 +19,7 @@ from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.params import bytewise_to_float, float_to_bytewise
 from sim_vehicle_stub.personas import ProfileFacts, create_persona, persona_names
 from sim_vehicle_stub.personas.base import Action
-from sim_vehicle_stub.testing import make_config
+from tests.emulator_harness import make_config
 
 FACTS = ProfileFacts(speed=20.0, tau=0.33, sensor_radii=(2000.0, 400.0), system_id=3)
 

@@ -1,4 +1,4 @@
-"""Test harness (for tests and benchmarks): an in-process emulator on its own event-loop thread, and a pymavlink client."""
+"""Test harness: an in-process emulator on its own event-loop thread, and a pymavlink client."""
 
 from __future__ import annotations
 
