@@ -20,11 +20,12 @@ from companion.link.factory import BACKENDS, Backend, make_link
 from companion.mission import MissionConfig, VehicleMission
 from companion.mission.core_for import core_for, is_swarm
 from companion.mission.swarm_core import SwarmCore
+from companion.sensors.factory import SENSOR_SOURCES, DetectorFeed, make_sensor_source
 from companion.telemetry import EventSink, MissionLog, read_log
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
 from companion.telemetry.tee_sink import TeeSink
 from mavlink_signing import ENV_VAR, load_signing_key
-from mdm_profiles import ProfileError, load_profile
+from mdm_profiles import ProfileError, SensorSourceKind, load_profile
 from mdm_profiles.mqtt_spec import MqttSpec
 
 log = logging.getLogger("companion")
@@ -45,6 +46,8 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--end-action", choices=("rtl", "land"), help="default: profile site, else rtl")
     p.add_argument("--land-wait", type=float, default=600.0, help="vehicle s to wait to land")
     p.add_argument("--no-tlog", action="store_true", help="do not write the .tlog")
+    p.add_argument("--sensor-source", choices=SENSOR_SOURCES,
+                   help="where readings come from (default: the profile's sensor_source.kind)")  # fmt: skip
     p.add_argument("--signing-key-file", type=Path,
                    help=f"MAVLink 2 signing passphrase file (default: ${ENV_VAR}; neither: off)")  # fmt: skip
     p.add_argument("-v", "--verbose", action="store_true")
@@ -108,8 +111,15 @@ def run_command(args: argparse.Namespace) -> int:
     mqtt = mqtt_spec(args, profile.mqtt)
     if mqtt is None and is_swarm(config):
         core_for(config, lambda: 0.0, None)  # raises: the swarm kinds need a broker
+    sensor_source: SensorSourceKind = args.sensor_source or profile.sensor_source.kind
+    if sensor_source == "mqtt" and mqtt is None:
+        raise ValueError(
+            "sensor source 'mqtt' reads detections from a broker; configure one "
+            "(--mqtt HOST[:PORT] or the profile's mqtt: section)"
+        )
     signing_key = load_signing_key(args.signing_key_file)
-    fly = _fly(config, url, args.backend, tlog=not args.no_tlog, mqtt=mqtt, signing_key=signing_key)
+    fly = _fly(config, url, args.backend, tlog=not args.no_tlog, mqtt=mqtt, signing_key=signing_key,
+               sensor_source=sensor_source)  # fmt: skip
     if args.backend == "mavsdk":
         reason = _run_mavsdk(fly)
         print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
@@ -141,7 +151,7 @@ def _dump_tasks() -> None:
 
 async def _fly(
     config: MissionConfig, url: str, backend: Backend, *, tlog: bool, mqtt: MqttSpec | None,
-    signing_key: bytes | None,
+    signing_key: bytes | None, sensor_source: SensorSourceKind,
 ) -> str:  # fmt: skip
     recovered = read_log(config.mission_log_path())
     if recovered.confirmed:
@@ -171,8 +181,15 @@ async def _fly(
         peers = SwarmPeers(telemetry.channel, telemetry.topics.prefix, config.vehicle,
                            config.profile.fleet.vehicles, delay=swarm.message_delay,
                            drop=swarm.message_drop, seed=config.seed)  # fmt: skip
+    feed = None
+    if telemetry is not None:
+        feed = DetectorFeed(telemetry.channel, telemetry.topics.detections)
+    sensors = make_sensor_source(sensor_source, profile=config.profile, seed=config.seed,
+                                 link=link, feed=feed)  # fmt: skip
+    log.info("vehicle %d: sensor source %s", config.vehicle, sensor_source)
     mission = VehicleMission(config, link, sink, recovered=recovered,
-                             fence=fence_for(config.profile), peers=peers)  # fmt: skip
+                             fence=fence_for(config.profile), peers=peers,
+                             sensors=sensors)  # fmt: skip
     if isinstance(mission.core, SwarmCore):
         mission.core.emit = mission.emit  # swarm_follow events in the mission log
     loop = asyncio.get_running_loop()

@@ -20,6 +20,7 @@ from mdm_profiles.schema import (
     SensorSpec,
     TargetEntry,
 )
+from mdm_profiles.sensor_source import SensorSourceKind, SensorSourceSpec
 
 __all__ = [
     "DecayIndexSpec",
@@ -32,6 +33,8 @@ __all__ = [
     "PolicySpec",
     "ProfileError",
     "RandomWalkSpec",
+    "SensorSourceKind",
+    "SensorSourceSpec",
     "SensorSpec",
     "TargetEntry",
     "builtin_profile",

@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from mdm_profiles.mqtt_spec import MqttSpec
+from mdm_profiles.sensor_source import SensorSourceSpec
 from mdm_profiles.swarm import SwarmSpec
 
 
@@ -162,6 +163,9 @@ class MissionProfile(_Strict):
     fleet: FleetSpec = FleetSpec()
     sensors: list[SensorSpec] = Field(
         min_length=1, description="Detection sensors, then confirmation."
+    )
+    sensor_source: SensorSourceSpec = Field(
+        default=SensorSourceSpec(), description="Where the companion's readings come from."
     )
     policy: PolicySpec
     mission: MissionSpec = MissionSpec()

@@ -73,18 +73,18 @@ class Emulator:
         self.config = config
         profile = config.profile
         n = config.fleet_size
-        rng = np.random.default_rng(config.seed)
         self.scenario = Scenario.from_profile(profile)
-        if config.start_positions is not None:
-            start = np.array(config.start_positions, dtype=float).reshape(n, 2)
-        else:
-            start = self.scenario.start_positions(1, n, profile.fleet.start, rng)[0]
+        given = config.start_positions
+        start, tracks = self.scenario.live_run(
+            config.seed, n, profile.fleet.start,
+            None if given is None else np.array(given, dtype=float).reshape(n, 2),
+        )  # fmt: skip
         self.clock = SimClock(config.speedup)
         self.events = EventLog(config.events)
         self.fleet = Fleet(start, LagModel(profile.fleet.tau), profile.fleet.speed)
         o = profile.origin
         self.geo = GeoFrame(o.lat, o.lon, o.alt)
-        self.sensors = SensorWorld(self.scenario, n, rng, self.events)
+        self.sensors = SensorWorld(self.scenario, tracks, n, self.events)
         self.telemetry = Telemetry(self.fleet, self.geo, self.clock, int(time.time() * 1e6))
         scale = config.speedup if (config.scale_timeouts and config.speedup) else 1.0
         self.nodes: list[VehicleNode] = []

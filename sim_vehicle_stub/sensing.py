@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_core.world import Scenario, contacts
+from mdm_core.world import Scenario, TargetTracks, contacts
 from sim_vehicle_stub.events import EventLog
 
 FloatArray = NDArray[np.float64]
@@ -34,10 +34,10 @@ class SensorWorld:
     """Targets of one run of the scenario and every vehicle's contact history."""
 
     def __init__(
-        self, scenario: Scenario, n_vehicles: int, rng: np.random.Generator, events: EventLog
+        self, scenario: Scenario, tracks: TargetTracks, n_vehicles: int, events: EventLog
     ) -> None:
         self.scenario = scenario
-        self.tracks = scenario.tracks(1, rng)
+        self.tracks = tracks
         self.events = events
         m = scenario.targets.count
         self.n_sensors = len(scenario.sensors)

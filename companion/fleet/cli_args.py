@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from companion.link.factory import BACKENDS
+from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments
 
 
@@ -30,6 +31,9 @@ def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
                    help="sim time waits for every companion's setpoint each tick, so setpoints "
                    "stay at 10 Hz in vehicle time on a busy host (default); --no-lockstep runs "
                    "at the requested speed-up and companions skip stale positions")  # fmt: skip
+    p.add_argument("--sensor-source", choices=SENSOR_SOURCES,
+                   help="every companion's sensor source (default: the profile's "
+                   "sensor_source.kind)")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no live progress lines")
     p.add_argument("--signing-key-file", type=Path,
                    help="MAVLink 2 signing passphrase file for the emulator and every companion "

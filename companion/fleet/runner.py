@@ -46,6 +46,8 @@ class FleetOptions:
     signing_key_file: Path | None = None
     """MAVLink signing passphrase file for the emulator and the companions (they also inherit
     $MDM_MAVLINK_KEY)."""
+    sensor_source: str | None = None
+    """--sensor-source of every companion (None: the profile's sensor_source.kind)."""
     lockstep: bool = False
     """The emulator holds sim time until every companion answered the last position
     (sim-vehicle --lockstep): a loaded host slows the run instead of the companions skipping
@@ -84,6 +86,7 @@ def companion_command(o: FleetOptions, vehicle: int) -> list[str]:
         "--log-dir", str(o.out),
         "--duration", str(o.duration),
         "--land-wait", "0",
+        *(["--sensor-source", o.sensor_source] if o.sensor_source else []),
         *o.mqtt_args,
         *_signing_args(o),
     ]  # fmt: skip
@@ -118,7 +121,7 @@ def run_fleet(o: FleetOptions) -> FleetResult:
             for p in companions:
                 _stop(p)
             _stop(emulator)
-    result = score(profile, o.out, n, o.duration)
+    result = score(profile, o.out, n, o.duration, virtual_seed=_virtual_seed(o, profile))
     (o.out / "results.json").write_text(json.dumps(result.as_json(), indent=2, default=str))
     log.info("fleet done in %.1f s wall", time.perf_counter() - started)
     return result
@@ -146,11 +149,17 @@ def _watch(
             break
         if not o.quiet and now - last_print >= 2.0:
             views = read_progress(o.out, n)
-            found = score(profile, o.out, n, o.duration).tnc
+            found = score(profile, o.out, n, o.duration, virtual_seed=_virtual_seed(o, profile)).tnc
             line = progress_line(views, found, real)
             if line != last_line or now - last_print >= 10.0:
                 print(line, flush=True)
                 last_print, last_line = now, line
+
+
+def _virtual_seed(o: FleetOptions, profile: MissionProfile) -> int | None:
+    """The companions' seed when they read virtual sensors (scored against that world)."""
+    virtual = (o.sensor_source or profile.sensor_source.kind) == "virtual"
+    return o.seed if virtual else None
 
 
 def _stop(p: subprocess.Popen[bytes]) -> None:
@@ -179,6 +188,7 @@ def fleet_command(args: argparse.Namespace) -> int:
         setpoints=args.setpoints, seed=args.seed, base_port=args.base_port,
         quiet=args.quiet or args.json, mqtt_args=tuple(mqtt_argv(args)),
         signing_key_file=args.signing_key_file, lockstep=args.lockstep,
+        sensor_source=args.sensor_source,
     )  # fmt: skip
     started = time.perf_counter()
     result = run_fleet(opts)

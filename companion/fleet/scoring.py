@@ -10,6 +10,7 @@ import numpy as np
 
 from companion.telemetry.mission_log import read_records
 from mdm_core.metrics import confirmed_within, team_times, time_to_all
+from mdm_core.world import Scenario
 from mdm_profiles import MissionProfile
 
 
@@ -105,18 +106,29 @@ def _match(
     return seen[best].target, gaps[best]
 
 
-def score(profile: MissionProfile, log_dir: Path, vehicles: int, duration: float) -> FleetResult:
+def score(
+    profile: MissionProfile,
+    log_dir: Path,
+    vehicles: int,
+    duration: float,
+    *,
+    virtual_seed: int | None = None,
+) -> FleetResult:
     """Read mission-<i>.jsonl of every vehicle and compute T_nc, T_S and the false confirmations.
 
     A confirmation counts when it lies within the confirmation radius of a real target: of the
     target's position when the emulator saw it come in range (emulator-events.jsonl in
-    ``log_dir``, needed for moving targets), else of the profile's position.
+    ``log_dir``, needed for moving targets), else of the profile's position. ``virtual_seed``:
+    the companions read virtual sensors with that seed (the emulator's stayed off), so the
+    targets are where that virtual world had them at the confirmation's time.
     """
     targets = np.array([[t.north, t.east] for t in profile.targets])
     real = np.array([not t.false_target for t in profile.targets])
     radius = profile.sensors[-1].radius
     events = log_dir / EMULATOR_EVENTS
     motion = profile.target_motion
+    if virtual_seed is not None:
+        return _score_virtual(profile, log_dir, vehicles, duration, virtual_seed)
     if motion is not None and not events.exists():
         raise FileNotFoundError(
             f"{events}: moving targets are scored against the emulator's event log, "
@@ -143,6 +155,18 @@ def score(profile: MissionProfile, log_dir: Path, vehicles: int, duration: float
                 found.append(Confirmation(i, t, float(where[0]), float(where[1]), k, gap, ok))
                 if ok:
                     per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
+    return _result(profile, vehicles, duration, per_vehicle, real, found, reasons)
+
+
+def _result(
+    profile: MissionProfile,
+    vehicles: int,
+    duration: float,
+    per_vehicle: np.ndarray,
+    real: np.ndarray,
+    found: list[Confirmation],
+    reasons: dict[int, str],
+) -> FleetResult:
     times = team_times(per_vehicle)
     tnc = int(confirmed_within(times, duration)[0])
     ts, capped = time_to_all(times, real, profile.mission.ts_cap)
@@ -158,3 +182,36 @@ def score(profile: MissionProfile, log_dir: Path, vehicles: int, duration: float
         confirmations=found,
         end_reasons=reasons,
     )
+
+
+def _score_virtual(
+    profile: MissionProfile, log_dir: Path, vehicles: int, duration: float, seed: int
+) -> FleetResult:
+    """:func:`score` against the virtual sensors' own targets (exact: same seed, same world)."""
+    scenario = Scenario.from_profile(profile)
+    _, tracks = scenario.live_run(seed, profile.fleet.vehicles, profile.fleet.start)
+    run = np.zeros(1, dtype=np.intp)
+    real = ~scenario.targets.false_mask
+    radius = profile.sensors[-1].radius
+    per_vehicle = np.full((1, vehicles, scenario.targets.count), np.inf)
+    found: list[Confirmation] = []
+    reasons: dict[int, str] = {}
+    for i in range(vehicles):
+        start: float | None = None
+        for rec in read_records(log_dir / f"mission-{i}.jsonl"):
+            if rec.get("event") == "phase" and "search_start" in rec and start is None:
+                start = float(rec["search_start"])
+            elif rec.get("event") == "end":
+                reasons[i] = str(rec.get("reason"))
+            elif rec.get("event") == "confirmation":
+                where = np.array([rec["north"], rec["east"]], dtype=float)
+                at = tracks.positions(run, np.array([float(rec["t"])]))[0]
+                gaps = np.linalg.norm(at - where, axis=1)
+                k = int(np.argmin(gaps))
+                t = float(rec["t"]) - (start or 0.0)
+                ok = bool(real[k] and gaps[k] <= radius)
+                found.append(Confirmation(i, t, float(where[0]), float(where[1]), k,
+                                          float(gaps[k]), ok))  # fmt: skip
+                if ok:
+                    per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
+    return _result(profile, vehicles, duration, per_vehicle, real, found, reasons)

@@ -29,6 +29,7 @@ from companion.mission.config import MissionConfig
 from companion.mission.core_for import core_for
 from companion.mission.phase import Phase
 from companion.mission.swarm_core import SwarmExchange
+from companion.sensors.base import SensorSource
 from companion.sensors.mavlink_source import MavlinkSensorSource
 from companion.telemetry.mission_log import EventSink, Recovered
 
@@ -44,7 +45,8 @@ class VehicleMission:
     Tasks (one TaskGroup): ``decide`` (events in, policy, setpoints and the companion
     HEARTBEAT out: if it dies, the heartbeat stops), ``lifecycle`` (connect, mode, arm,
     takeoff, search, end), ``supervise`` (link loss -> stop commanding, reconnect with
-    backoff), ``sensor-switch`` (MDM_SENSOR parameter).
+    backoff), ``sensor`` (the sensor source's own work: MDM_SENSOR switches for ``mavlink``,
+    the silence watch for ``mqtt``).
     """
 
     def __init__(
@@ -56,6 +58,7 @@ class VehicleMission:
         recovered: Recovered | None = None,
         fence: Geofence | None = None,
         peers: SwarmExchange | None = None,
+        sensors: SensorSource | None = None,
     ) -> None:
         profile = config.profile
         self.config = config
@@ -63,7 +66,8 @@ class VehicleMission:
         self.sink = sink
         self.recovered = recovered or Recovered()
         self.clock = VehicleClock(floor=self.recovered.last_time)
-        self.sensors = MavlinkSensorSource(link, len(profile.sensors))
+        self.sensors = sensors or MavlinkSensorSource(link, len(profile.sensors))
+        self.sensors.report = self.emit
         self.core = core_for(config, lambda: self.sensors.signal, peers)
         self.fence = fence or Geofence.rectangle(profile.area.north, profile.area.east)
         self.guide = GuidanceConfig(
@@ -109,7 +113,7 @@ class VehicleMission:
                 loops = [
                     tg.create_task(self._decide(), name=f"v{self.config.vehicle}-decide"),
                     tg.create_task(self._supervise(), name=f"v{self.config.vehicle}-supervise"),
-                    tg.create_task(self.sensors.run_switcher(), name=f"v{self.config.vehicle}-sensor"),
+                    tg.create_task(self.sensors.run(), name=f"v{self.config.vehicle}-sensor"),
                 ]  # fmt: skip
                 life = tg.create_task(self._lifecycle(), name=f"v{self.config.vehicle}-lifecycle")
                 life.add_done_callback(lambda _: [t.cancel() for t in loops])
@@ -292,6 +296,7 @@ class VehicleMission:
         if prev is not None and pos.time > prev.time:
             self._period += 0.2 * (min(pos.time - prev.time, 1.0) - self._period)
         self.position = pos
+        self.sensors.observe(t, pos.north, pos.east)
         if t - self._last_tick >= 10.0:
             self._last_tick = t
             self.emit("tick", phase=self.phase.value, level=self.core.level, wall=round(time.time(), 3),

@@ -22,14 +22,13 @@ class MavlinkSensorSource(SensorSource):
     """Contacts from DEBUG_VECT messages; sensor ``n_sensors - 1`` confirms ('CNF'), others 'DET'."""
 
     def __init__(self, link: VehicleLink, n_sensors: int) -> None:
+        super().__init__()
         self._link = link
         self._n = n_sensors
         self._active = -1
         self._since = 0.0
         self._pending: list[tuple[float, float]] = []
         self._wanted: asyncio.Queue[int] = asyncio.Queue()
-        self.signal = 0.0
-        """Latest strongest-signal reading of the active sensor (exp(-d/r))."""
 
     @property
     def active(self) -> int:
@@ -63,8 +62,8 @@ class MavlinkSensorSource(SensorSource):
         self._pending.clear()
         return out
 
-    async def run_switcher(self) -> None:
-        """Background task: send the latest wanted sensor to the vehicle (retried by the link)."""
+    async def run(self) -> None:
+        """Send the latest wanted sensor to the vehicle (retried by the link)."""
         while True:
             index = await self._wanted.get()
             while not self._wanted.empty():

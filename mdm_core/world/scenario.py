@@ -5,11 +5,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mdm_core.world.area import Area
 from mdm_core.world.sensors import Sensor
 from mdm_core.world.targets import RandomWalk, TargetSpec, TargetTracks
 from mdm_profiles import MissionProfile
+
+FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -57,6 +60,22 @@ class Scenario:
     def tracks(self, n_runs: int, rng: np.random.Generator) -> TargetTracks:
         """Target tracks for ``n_runs`` independent runs drawn from ``rng``."""
         return TargetTracks(self.targets, self.area, n_runs, rng, self.walk, self.grid_dt)
+
+    def live_run(
+        self,
+        seed: int,
+        n_vehicles: int,
+        placement: str,
+        start: FloatArray | None = None,
+    ) -> tuple[FloatArray, TargetTracks]:
+        """Start positions (n_vehicles, 2) and the one run of targets a live mission with ``seed``
+        has: the emulator and the companion's virtual sensors both call this, so the same seed
+        places the same targets on both (the draws' order is part of that contract). Given
+        ``start`` positions draw nothing, so the targets then differ from a drawn start's."""
+        rng = np.random.default_rng(seed)
+        if start is None:
+            start = self.start_positions(1, n_vehicles, placement, rng)[0]
+        return start, self.tracks(1, rng)
 
     def start_positions(
         self, n_runs: int, n_vehicles: int, placement: str, rng: np.random.Generator

@@ -1,4 +1,4 @@
-"""The topic tree: <prefix>/uav<i>/state|event|status|cmd and <prefix>/all/cmd (default prefix mdm/<profile>)."""
+"""The topic tree: <prefix>/uav<i>/state|event|status|cmd|detections and <prefix>/all/cmd (default prefix mdm/<profile>)."""
 
 from __future__ import annotations
 
@@ -39,6 +39,11 @@ class VehicleTopics:
     @property
     def cmd(self) -> str:
         return self._topic("cmd")
+
+    @property
+    def detections(self) -> str:
+        """Where the vehicle's onboard detector publishes (the ``mqtt`` sensor source)."""
+        return self._topic("detections")
 
     @property
     def fleet_cmd(self) -> str:
