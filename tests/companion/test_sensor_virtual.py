@@ -102,7 +102,8 @@ def test_virtual_sensors_confirm_the_real_target_with_the_emulators_sensors_off(
     target = load_profile(path).targets[0]
     gap = np.hypot(confirmations[0]["north"] - target.north, confirmations[0]["east"] - target.east)
     assert gap < 1e-6, f"confirmed {gap:.1f} m from the real target"
-    assert result.tnc == 1 and result.false_confirmations == 0
+    assert result.tnc == 1
+    assert result.false_confirmations == 0
     emulator = read_records(out / "emulator-events.jsonl")
     sensing = [r for r in emulator if r["event"] in ("entered_range", "detected", "confirmed")]
     assert sensing == [], "the emulator's own sensors read targets (it was asked to switch them on)"
