@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import math
 import os
+import socket
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -25,6 +26,7 @@ __all__ = [
     "TAU",
     "Client",
     "fitted_tau",
+    "free_udp_base",
     "make_config",
     "mavutil",
     "running_emulator",
@@ -199,3 +201,26 @@ def step_samples(log: list[Any], axis: str, target: float) -> list[tuple[float, 
             start = k - 1
             break
     return pts[start:]
+
+
+def free_udp_base(count: int, gap: int = 200) -> int:
+    """A base port with base..base+count-1 and base+gap.. free for UDP (emulator and companions)."""
+    for _ in range(50):
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+            probe.bind(("127.0.0.1", 0))
+            base = int(probe.getsockname()[1])
+        if base + gap + count > 65535:
+            continue
+        socks = []
+        try:
+            for port in [*range(base, base + count), *range(base + gap, base + gap + count)]:
+                s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                socks.append(s)
+                s.bind(("127.0.0.1", port))
+            return base
+        except OSError:
+            continue
+        finally:
+            for s in socks:
+                s.close()
+    raise RuntimeError("no free UDP port range")

@@ -3,7 +3,6 @@ emulator whose own sensors stay off (the companion never switches them on)."""
 
 from __future__ import annotations
 
-import socket
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +14,7 @@ from companion.telemetry import read_records
 from mdm_profiles import builtin_profile, load_profile
 from sim_vehicle_stub.config import EmulatorConfig
 from sim_vehicle_stub.emulator import Emulator
+from tests.emulator_harness import free_udp_base
 
 PROFILE = """
 name: virtual-sensor-test
@@ -36,29 +36,6 @@ policy:
       index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 400.0}
 mission: {duration: 3000.0, ts_cap: 3000.0}
 """
-
-
-def free_udp_base(count: int, gap: int = 200) -> int:
-    """A base port with base..base+count-1 and base+gap.. free for UDP (emulator and companions)."""
-    for _ in range(50):
-        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-            probe.bind(("127.0.0.1", 0))
-            base = int(probe.getsockname()[1])
-        if base + gap + count > 65535:
-            continue
-        socks = []
-        try:
-            for port in [*range(base, base + count), *range(base + gap, base + gap + count)]:
-                s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-                socks.append(s)
-                s.bind(("127.0.0.1", port))
-            return base
-        except OSError:
-            continue
-        finally:
-            for s in socks:
-                s.close()
-    raise RuntimeError("no free UDP port range")
 
 
 @pytest.mark.parametrize("name", ["paper-dynamic-false", "paper-popup-false"])
