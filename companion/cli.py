@@ -30,6 +30,7 @@ from mdm_profiles.mqtt_spec import MqttSpec
 
 log = logging.getLogger("companion")
 DEFAULT_BASE_PORT = 14540
+STOPPED_BY_SECOND_SIGNAL = "stopped by a second signal"
 
 
 def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -48,6 +49,9 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--no-tlog", action="store_true", help="do not write the .tlog")
     p.add_argument("--sensor-source", choices=SENSOR_SOURCES,
                    help="where readings come from (default: the profile's sensor_source.kind)")  # fmt: skip
+    p.add_argument("--dedicated-link", action="store_true",
+                   help="the link carries only this companion: switch off streams it does not "
+                        "read (never with a ground station on the same link)")  # fmt: skip
     p.add_argument("--signing-key-file", type=Path,
                    help=f"MAVLink 2 signing passphrase file (default: ${ENV_VAR}; neither: off)")  # fmt: skip
     p.add_argument("-v", "--verbose", action="store_true")
@@ -103,6 +107,7 @@ def run_command(args: argparse.Namespace) -> int:
         end_action=FlightMode(end_action),
         battery_min=site.battery_min if site is not None else 20.0,
         land_wait=args.land_wait,
+        dedicated_link=args.dedicated_link,
     )
     port = args.base_port + args.vehicle
     url = args.connect or f"udpin:0.0.0.0:{port}"
@@ -123,10 +128,16 @@ def run_command(args: argparse.Namespace) -> int:
     if args.backend == "mavsdk":
         reason = _run_mavsdk(fly)
         print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
-        os._exit(0)  # see _run_mavsdk: never join MAVSDK's blocked worker threads
+        os._exit(_exit_status(reason))  # see _run_mavsdk: never join MAVSDK's blocked threads
     reason = asyncio.run(fly)
     print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
-    return 0
+    return _exit_status(reason)
+
+
+def _exit_status(reason: str) -> int:
+    """0 for a mission that ended (including by one signal); 130 when a second signal cut it
+    short: the end action was not seen through."""
+    return 130 if reason == STOPPED_BY_SECOND_SIGNAL else 0
 
 
 def _run_mavsdk(coro: Coroutine[Any, Any, str]) -> str:
@@ -214,7 +225,7 @@ async def _fly(
                              iterations=core.iterations,
                              peer_bests_used=core.peer_bests_used)  # fmt: skip
     except asyncio.CancelledError:
-        return "stopped by a second signal"
+        return STOPPED_BY_SECOND_SIGNAL
     finally:
         mission_log.close()
 

@@ -31,6 +31,9 @@ class ArduCopter(Autopilot):
     name: ClassVar[str] = "ardupilot"
     mav_autopilot: ClassVar[int] = 3
     takeoff_by_command: ClassVar[bool] = True
+    # GUIDED's velocity controller starts with WPNAV_SPEED as its limit (and RTL flies at it):
+    # ArduCopter/mode_guided.cpp, velaccel_control_start / set_speed_xy.
+    speed_param: ClassVar[tuple[str, float] | None] = ("WPNAV_SPEED", 100.0)
 
     def custom_mode(self, mode: FlightMode) -> int:
         return _MODES[mode]

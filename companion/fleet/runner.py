@@ -87,6 +87,7 @@ def companion_command(o: FleetOptions, vehicle: int) -> list[str]:
         "--duration", str(o.duration),
         "--land-wait", "0",
         *(["--sensor-source", o.sensor_source] if o.sensor_source else []),
+        "--dedicated-link",
         *o.mqtt_args,
         *_signing_args(o),
     ]  # fmt: skip

@@ -1,16 +1,31 @@
-"""The link interface every MAVLink backend implements (pymavlink, MAVSDK)."""
+"""The link interface every MAVLink backend implements (pymavlink, MAVSDK), and what they share:
+stream requests, the speed limit, parameter probes, the vehicle's own words (STATUSTEXT)."""
 
 from __future__ import annotations
 
 import asyncio
+import logging
+import math
+import time
 from abc import ABC, abstractmethod
+from collections import deque
 from typing import Literal
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.autopilots import Autopilot, FlightMode
 from companion.guidance import Setpoint
 from companion.link.messages import LinkEvent
+from companion.link.outcome import CommandResult, Outcome, denied
+from companion.link.streams import StreamNeed, StreamWatch
+
+log = logging.getLogger(__name__)
 
 SetpointKind = Literal["velocity", "position"]
+
+_REASON_WAIT_S = 0.3
+"""How long a refusal waits for the STATUSTEXT that explains it: ArduPilot queues the text
+before the COMMAND_ACK, but sends it from its text queue, which can come out after the ack."""
 
 
 class LinkError(RuntimeError):
@@ -21,13 +36,30 @@ class VehicleLink(ABC):
     """One vehicle over MAVLink: events in (``events``), commands and setpoints out.
 
     A backend parses what it receives into :mod:`companion.link.messages` events on
-    ``events``; the mission reads nothing else. Commands return True when the vehicle
-    accepted them and False when it refused or never answered.
+    ``events``; the mission reads nothing else. Commands return a
+    :class:`~companion.link.outcome.CommandResult`: truthy when accepted, else denied (with the
+    vehicle's STATUSTEXT reason where it sent one) or timed out.
     """
 
     events: asyncio.Queue[LinkEvent]
     autopilot: Autopilot | None
     """Set from the first HEARTBEAT of the vehicle."""
+    target_system: int
+    global_position: bool = False
+    """The position comes from GLOBAL_POSITION_INT (around the profile origin), not LOCAL_POSITION_NED."""
+
+    def __init__(self) -> None:
+        self.events = asyncio.Queue()
+        self.autopilot = None
+        self.streams = StreamWatch()
+        self.heard: set[int] = set()
+        """System ids heard on this link (any sender), for the 'waiting for system N' line."""
+        self._texts: deque[tuple[float, int, str]] = deque(maxlen=32)
+        self._param_known: dict[str, bool] = {}
+
+    @abstractmethod
+    def describe(self) -> str:
+        """The URL the link listens on or connects to."""
 
     @abstractmethod
     async def open(self) -> None:
@@ -38,7 +70,8 @@ class VehicleLink(ABC):
         """Release sockets and logs; safe to call twice."""
 
     async def configure_streams(self) -> None:
-        """Ask the vehicle to stop streams the companion does not read (default: leave them)."""
+        """Ask the vehicle to stop streams the companion does not read (a dedicated link only:
+        a ground station sharing the link would lose them). Default: leave them."""
         return
 
     async def reconnect(self) -> None:
@@ -54,21 +87,158 @@ class VehicleLink(ABC):
     def send_setpoint(self, setpoint: Setpoint, kind: SetpointKind) -> None:
         """A velocity (with altitude-hold vd) or a position setpoint, local NED."""
 
+    async def begin_setpoints(self) -> None:
+        """Called once the vehicle is airborne in the guided mode, before the search's
+        setpoints (MAVSDK on ArduPilot starts its Offboard stream here, not before takeoff)."""
+        return
+
     @abstractmethod
-    async def set_mode(self, mode: FlightMode) -> bool:
+    async def set_mode(self, mode: FlightMode) -> CommandResult:
         """Ask for a flight mode."""
 
     @abstractmethod
-    async def arm(self) -> bool:
+    async def arm(self) -> CommandResult:
         """Arm the motors."""
 
     @abstractmethod
-    async def takeoff(self, altitude: float) -> bool:
+    async def takeoff(self, altitude: float) -> CommandResult:
         """Climb to ``altitude`` m above home (autopilots that need a command for it)."""
 
     @abstractmethod
-    async def set_sensor(self, index: int) -> bool:
-        """Switch the payload sensor: parameter MDM_SENSOR (INT32), -1 = off."""
+    async def command_long(self, command: int, *params: float) -> CommandResult:
+        """COMMAND_LONG to the autopilot, retried until a final COMMAND_ACK."""
+
+    @abstractmethod
+    def request_data_stream(self, stream_id: int, rate_hz: int) -> None:
+        """REQUEST_DATA_STREAM (no answer comes back; older ArduPilot needs it)."""
+
+    @abstractmethod
+    async def read_param(self, name: str) -> float | None:
+        """PARAM_REQUEST_READ; the value, or None when the vehicle does not answer."""
+
+    @abstractmethod
+    async def set_param(self, name: str, value: float, param_type: int) -> float | None:
+        """PARAM_SET; the value the vehicle echoed (it may clamp it), None without an echo."""
+
+    # -- the vehicle's words ---------------------------------------------------------------
+
+    def _note_text(self, severity: int, text: str) -> None:
+        self._texts.append((time.monotonic(), severity, text))
+
+    async def _with_reason(self, result: CommandResult, since: float) -> CommandResult:
+        """A refusal with the vehicle's STATUSTEXT (warning or worse) sent since ``since``."""
+        if result.outcome is Outcome.ACCEPTED or result.reason:
+            return result
+        deadline = time.monotonic() + _REASON_WAIT_S
+        while True:
+            texts = [
+                t for w, s, t in self._texts if w >= since and s <= mavlink2.MAV_SEVERITY_WARNING
+            ]
+            if texts or time.monotonic() >= deadline:
+                break
+            await asyncio.sleep(0.05)
+        if not texts:
+            return result
+        return CommandResult(result.what, result.outcome, result.result, "; ".join(texts[-2:]))
+
+    # -- streams ---------------------------------------------------------------------------
+
+    async def request_streams(self, needs: tuple[StreamNeed, ...], wait: float = 2.0) -> list[str]:
+        """Make sure every needed message arrives at its rate: look first, then ask with
+        SET_MESSAGE_INTERVAL, then with REQUEST_DATA_STREAM. Returns one line per message still
+        missing, naming what was tried (empty when all arrive)."""
+        since = time.monotonic()
+        missing = await self._await_streams(needs, since, wait)
+        tried: dict[str, list[str]] = {n.name: [] for n in missing}
+        for need in missing:
+            self.streams.clear(need.name)
+            result = await self.command_long(
+                mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL, float(need.msg_id), need.interval_us()
+            )
+            tried[need.name].append(f"SET_MESSAGE_INTERVAL {need.interval_us():.0f} us: "
+                                    f"{result.outcome.value}")  # fmt: skip
+            log.info("asked system %d for %s every %.0f us: %s", self.target_system, need.name,
+                     need.interval_us(), result.describe())  # fmt: skip
+        if missing:
+            missing = await self._await_streams(missing, since, wait)
+        for need in missing:
+            rate = max(1, math.ceil(need.rate_hz))
+            self.request_data_stream(need.data_stream, rate)
+            stream = mavlink2.enums["MAV_DATA_STREAM"][need.data_stream].name
+            tried[need.name].append(f"REQUEST_DATA_STREAM {stream} at {rate} Hz")
+            log.info("asked system %d for %s at %d Hz", self.target_system, stream, rate)
+        if missing:
+            missing = await self._await_streams(missing, since, wait)
+        problems = []
+        for need in missing:
+            measured = self.streams.rate(need.name)
+            got = "nothing" if not self.streams.seen_since(need.name, since) else (
+                f"{measured:.1f} Hz" if measured is not None else "too few to time"
+            )  # fmt: skip
+            problems.append(
+                f"{need.name} from system {self.target_system}: needed at "
+                f"{need.rate_hz:g} Hz, got {got}; tried {'; '.join(tried[need.name])}"
+            )
+        return problems
+
+    async def _await_streams(
+        self, needs: tuple[StreamNeed, ...] | list[StreamNeed], since: float, wait: float
+    ) -> tuple[StreamNeed, ...]:
+        deadline = time.monotonic() + wait
+        while True:
+            missing = tuple(n for n in needs if not self.streams.satisfied(n, since))
+            if not missing or time.monotonic() >= deadline:
+                return missing
+            await asyncio.sleep(0.1)
+
+    # -- parameters and speed --------------------------------------------------------------
+
+    async def has_param(self, name: str) -> bool:
+        """Whether the vehicle answers PARAM_REQUEST_READ for ``name`` (asked once)."""
+        known = self._param_known.get(name)
+        if known is None:
+            known = await self.read_param(name) is not None
+            self._param_known[name] = known
+        return known
+
+    async def set_speed(self, speed: float) -> str:
+        """Set the horizontal speed limit to ``speed`` m/s: DO_CHANGE_SPEED, then the
+        autopilot's own parameter (read, raised if lower, read back). Returns what the vehicle
+        now keeps, one line, naming a cap below ``speed``."""
+        ap = self.autopilot
+        result = await self.command_long(
+            mavlink2.MAV_CMD_DO_CHANGE_SPEED,
+            1.0,
+            speed,
+            -1.0,  # 1 = ground speed; -1 = throttle as is
+        )
+        line = f"DO_CHANGE_SPEED {speed:g} m/s {result.describe()}"
+        if ap is None or ap.speed_param is None:
+            return line
+        name, scale = ap.speed_param
+        value = await self.read_param(name)
+        if value is None:
+            return f"{line}; {name} not readable"
+        if value / scale < speed - 1e-6:
+            echoed = await self.set_param(name, speed * scale, mavlink2.MAV_PARAM_TYPE_REAL32)
+            if echoed is None:
+                return f"{line}; {name} {value / scale:g} m/s, raising it got no answer"
+            value = echoed
+        kept = value / scale
+        if kept < speed - 1e-6:
+            return f"{line}; vehicle caps at {kept:g} m/s ({name}), profile asks {speed:g}"
+        return f"{line}; {name} {kept:g} m/s"
+
+    async def set_sensor(self, index: int) -> CommandResult:
+        """Switch the payload sensor: parameter MDM_SENSOR (INT32), -1 = off. Only where the
+        vehicle has the parameter: otherwise denied at once, never a PARAM_SET loop."""
+        if not await self.has_param("MDM_SENSOR"):
+            return denied("MDM_SENSOR", "the vehicle has no MDM_SENSOR parameter")
+        return await self._set_sensor(index)
+
+    @abstractmethod
+    async def _set_sensor(self, index: int) -> CommandResult:
+        """PARAM_SET MDM_SENSOR, confirmed by its echo."""
 
     async def __aenter__(self) -> VehicleLink:
         await self.open()

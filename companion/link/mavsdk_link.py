@@ -21,8 +21,9 @@ from mavsdk.asyncio.plugins.offboard import OffboardAsync
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.plugins.mavlink_direct import MavlinkDirect, MavlinkMessage
 from mavsdk.plugins.offboard import Offboard, PositionNedYaw, VelocityNedYaw
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from companion.autopilots import Autopilot, FlightMode, UnknownAutopilotError, autopilot_for
+from companion.autopilots import FlightMode, UnknownAutopilotError, autopilot_for
 from companion.guidance import Setpoint
 from companion.link.address import parse_address
 from companion.link.base import LinkError, SetpointKind, VehicleLink
@@ -32,13 +33,22 @@ from companion.link.messages import (
     LocalPosition,
     SensorContact,
     SensorSignal,
+    StatusText,
     SystemStatus,
 )
+from companion.link.outcome import CommandResult, accepted, denied, timed_out
 from companion.link.tlog import TelemetryLog
 
 log = logging.getLogger(__name__)
-_SUBSCRIBED = ("HEARTBEAT", "LOCAL_POSITION_NED", "SYS_STATUS", "DEBUG_VECT", "NAMED_VALUE_FLOAT")
-_HEALTH_BITS = 0x20 | 0x10000000
+_SUBSCRIBED = ("HEARTBEAT", "LOCAL_POSITION_NED", "SYS_STATUS", "DEBUG_VECT", "NAMED_VALUE_FLOAT",
+               "STATUSTEXT")  # fmt: skip
+_HEALTH_BITS = mavlink2.MAV_SYS_STATUS_SENSOR_GPS | mavlink2.MAV_SYS_STATUS_PREARM_CHECK
+_NOT_AUTOPILOT_TYPES = (
+    mavlink2.MAV_TYPE_GCS,
+    mavlink2.MAV_TYPE_ONBOARD_CONTROLLER,
+    mavlink2.MAV_TYPE_GIMBAL,
+    mavlink2.MAV_TYPE_ADSB,
+)
 
 
 class MavsdkLink(VehicleLink):
@@ -62,10 +72,9 @@ class MavsdkLink(VehicleLink):
         tlog: Path | None = None,
         discover_timeout: float = 5.0,
     ) -> None:
+        super().__init__()
         self.address = parse_address(url)
         self.target_system = target_system
-        self.events = asyncio.Queue()
-        self.autopilot: Autopilot | None = None
         self._ids = (system_id, component_id)
         self._tlog_path = tlog
         self._tlog: TelemetryLog | None = None
@@ -79,6 +88,11 @@ class MavsdkLink(VehicleLink):
         self._handles: list[Any] = []
         self._loop: asyncio.AbstractEventLoop | None = None
         self._offboard_started = False
+        self._airborne = False
+        """begin_setpoints ran: on ArduPilot, GUIDED is entered through Offboard from now on."""
+
+    def describe(self) -> str:
+        return self.address.url()
 
     async def open(self) -> None:
         if self._mavsdk is not None:
@@ -88,14 +102,18 @@ class MavsdkLink(VehicleLink):
             self._tlog = TelemetryLog(self._tlog_path)
         cfg = Configuration.create_manual(*self._ids, False)
         self._mavsdk = Mavsdk(cfg)
-        await self._mavsdk.add_any_connection(self.address.mavsdk_url())
+        try:
+            await self._mavsdk.add_any_connection(self.address.mavsdk_url())
+        except Exception as exc:  # MAVSDK's ConnectionError: tcp not up yet and the like
+            self._mavsdk.destroy()
+            self._mavsdk = None
+            raise LinkError(f"cannot open {self.address.url()}: {exc}") from exc
         system = None
         while system is None:
             system = await self._mavsdk.first_autopilot(timeout_s=self._discover_timeout)
             if system is None:
-                log.info(
-                    "MAVSDK: waiting for system %d on %s", self.target_system, self.address.url()
-                )
+                log.warning("MAVSDK: waiting for system %d on %s; no autopilot heard yet",
+                            self.target_system, self.address.url())  # fmt: skip
         raw = system._system
         self._direct = MavlinkDirect(raw)
         self._action = ActionAsync(system)
@@ -132,6 +150,7 @@ class MavsdkLink(VehicleLink):
             loop.call_soon_threadsafe(self._receive, message, time.perf_counter())
 
     def _receive(self, message: MavlinkMessage, received: float) -> None:
+        self.heard.add(message.system_id)
         if message.system_id != self.target_system:
             return
         try:
@@ -149,6 +168,7 @@ class MavsdkLink(VehicleLink):
         self, name: str, component: int, f: dict[str, Any], received: float
     ) -> LinkEvent | None:
         if name == "LOCAL_POSITION_NED":
+            self.streams.note(name, f["time_boot_ms"] / 1000.0)
             return LocalPosition(
                 f["time_boot_ms"] / 1000.0, f["x"], f["y"], f["z"], f["vx"], f["vy"], f["vz"],
                 received,
@@ -163,7 +183,7 @@ class MavsdkLink(VehicleLink):
                 return SensorSignal(f["time_boot_ms"] / 1000.0, f["value"])
             return None
         if name == "HEARTBEAT":
-            if component != 1 or f["type"] in (6, 18, 26, 27):
+            if component != 1 or f["type"] in _NOT_AUTOPILOT_TYPES:
                 return None
             if self.autopilot is None or self.autopilot.mav_autopilot != f["autopilot"]:
                 self.autopilot = autopilot_for(int(f["autopilot"]))
@@ -171,7 +191,12 @@ class MavsdkLink(VehicleLink):
                 int(f["autopilot"]), int(f["custom_mode"]), bool(f["base_mode"] & 128),
                 int(f["system_status"]),
             )  # fmt: skip
+        if name == "STATUSTEXT":
+            text = str(f["text"]).rstrip("\x00")
+            self._note_text(int(f["severity"]), text)
+            return StatusText(int(f["severity"]), text)
         if name == "SYS_STATUS":
+            self.streams.note(name)
             need = f["onboard_control_sensors_present"] & _HEALTH_BITS
             healthy = (f["onboard_control_sensors_health"] & need) == need
             return SystemStatus(int(f["battery_remaining"]), healthy)
@@ -182,8 +207,9 @@ class MavsdkLink(VehicleLink):
     def send_heartbeat(self) -> None:
         if self._direct is None:
             return
-        fields = {"type": 18, "autopilot": 8, "base_mode": 0, "custom_mode": 0,
-                  "system_status": 4, "mavlink_version": 3}  # fmt: skip
+        fields = {"type": mavlink2.MAV_TYPE_ONBOARD_CONTROLLER,
+                  "autopilot": mavlink2.MAV_AUTOPILOT_INVALID, "base_mode": 0, "custom_mode": 0,
+                  "system_status": mavlink2.MAV_STATE_ACTIVE, "mavlink_version": 3}  # fmt: skip
         msg = MavlinkMessage("HEARTBEAT", *self._ids, 0, 0, json.dumps(fields))
         try:
             self._direct.send_message(msg)
@@ -192,7 +218,9 @@ class MavsdkLink(VehicleLink):
 
     def send_setpoint(self, setpoint: Setpoint, kind: SetpointKind) -> None:
         off = self._offboard_sync
-        if off is None:
+        if off is None or (self._ardupilot() and not self._offboard_started):
+            # MAVSDK repeats the last setpoint at 20 Hz from the first one set, and a velocity
+            # setpoint during an ArduCopter takeoff cancels it: none before begin_setpoints.
             return
         sp = setpoint
         try:
@@ -203,13 +231,23 @@ class MavsdkLink(VehicleLink):
         except Exception as exc:
             log.debug("setpoint not sent: %s", exc)
 
-    async def set_mode(self, mode: FlightMode) -> bool:
+    def _ardupilot(self) -> bool:
+        return self.autopilot is not None and self.autopilot.name == "ardupilot"
+
+    async def set_mode(self, mode: FlightMode) -> CommandResult:
         if self._action is None or self._offboard is None:
             raise LinkError("set_mode before the vehicle was discovered")
+        if mode is FlightMode.GUIDED and self._ardupilot() and not self._airborne:
+            # GUIDED without Offboard: takeoff first (begin_setpoints starts Offboard after it).
+            assert self.autopilot is not None
+            cmd = self.autopilot.mode_command(mode, armed=False)
+            return await self.command_long(
+                mavlink2.MAV_CMD_DO_SET_MODE, cmd.base_mode, cmd.custom_main, cmd.custom_sub
+            )
+        since = time.monotonic()
         try:
             if mode is FlightMode.GUIDED:
-                await self._offboard.start()
-                self._offboard_started = True
+                await self._start_offboard()
             elif mode is FlightMode.HOLD:
                 await self._action.hold()
             elif mode is FlightMode.RTL:
@@ -217,53 +255,127 @@ class MavsdkLink(VehicleLink):
             else:
                 await self._action.land()
         except Exception as exc:
-            log.warning("MAVSDK %s refused: %s", mode.value, exc)
-            return False
-        return True
+            return await self._refused(mode.value, exc, since)
+        return accepted(mode.value)
 
-    async def arm(self) -> bool:
-        return await self._call("arm")
+    async def _start_offboard(self) -> None:
+        assert self._offboard is not None
+        assert self._offboard_sync is not None
+        # offboard.start() refuses without a setpoint set first: hold still until the
+        # mission's first one.
+        self._offboard_sync.set_velocity_ned(VelocityNedYaw(0.0, 0.0, 0.0, 0.0))
+        await self._offboard.start()
+        self._offboard_started = True
 
-    async def takeoff(self, altitude: float) -> bool:
+    async def begin_setpoints(self) -> None:
+        self._airborne = True
+        if self._ardupilot() and not self._offboard_started:
+            try:
+                await self._start_offboard()
+            except Exception as exc:
+                log.warning("MAVSDK offboard start: %s", exc)
+
+    async def arm(self) -> CommandResult:
         if self._action is None:
-            raise LinkError("takeoff before the vehicle was discovered")
-        if self.autopilot is None or self._direct is None:
-            return await self._call("takeoff")
-        # MavlinkDirect's send_command: MAVSDK's takeoff() for ArduPilot climbs to its own
-        # default altitude (2.5 m) whatever set_takeoff_altitude() said.
-        p = self.autopilot.takeoff_params(altitude)
-        fields = {"target_system": self.target_system, "target_component": 1, "command": 22,
-                  "confirmation": 0, **{f"param{i + 1}": v for i, v in enumerate(p)}}  # fmt: skip
+            raise LinkError("arm before the vehicle was discovered")
+        since = time.monotonic()
+        try:
+            await self._action.arm()
+        except Exception as exc:
+            return await self._refused("arm", exc, since)
+        return accepted("arm")
+
+    async def _refused(self, what: str, exc: Exception, since: float) -> CommandResult:
+        """An action error as a typed outcome, with the vehicle's STATUSTEXT reason."""
+        result = getattr(exc, "result", None)
+        name = getattr(getattr(result, "result", result), "name", "") or str(exc)
+        outcome = timed_out(what, str(exc)) if "TIMEOUT" in name.upper() else denied(what, "")
+        outcome = await self._with_reason(outcome, since)
+        if not outcome.reason:
+            outcome = denied(what, str(exc))
+        log.warning("MAVSDK %s", outcome.describe())
+        return outcome
+
+    async def takeoff(self, altitude: float) -> CommandResult:
+        if self.autopilot is None:
+            raise LinkError("takeoff before the first HEARTBEAT")
+        # COMMAND_LONG through MavlinkDirect: MAVSDK's takeoff() for ArduPilot climbs to its
+        # own default altitude (2.5 m) whatever set_takeoff_altitude() said.
+        return await self.command_long(
+            mavlink2.MAV_CMD_NAV_TAKEOFF, *self.autopilot.takeoff_params(altitude)
+        )
+
+    async def command_long(self, command: int, *params: float) -> CommandResult:
+        entry = mavlink2.enums["MAV_CMD"].get(command)
+        name = entry.name if entry is not None else f"command {command}"
+        direct = self._direct
+        if direct is None:
+            raise LinkError(f"{name} before the vehicle was discovered")
+        full = list(params) + [0.0] * (7 - len(params))
+        fields = {"target_system": self.target_system, "target_component": 1, "command": command,
+                  "confirmation": 0, **{f"param{i + 1}": v for i, v in enumerate(full)}}  # fmt: skip
         msg = MavlinkMessage("COMMAND_LONG", *self._ids, self.target_system, 1,
                              json.dumps(fields).replace("NaN", "null"))  # fmt: skip
-        direct = self._direct
+        since = time.monotonic()
         try:
             ack = await asyncio.get_running_loop().run_in_executor(None, direct.send_command, msg)
-            result = json.loads(ack.fields_json).get("result")
-        except Exception as exc:
-            log.warning("MAVSDK takeoff: %s", exc)
-            return False
-        return bool(result == 0)
+            code = json.loads(ack.fields_json).get("result")
+        except Exception as exc:  # MavlinkDirectError on a time-out
+            log.warning("%s: %s", name, exc)
+            return timed_out(name, str(exc))
+        if code == mavlink2.MAV_RESULT_ACCEPTED:
+            return accepted(name)
+        label = mavlink2.enums["MAV_RESULT"].get(code)
+        outcome = await self._with_reason(denied(name, "", code), since)
+        if not outcome.reason:
+            outcome = denied(name, label.name if label is not None else str(code), code)
+        log.warning("%s", outcome.describe())
+        return outcome
 
-    async def set_sensor(self, index: int) -> bool:
+    def request_data_stream(self, stream_id: int, rate_hz: int) -> None:
+        if self._direct is None:
+            return
+        fields = {"target_system": self.target_system, "target_component": 1,
+                  "req_stream_id": stream_id, "req_message_rate": rate_hz, "start_stop": 1}  # fmt: skip
+        msg = MavlinkMessage("REQUEST_DATA_STREAM", *self._ids, self.target_system, 1,
+                             json.dumps(fields))  # fmt: skip
+        try:
+            self._direct.send_message(msg)
+        except Exception as exc:
+            log.warning("REQUEST_DATA_STREAM not sent: %s", exc)
+
+    async def read_param(self, name: str) -> float | None:
         if self._param is None:
-            return False
+            return None
+        for getter in (self._param.get_param_float, self._param.get_param_int):
+            try:
+                return float(await getter(name))
+            except Exception as exc:  # ParamError: absent, wrong type or a time-out
+                log.debug("MAVSDK %s: %s", name, exc)
+        return None
+
+    async def set_param(self, name: str, value: float, param_type: int) -> float | None:
+        if self._param is None:
+            return None
+        try:
+            if param_type == mavlink2.MAV_PARAM_TYPE_INT32:
+                await self._param.set_param_int(name, round(value))
+            else:
+                await self._param.set_param_float(name, value)
+        except Exception as exc:
+            log.warning("MAVSDK %s=%g: %s", name, value, exc)
+            return None
+        return await self.read_param(name)
+
+    async def _set_sensor(self, index: int) -> CommandResult:
+        if self._param is None:
+            return timed_out("MDM_SENSOR", "vehicle not discovered")
         try:
             await self._param.set_param_int("MDM_SENSOR", index)
         except Exception as exc:
             log.warning("MAVSDK MDM_SENSOR=%d: %s", index, exc)
-            return False
-        return True
-
-    async def _call(self, action: str) -> bool:
-        if self._action is None:
-            raise LinkError(f"{action} before the vehicle was discovered")
-        try:
-            await getattr(self._action, action)()
-        except Exception as exc:
-            log.warning("MAVSDK %s refused: %s", action, exc)
-            return False
-        return True
+            return timed_out("MDM_SENSOR", str(exc))
+        return accepted("MDM_SENSOR")
 
 
 def _repack(name: str, fields: dict[str, Any], system: int) -> bytes:

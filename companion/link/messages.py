@@ -62,4 +62,25 @@ class SensorSignal:
     value: float
 
 
-LinkEvent = Heartbeat | LocalPosition | SystemStatus | SensorContact | SensorSignal
+@dataclass(frozen=True, slots=True)
+class StatusText:
+    """A STATUSTEXT of the vehicle (arming refusals, failsafes, mode changes in its own words)."""
+
+    severity: int
+    """MAV_SEVERITY: 0 emergency .. 7 debug."""
+    text: str
+
+
+@dataclass(frozen=True, slots=True)
+class StraySource:
+    """Messages with the vehicle's system id from another address than the one the link locked
+    to (reported once per address; they are dropped)."""
+
+    address: str
+    locked: str
+
+
+LinkEvent = (
+    Heartbeat | LocalPosition | SystemStatus | SensorContact | SensorSignal | StatusText
+    | StraySource
+)  # fmt: skip

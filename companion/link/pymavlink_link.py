@@ -8,12 +8,13 @@ import math
 import socket
 import struct
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, cast
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from companion.autopilots import Autopilot, FlightMode, UnknownAutopilotError, autopilot_for
+from companion.autopilots import FlightMode, UnknownAutopilotError, autopilot_for
 from companion.guidance import Setpoint
 from companion.link import fast_frames
 from companion.link.address import Address, parse_address
@@ -25,8 +26,11 @@ from companion.link.messages import (
     LocalPosition,
     SensorContact,
     SensorSignal,
+    StatusText,
+    StraySource,
     SystemStatus,
 )
+from companion.link.outcome import CommandResult, Outcome, accepted, denied, timed_out
 from companion.link.tlog import TelemetryLog
 from mavlink_signing import SigningState, Verdict
 
@@ -36,9 +40,14 @@ VELOCITY_MASK = 3527
 """SET_POSITION_TARGET_LOCAL_NED type_mask: vx, vy, vz only (ArduPilot and PX4 accept it)."""
 POSITION_MASK = 3576
 """type_mask: x, y, z only."""
-_NOT_AUTOPILOT_TYPES = {6, 18, 26, 27}  # GCS, onboard controller, gimbal, ADS-B
-_HEALTH_BITS = 0x20 | 0x10000000  # GPS, pre-arm check
-_PARAM_INT32 = 6
+_NOT_AUTOPILOT_TYPES = {
+    mavlink2.MAV_TYPE_GCS,
+    mavlink2.MAV_TYPE_ONBOARD_CONTROLLER,
+    mavlink2.MAV_TYPE_GIMBAL,
+    mavlink2.MAV_TYPE_ADSB,
+}
+_HEALTH_BITS = mavlink2.MAV_SYS_STATUS_SENSOR_GPS | mavlink2.MAV_SYS_STATUS_PREARM_CHECK
+_PARAM_INT32 = mavlink2.MAV_PARAM_TYPE_INT32
 _DRAIN_MAX = 256
 """Datagrams read at once beyond the one asyncio hands over (see ``PymavlinkLink._drain``)."""
 
@@ -89,27 +98,33 @@ class PymavlinkLink(VehicleLink):
         command_tries: int = 5,
         signing_key: bytes | None = None,
     ) -> None:
+        super().__init__()
         self.address: Address = parse_address(url)
         self.target_system = target_system
-        self.events = asyncio.Queue()
-        self.autopilot: Autopilot | None = None
         self._mav = mavlink2.MAVLink(None, srcSystem=system_id, srcComponent=component_id)
         self._mav.robust_parsing = True
         self._tlog_path = tlog
         self._tlog: TelemetryLog | None = None
         self._frame = frame
+        self.global_position = frame is not None
         self._timeout = command_timeout
         self._tries = command_tries
         self._transport: asyncio.BaseTransport | None = None
         self._sock: socket.socket | None = None
         self._remote: tuple[str, int] | None = None
+        """udpin: the vehicle's address, locked to the first that sent the target system's
+        messages (released only on reconnect, after the link was lost)."""
+        self._strays: set[tuple[str, int]] = set()
         self._acks: dict[int, asyncio.Future[int]] = {}
-        self._params: dict[str, asyncio.Future[float]] = {}
+        self._params: dict[str, asyncio.Future[tuple[float, int]]] = {}
         self._time_ms = 0
         self._armed = False
         self.bad_packets = 0
         self._signing = SigningState(signing_key) if signing_key is not None else None
         self.signing_rejected = 0
+
+    def describe(self) -> str:
+        return self.address.url()
 
     async def open(self) -> None:
         loop = asyncio.get_running_loop()
@@ -148,7 +163,8 @@ class PymavlinkLink(VehicleLink):
     async def reconnect(self) -> None:
         """UDP in: keep the bound port (the vehicle sends to it again); others: re-open."""
         if self.address.scheme == "udpin" and self._transport is not None:
-            self._remote = None
+            self._remote = None  # the vehicle may come back from another port (a restart)
+            self._strays.clear()
             return
         await self.close()
         await asyncio.sleep(0.1)  # let the old transport release its socket
@@ -181,10 +197,8 @@ class PymavlinkLink(VehicleLink):
             if msg_id not in fast_frames.FAST:
                 self._accept(frame, addr, received)
                 continue
-            if system != self.target_system:
+            if system != self.target_system or not self._from_vehicle(addr):
                 continue
-            if self.address.scheme == "udpin":
-                self._remote = (str(addr[0]), int(addr[1]))  # type: ignore[index]
             if self._tlog is not None:
                 self._tlog.write(frame)
             event = self._fast_event(msg_id, fast_frames.unpack(msg_id, frame), received)
@@ -198,6 +212,7 @@ class PymavlinkLink(VehicleLink):
         if msg_id == fast_frames.LOCAL_POSITION_NED:
             t, x, y, z, vx, vy, vz = cast(tuple[int, float, float, float, float, float, float], f)
             self._time_ms = t
+            self.streams.note("LOCAL_POSITION_NED", t / 1000.0)
             if self._frame is not None:
                 return None
             return LocalPosition(t / 1000.0, x, y, z, vx, vy, vz, received)
@@ -219,12 +234,14 @@ class PymavlinkLink(VehicleLink):
             if msg.get_type() == "BAD_DATA":
                 self.bad_packets += 1
                 continue
-            if msg.get_srcSystem() != self.target_system:
+            system = msg.get_srcSystem()
+            self.heard.add(system)
+            if system != self.target_system:
                 continue
             if self._signing is not None and not self._authentic(self._signing, msg):
                 continue
-            if addr is not None and self.address.scheme == "udpin":
-                self._remote = (str(addr[0]), int(addr[1]))
+            if not self._from_vehicle(addr):
+                continue
             if self._tlog is not None:
                 self._tlog.write(msg.get_msgbuf())
             try:
@@ -234,6 +251,27 @@ class PymavlinkLink(VehicleLink):
                 continue
             if event is not None:
                 self.events.put_nowait(event)
+
+    def _from_vehicle(self, addr: tuple[str | Any, int] | None) -> bool:
+        """udpin: lock to the first address that speaks for the target system; another
+        address with the same id is dropped and reported once (a second vehicle or emulator
+        with a clashing id must never be taken for ours)."""
+        if addr is None or self.address.scheme != "udpin":
+            return True
+        source = (str(addr[0]), int(addr[1]))
+        if self._remote is None:
+            self._remote = source
+            log.info("system %d locked to %s:%d", self.target_system, *source)
+            return True
+        if source == self._remote:
+            return True
+        if source not in self._strays:
+            self._strays.add(source)
+            locked = f"{self._remote[0]}:{self._remote[1]}"
+            log.warning("ignoring another sender of system %d at %s:%d (locked to %s)",
+                        self.target_system, *source, locked)  # fmt: skip
+            self.events.put_nowait(StraySource(f"{source[0]}:{source[1]}", locked))
+        return False
 
     def _authentic(self, signing: SigningState, msg: Any) -> bool:
         verdict = signing.check(msg.get_msgbuf())
@@ -250,6 +288,7 @@ class PymavlinkLink(VehicleLink):
         kind = msg.get_type()
         if kind == "LOCAL_POSITION_NED":
             self._time_ms = msg.time_boot_ms
+            self.streams.note(kind, msg.time_boot_ms / 1000.0)
             if self._frame is not None:
                 return None
             return LocalPosition(
@@ -257,6 +296,7 @@ class PymavlinkLink(VehicleLink):
             )
         if kind == "GLOBAL_POSITION_INT" and self._frame is not None:
             self._time_ms = msg.time_boot_ms
+            self.streams.note(kind, msg.time_boot_ms / 1000.0)
             n, e, d = self._frame.to_local(msg.lat * 1e-7, msg.lon * 1e-7, msg.alt * 1e-3)
             v = (msg.vx / 100.0, msg.vy / 100.0, msg.vz / 100.0)
             return LocalPosition(msg.time_boot_ms / 1000.0, n, e, d, *v, received)
@@ -277,20 +317,29 @@ class PymavlinkLink(VehicleLink):
                 log.info("system %d is %s", self.target_system, self.autopilot.name)
             self._armed = bool(msg.base_mode & 128)
             return Heartbeat(msg.autopilot, msg.custom_mode, self._armed, msg.system_status)
+        if kind == "STATUSTEXT":
+            text = _text(msg.text)
+            self._note_text(msg.severity, text)
+            return StatusText(msg.severity, text)
         if kind == "SYS_STATUS":
+            self.streams.note(kind)
             need = msg.onboard_control_sensors_present & _HEALTH_BITS
             healthy = (msg.onboard_control_sensors_health & need) == need
             return SystemStatus(msg.battery_remaining, healthy)
         if kind == "COMMAND_ACK":
             future = self._acks.get(msg.command)
-            if future is not None and not future.done() and msg.result != 5:  # 5 IN_PROGRESS
+            if (
+                future is not None
+                and not future.done()
+                and msg.result != mavlink2.MAV_RESULT_IN_PROGRESS
+            ):
                 future.set_result(msg.result)
             return None
         if kind == "PARAM_VALUE":
             name = _text(msg.param_id)
             pending = self._params.get(name)
             if pending is not None and not pending.done():
-                pending.set_result(self._param_value(msg.param_value, msg.param_type))
+                pending.set_result((msg.param_value, msg.param_type))
             return None
         return None
 
@@ -317,14 +366,20 @@ class PymavlinkLink(VehicleLink):
             self._tlog.write(buf)
 
     def send_heartbeat(self) -> None:
-        self._send(self._mav.heartbeat_encode(18, 8, 0, 0, 4))
+        self._send(
+            self._mav.heartbeat_encode(
+                mavlink2.MAV_TYPE_ONBOARD_CONTROLLER, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0,
+                mavlink2.MAV_STATE_ACTIVE,
+            )
+        )  # fmt: skip
 
     def send_setpoint(self, setpoint: Setpoint, kind: SetpointKind) -> None:
         if self._frame is not None and kind == "position":
             lat, lon, alt = self._frame.to_geodetic(setpoint.north, setpoint.east, setpoint.down)
             self._send(
                 self._mav.set_position_target_global_int_encode(
-                    self._time_ms, self.target_system, 1, 5, POSITION_MASK,
+                    self._time_ms, self.target_system, 1,
+                    mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, POSITION_MASK,
                     round(lat * 1e7), round(lon * 1e7), alt, 0, 0, 0, 0, 0, 0, 0, 0,
                 )
             )  # fmt: skip
@@ -333,16 +388,19 @@ class PymavlinkLink(VehicleLink):
         sp = setpoint
         self._send(
             self._mav.set_position_target_local_ned_encode(
-                self._time_ms, self.target_system, 1, 1, mask,
+                self._time_ms, self.target_system, 1, mavlink2.MAV_FRAME_LOCAL_NED, mask,
                 sp.north, sp.east, sp.down, sp.vn, sp.ve, sp.vd, 0, 0, 0, 0, 0,
             )
         )  # fmt: skip
 
-    async def command(self, command: int, *params: float) -> bool:
-        """COMMAND_LONG with retries until a final COMMAND_ACK; True if ACCEPTED."""
+    async def command_long(self, command: int, *params: float) -> CommandResult:
+        """COMMAND_LONG with retries until a final COMMAND_ACK; a refusal carries the
+        vehicle's STATUSTEXT reason."""
+        name = _command_name(command)
         full = list(params) + [0.0] * (7 - len(params))
         future: asyncio.Future[int] = asyncio.get_running_loop().create_future()
         self._acks[command] = future
+        since = time.monotonic()
         try:
             for attempt in range(self._tries):
                 self._send(
@@ -350,74 +408,111 @@ class PymavlinkLink(VehicleLink):
                 )
                 # asyncio.wait, not wait_for: on 3.11 wait_for can swallow a cancel
                 await asyncio.wait({future}, timeout=self._timeout)
-                if not future.done():
-                    continue
-                result = future.result()
-                if result != 0:
-                    log.warning("command %d refused with result %d", command, result)
-                return result == 0
-            log.warning("command %d: no COMMAND_ACK after %d tries", command, self._tries)
-            return False
+                if future.done():
+                    break
         finally:
             self._acks.pop(command, None)
+        if not future.done():
+            result = timed_out(name, f"no COMMAND_ACK after {self._tries} tries")
+        elif future.result() == mavlink2.MAV_RESULT_ACCEPTED:
+            return accepted(name)
+        else:
+            code = future.result()
+            label = (
+                mavlink2.enums["MAV_RESULT"][code].name
+                if code in mavlink2.enums["MAV_RESULT"]
+                else str(code)
+            )
+            result = CommandResult(name, Outcome.DENIED, code, None)
+            result = await self._with_reason(result, since)
+            if result.reason is None:
+                result = CommandResult(name, Outcome.DENIED, code, label)
+        log.warning("%s", result.describe())
+        return result
+
+    def request_data_stream(self, stream_id: int, rate_hz: int) -> None:
+        self._send(
+            self._mav.request_data_stream_encode(self.target_system, 1, stream_id, rate_hz, 1)
+        )
 
     async def configure_streams(self) -> None:
         """SET_MESSAGE_INTERVAL -1 for the streams the mission does not read: ATTITUDE,
         SYSTEM_TIME, GPS_RAW_INT, BATTERY_STATUS, HOME_POSITION, EXTENDED_SYS_STATE (and
         GLOBAL_POSITION_INT in the local frame): at high speed-ups every message not parsed is
-        CPU for the rest of the fleet. HEARTBEAT, SYS_STATUS and the position stay."""
+        CPU for the rest of the fleet. Only on a dedicated link (``--dedicated-link``): a ground
+        station sharing the link would lose them."""
         unused = [30, 2, 24, 147, 242, 245] + ([33] if self._frame is None else [])
         for msg_id in unused:
-            if not await self.command(511, float(msg_id), -1.0):
+            if not await self.command_long(
+                mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL, float(msg_id), -1.0
+            ):
                 log.info("vehicle keeps streaming message %d", msg_id)
 
-    async def set_mode(self, mode: FlightMode) -> bool:
+    async def set_mode(self, mode: FlightMode) -> CommandResult:
         if self.autopilot is None:
             raise LinkError("set_mode before the first HEARTBEAT")
         cmd = self.autopilot.mode_command(mode, armed=self._armed)
-        return await self.command(176, cmd.base_mode, cmd.custom_main, cmd.custom_sub)
+        return await self.command_long(
+            mavlink2.MAV_CMD_DO_SET_MODE, cmd.base_mode, cmd.custom_main, cmd.custom_sub
+        )
 
-    async def arm(self) -> bool:
-        return await self.command(400, 1.0)
+    async def arm(self) -> CommandResult:
+        return await self.command_long(mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, 1.0)
 
-    async def takeoff(self, altitude: float) -> bool:
+    async def takeoff(self, altitude: float) -> CommandResult:
         if self.autopilot is None:
             raise LinkError("takeoff before the first HEARTBEAT")
-        return await self.command(22, *self.autopilot.takeoff_params(altitude))
+        return await self.command_long(
+            mavlink2.MAV_CMD_NAV_TAKEOFF, *self.autopilot.takeoff_params(altitude)
+        )
 
-    async def set_sensor(self, index: int) -> bool:
-        return await self.set_param_int("MDM_SENSOR", index)
+    async def _set_sensor(self, index: int) -> CommandResult:
+        echoed = await self.set_param("MDM_SENSOR", float(index), _PARAM_INT32)
+        if echoed is None:
+            return timed_out("MDM_SENSOR", f"no PARAM_VALUE after {self._tries} tries")
+        if echoed != index:
+            return denied("MDM_SENSOR", f"vehicle kept {echoed:g}, asked {index}")
+        return accepted("MDM_SENSOR")
 
-    async def set_param_int(self, name: str, value: int) -> bool:
-        """PARAM_SET of an INT32 parameter, retried until PARAM_VALUE echoes the value."""
-        encoded = float(value)
-        if self.autopilot is not None and self.autopilot.name == "px4":
-            encoded = struct.unpack("<f", struct.pack("<i", value))[0]  # PX4: bytewise
+    async def read_param(self, name: str) -> float | None:
+        return await self._param_exchange(
+            name,
+            lambda: self._mav.param_request_read_encode(self.target_system, 1, name.encode(), -1),
+        )
+
+    async def set_param(self, name: str, value: float, param_type: int) -> float | None:
+        encoded = value
+        if param_type == _PARAM_INT32 and self._bytewise():
+            encoded = struct.unpack("<f", struct.pack("<i", round(value)))[0]
+        return await self._param_exchange(
+            name,
+            lambda: self._mav.param_set_encode(
+                self.target_system, 1, name.encode(), encoded, param_type
+            ),
+        )
+
+    async def _param_exchange(self, name: str, encode: Callable[[], Any]) -> float | None:
+        """Send until a PARAM_VALUE of ``name`` comes back; its decoded value, or None."""
         for _ in range(self._tries):
-            future: asyncio.Future[float] = asyncio.get_running_loop().create_future()
+            future: asyncio.Future[tuple[float, int]] = asyncio.get_running_loop().create_future()
             self._params[name] = future
-            self._send(
-                self._mav.param_set_encode(
-                    self.target_system, 1, name.encode(), encoded, _PARAM_INT32
-                )
-            )
+            self._send(encode())
             try:
                 await asyncio.wait({future}, timeout=self._timeout)
             finally:
                 self._params.pop(name, None)
-            if not future.done():
-                continue
-            if future.result() == value:
-                return True
-        log.warning("parameter %s=%d not confirmed by the vehicle", name, value)
-        return False
+            if future.done():
+                return self._param_value(*future.result())
+        log.info("parameter %s: no PARAM_VALUE from system %d after %d tries", name,
+                 self.target_system, self._tries)  # fmt: skip
+        return None
+
+    def _bytewise(self) -> bool:
+        """PX4 carries integer parameters bytewise in the float field; ArduPilot casts them."""
+        return self.autopilot is not None and self.autopilot.name == "px4"
 
     def _param_value(self, value: float, param_type: int) -> float:
-        if (
-            param_type == _PARAM_INT32
-            and self.autopilot is not None
-            and self.autopilot.name == "px4"
-        ):
+        if param_type == _PARAM_INT32 and self._bytewise():
             return float(struct.unpack("<i", struct.pack("<f", value))[0])
         return value if math.isfinite(value) else math.nan
 
@@ -441,6 +536,11 @@ async def _udp_socket(
         sock.close()
         raise
     return sock
+
+
+def _command_name(command: int) -> str:
+    entry = mavlink2.enums["MAV_CMD"].get(command)
+    return entry.name if entry is not None else f"command {command}"
 
 
 def _text(raw: str | bytes) -> str:

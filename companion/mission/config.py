@@ -38,6 +38,9 @@ class MissionConfig:
     """Vehicle seconds to wait for touchdown after the end action; 0 = exit at once."""
     climb_timeout: float = 120.0
     """Vehicle seconds allowed to reach the search altitude before the mission is aborted."""
+    dedicated_link: bool = False
+    """The link carries only this companion (no ground station on it): streams the mission does
+    not read may be switched off to save CPU (the fleet's emulator links)."""
     stop_when_all_found: bool = True
     """End when this vehicle has confirmed as many targets as the profile declares real."""
 

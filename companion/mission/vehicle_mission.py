@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import math
 import random
@@ -22,8 +23,11 @@ from companion.link.messages import (
     LocalPosition,
     SensorContact,
     SensorSignal,
+    StatusText,
+    StraySource,
     SystemStatus,
 )
+from companion.link.streams import needs
 from companion.mission.clock import VehicleClock
 from companion.mission.config import MissionConfig
 from companion.mission.core_for import core_for
@@ -37,6 +41,12 @@ log = logging.getLogger(__name__)
 _COMMANDING = (Phase.PREPARE, Phase.CLIMB, Phase.SEARCH)
 _SETPOINT_GAP_S = 0.5
 """A gap in our setpoints this long (vehicle s) can explain a HOLD: PX4's COM_OF_LOSS_T is 1 s."""
+_WAIT_LINE_S = 5.0
+"""Wall seconds between 'waiting for system N' lines."""
+_OPEN_BACKOFF_MAX_S = 8.0
+_TEXT_LEVEL = {0: logging.ERROR, 1: logging.ERROR, 2: logging.ERROR, 3: logging.ERROR,
+               4: logging.WARNING, 5: logging.INFO, 6: logging.INFO}  # fmt: skip
+"""MAV_SEVERITY -> log level for the vehicle's STATUSTEXT (7, debug, is logged at DEBUG)."""
 
 
 class VehicleMission:
@@ -98,13 +108,16 @@ class VehicleMission:
         self._operator_paused = False
         self._end_action = config.end_action
         self._chores: set[asyncio.Task[None]] = set()
+        self._signals = 0
+        self._speed_set = False
 
     # -- public ----------------------------------------------------------------------------
 
     async def run(self) -> str:
         """Fly the mission; returns why it ended."""
         self._main = asyncio.current_task()
-        await self.link.open()
+        if not await self._open_link():
+            return self.end_reason or "stopped"
         self.emit("start", vehicle=self.config.vehicle, profile=self.config.profile.name,
                   seed=self.config.seed, resumed=len(self.recovered.confirmed),
                   altitude=self.config.altitude)  # fmt: skip
@@ -129,11 +142,24 @@ class VehicleMission:
             self._changed.set()
 
     def operator_stop(self) -> None:
-        """SIGINT/SIGTERM: first one ends the mission properly, a second one stops at once."""
-        if self.end_reason is None:
-            self.request_end("operator")
-        elif self._main is not None:
-            self._main.cancel()
+        """SIGINT/SIGTERM: the first one ends the mission with its end action and waits for it
+        (also when the mission was already ending); a second one stops commanding at once."""
+        self._signals += 1
+        v = self.config.vehicle
+        if self._signals > 1:
+            print(f"vehicle {v}: second signal: stop commanding and exit", flush=True)
+            if self._main is not None:
+                self._main.cancel()
+            return
+        self.request_end("operator")
+        armed = self.heartbeat is not None and self.heartbeat.armed
+        doing = (
+            f"flying {self._end_action.value.upper()} and waiting until it lands and disarms"
+            if armed and self.phase not in (Phase.PAUSED, Phase.LINK_LOST)
+            else "not commanding the vehicle (not armed, or a pilot has it)"
+        )
+        print(f"vehicle {v}: ending ({self.end_reason}): {doing}; signal again to stop at once",
+              flush=True)  # fmt: skip
 
     def emit(self, event: str, **fields: object) -> None:
         self.sink.emit(self.clock.now, event, **fields)
@@ -184,8 +210,9 @@ class VehicleMission:
 
     async def _hold(self) -> None:
         try:
-            if not await self.link.set_mode(FlightMode.HOLD):
-                log.error("vehicle %d refused hold", self.config.vehicle)
+            result = await self.link.set_mode(FlightMode.HOLD)
+            if not result:
+                log.error("vehicle %d refused hold: %s", self.config.vehicle, result.describe())
         except LinkError as exc:
             log.error("vehicle %d: hold not sent: %s", self.config.vehicle, exc)
 
@@ -251,6 +278,10 @@ class VehicleMission:
             self.sensors.accept(event)
         elif isinstance(event, Heartbeat):
             self._on_heartbeat(event)
+        elif isinstance(event, StatusText):
+            self._on_text(event)
+        elif isinstance(event, StraySource):
+            self.emit("stray", address=event.address, locked=event.locked)
         elif isinstance(event, SystemStatus):
             self.status = event
             if (
@@ -259,6 +290,13 @@ class VehicleMission:
             ):
                 self.request_end(f"battery {event.battery_remaining}%")
         self._changed.set()
+
+    def _on_text(self, text: StatusText) -> None:
+        """The autopilot's own words on the console and in the mission log."""
+        log.log(_TEXT_LEVEL.get(text.severity, logging.DEBUG), "vehicle %d says: %s",
+                self.config.vehicle, text.text)  # fmt: skip
+        if text.severity <= 6:
+            self.emit("statustext", severity=text.severity, text=text.text)
 
     def _on_heartbeat(self, hb: Heartbeat) -> None:
         self._last_heartbeat_wall = time.perf_counter()
@@ -360,8 +398,10 @@ class VehicleMission:
             self.end_reason = "already ended (mission log)"
             self._set_phase(Phase.DONE)
             return
-        await self._until(lambda: self.heartbeat is not None)
-        await self.link.configure_streams()
+        await self._await_vehicle()
+        if self.config.dedicated_link:
+            await self.link.configure_streams()
+        await self._ensure_streams()
         while self.end_reason is None:
             await self._until(lambda: self.heartbeat is not None and self.position is not None)
             if self.end_reason is not None:
@@ -372,9 +412,60 @@ class VehicleMission:
             if not self._airborne_guided() and not await self._prepare():
                 await self._sleep_vehicle(1.0)
                 continue
+            await self.link.begin_setpoints()
+            if not self._speed_set:
+                self._speed_set = True
+                line = await self.link.set_speed(self.config.profile.fleet.speed)
+                log.info("vehicle %d speed: %s", self.config.vehicle, line)
+                self.emit("speed", report=line)
             self._start_search()
             await self._until(lambda: self.phase is not Phase.SEARCH)
         await self._finish()
+
+    async def _open_link(self) -> bool:
+        """Open the link, retrying with backoff while the endpoint is not up (an autopilot
+        still booting); False when the mission was ended meanwhile."""
+        backoff, attempt = 0.5, 0
+        while True:
+            try:
+                await self.link.open()
+                return True
+            except LinkError as exc:
+                attempt += 1
+                wait = min(backoff * 2 ** (attempt - 1), _OPEN_BACKOFF_MAX_S)
+                log.warning("vehicle %d: %s; retry %d in %.1f s", self.config.vehicle, exc,
+                            attempt, wait)  # fmt: skip
+            deadline = time.monotonic() + wait
+            while time.monotonic() < deadline:
+                if self.end_reason is not None:
+                    return False
+                await asyncio.sleep(0.1)
+
+    async def _await_vehicle(self) -> None:
+        """Wait for the vehicle's HEARTBEAT, saying every few seconds what is heard instead."""
+        while self.heartbeat is None and self.end_reason is None:
+            self._changed.clear()
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._changed.wait(), _WAIT_LINE_S)
+            if self.heartbeat is None:
+                heard = sorted(self.link.heard)
+                log.warning("vehicle %d: waiting on %s for system %d; heard %s",
+                            self.config.vehicle, self.link.describe(), self.config.system_id,
+                            f"systems {heard}" if heard else "nothing")  # fmt: skip
+
+    async def _ensure_streams(self) -> None:
+        """Ask for every message the mission reads; while one is missing, say which and what
+        was tried, and ask again (a vehicle still booting may not answer the first time)."""
+        while self.end_reason is None:
+            problems = await self.link.request_streams(
+                needs(global_position=self.link.global_position)
+            )
+            if not problems:
+                return
+            for line in problems:
+                log.error("vehicle %d: missing %s", self.config.vehicle, line)
+            self.emit("streams", missing=problems)
+            await asyncio.sleep(5.0)
 
     def _airborne_guided(self) -> bool:
         hb, pos, ap = self.heartbeat, self.position, self.link.autopilot
@@ -394,17 +485,25 @@ class VehicleMission:
         if not await self._ensure_guided():
             return False
         hb = self.heartbeat
-        if hb is not None and not hb.armed and not await self.link.arm():
-            log.warning("vehicle %d refused to arm", self.config.vehicle)
-            return False
+        if hb is not None and not hb.armed:
+            result = await self.link.arm()
+            if not result:
+                log.warning("vehicle %d refused to arm: %s", self.config.vehicle, result.describe())
+                self.emit("refused", command="arm", outcome=result.outcome.value,
+                          reason=result.reason)  # fmt: skip
+                return False
         await self._until(lambda: self.heartbeat is not None and self.heartbeat.armed, 10.0)
         self._set_phase(Phase.CLIMB)
         pos = self.position
         on_ground = pos is not None and -pos.down < 0.5 * self.config.altitude
         if ap.takeoff_by_command and on_ground:
             self._climbing_by_command = True
-            if not await self.link.takeoff(self.config.altitude):
+            result = await self.link.takeoff(self.config.altitude)
+            if not result:
                 self._climbing_by_command = False
+                log.warning("vehicle %d: takeoff %s", self.config.vehicle, result.describe())
+                self.emit("refused", command="takeoff", outcome=result.outcome.value,
+                          reason=result.reason)  # fmt: skip
                 return False
             # If the autopilot's takeoff stops short (its own takeoff altitude), setpoints
             # finish the climb: wait for the altitude or for the climb to stall airborne.
@@ -414,6 +513,8 @@ class VehicleMission:
                 self.config.climb_timeout,
             )
             self._climbing_by_command = False
+            if self._in(Phase.CLIMB):
+                await self.link.begin_setpoints()  # setpoints finish a climb that stopped short
         try:
             ok = await self._until(
                 lambda: (
@@ -448,7 +549,13 @@ class VehicleMission:
             hb = self.heartbeat
             if hb is not None and ap.is_guided(hb.custom_mode):
                 return True
-            if await self.link.set_mode(FlightMode.GUIDED) and await self._until(
+            result = await self.link.set_mode(FlightMode.GUIDED)
+            if not result:
+                log.warning("vehicle %d: guided mode %s", self.config.vehicle, result.describe())
+                self.emit("refused", command="guided", outcome=result.outcome.value,
+                          reason=result.reason)  # fmt: skip
+                continue
+            if await self._until(
                 lambda: self.heartbeat is not None and ap.is_guided(self.heartbeat.custom_mode),
                 5.0,
             ):
@@ -479,9 +586,13 @@ class VehicleMission:
             self._set_phase(Phase.DONE)
             return  # never fight the pilot; nothing to bring back on the ground
         self._own_mode_change = True
-        if not await self.link.set_mode(self._end_action):
-            log.error("vehicle %d refused %s", self.config.vehicle, self._end_action.value)
+        result = await self.link.set_mode(self._end_action)
+        if not result:
+            log.error("vehicle %d refused %s: %s", self.config.vehicle, self._end_action.value,
+                      result.describe())  # fmt: skip
         if self.config.land_wait > 0:
+            log.info("vehicle %d: %s; waiting up to %g vehicle s until it lands and disarms",
+                     self.config.vehicle, self._end_action.value.upper(), self.config.land_wait)  # fmt: skip
             await self._until(
                 lambda: self.heartbeat is not None and not self.heartbeat.armed,
                 self.config.land_wait,

@@ -13,6 +13,7 @@ import numpy as np
 
 from companion.link.base import VehicleLink
 from companion.link.messages import SensorContact, SensorSignal
+from companion.link.outcome import Outcome
 from companion.sensors.base import FloatArray, SensorSource
 
 log = logging.getLogger(__name__)
@@ -70,7 +71,13 @@ class MavlinkSensorSource(SensorSource):
                 index = self._wanted.get_nowait()
             if index != self._active:
                 continue  # superseded while queued
-            if not await self._link.set_sensor(index):
-                log.warning("vehicle did not confirm sensor %d; retrying", index)
-                self._wanted.put_nowait(self._active)
-                await asyncio.sleep(1.0)
+            result = await self._link.set_sensor(index)
+            if result:
+                continue
+            if result.outcome is Outcome.DENIED:  # no such parameter, or it keeps another value
+                log.warning("sensor switching off: %s", result.describe())
+                return
+            log.warning("vehicle did not confirm sensor %d (%s); retrying", index,
+                        result.describe())  # fmt: skip
+            self._wanted.put_nowait(self._active)
+            await asyncio.sleep(1.0)

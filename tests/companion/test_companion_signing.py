@@ -56,7 +56,7 @@ async def _fly_link(port: int, key: bytes) -> tuple[bool, bool, int]:
                          signing_key=key, command_tries=2, command_timeout=0.5)  # fmt: skip
     async with link:
         heard = await _first_heartbeat(link, 3.0)
-        armed = await link.arm()
+        armed = bool(await link.arm())
         return heard, armed, link.signing_rejected
 
 

@@ -20,6 +20,7 @@ from companion.autopilots import FlightMode
 from companion.guidance import Setpoint
 from companion.link.base import SetpointKind, VehicleLink
 from companion.link.messages import Heartbeat, LinkEvent, LocalPosition
+from companion.link.outcome import CommandResult, accepted
 from companion.link.pymavlink_link import PymavlinkLink, _Protocol
 from companion.mission import MissionConfig, VehicleMission
 from companion.mission.phase import Phase
@@ -35,10 +36,15 @@ class _Sink:
 
 
 class _Link(VehicleLink):
+    """A vehicle that accepts everything and records setpoints (no sockets)."""
+
     def __init__(self) -> None:
-        self.events: asyncio.Queue[LinkEvent] = asyncio.Queue()
-        self.autopilot = None
+        super().__init__()
+        self.target_system = 1
         self.setpoints: list[Setpoint] = []
+
+    def describe(self) -> str:
+        return "test"
 
     async def open(self) -> None:
         return
@@ -52,17 +58,29 @@ class _Link(VehicleLink):
     def send_setpoint(self, setpoint: Setpoint, kind: SetpointKind) -> None:
         self.setpoints.append(setpoint)
 
-    async def set_mode(self, mode: FlightMode) -> bool:
-        return True
+    async def set_mode(self, mode: FlightMode) -> CommandResult:
+        return accepted(mode.value)
 
-    async def arm(self) -> bool:
-        return True
+    async def arm(self) -> CommandResult:
+        return accepted("arm")
 
-    async def takeoff(self, altitude: float) -> bool:
-        return True
+    async def takeoff(self, altitude: float) -> CommandResult:
+        return accepted("takeoff")
 
-    async def set_sensor(self, index: int) -> bool:
-        return True
+    async def command_long(self, command: int, *params: float) -> CommandResult:
+        return accepted(str(command))
+
+    def request_data_stream(self, stream_id: int, rate_hz: int) -> None:
+        return
+
+    async def read_param(self, name: str) -> float | None:
+        return 0.0
+
+    async def set_param(self, name: str, value: float, param_type: int) -> float | None:
+        return value
+
+    async def _set_sensor(self, index: int) -> CommandResult:
+        return accepted("MDM_SENSOR")
 
 
 def _position(t: float, north: float) -> LocalPosition:

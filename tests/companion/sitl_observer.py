@@ -1,0 +1,124 @@
+"""An independent view of a SITL vehicle: a second MAVLink connection (ArduCopter SERIAL1, PX4's
+GCS link) that records what the vehicle did, so flight tests never judge from the companion's own
+log. It asks for its own streams on its own link (per-link rates: the companion's are untouched)."""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+import time
+from dataclasses import dataclass, field
+
+os.environ.setdefault("MAVLINK20", "1")
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+_STREAMS = (
+    mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
+    mavlink2.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
+)
+
+
+@dataclass
+class Trace:
+    """What the observer saw."""
+
+    armed_ever: bool = False
+    armed: bool = False
+    mode: int = -1
+    modes: list[int] = field(default_factory=list)
+    """Custom modes in the order first seen after each change."""
+    max_alt: float = 0.0
+    alt: float = 0.0
+    """Relative altitude, m."""
+    distance: float = 0.0
+    """Horizontal path length while airborne (> 1 m), m."""
+    max_speed: float = 0.0
+    """Horizontal ground speed, m/s."""
+    landed_state: int = 0
+    texts: list[str] = field(default_factory=list)
+    last_position: tuple[float, float] | None = None
+
+
+class Observer:
+    """Reads ``url`` in a thread until ``close``; ``trace`` is updated live."""
+
+    def __init__(self, url: str, sysid: int) -> None:
+        self.url = url
+        self.sysid = sysid
+        self.trace = Trace()
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._conn = mavutil.mavlink_connection(url, source_system=250, source_component=190)
+        self._thread = threading.Thread(target=self._run, name="observer", daemon=True)
+        self._thread.start()
+
+    def _ask_streams(self) -> None:
+        for msg_id in _STREAMS:
+            self._conn.mav.command_long_send(self.sysid, 1, mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL,
+                                             0, msg_id, 100_000, 0, 0, 0, 0, 0)  # fmt: skip
+
+    def _run(self) -> None:
+        asked = 0.0
+        while not self._stop.is_set():
+            if time.monotonic() - asked > 5.0:  # again after a reboot or a lost request
+                self._conn.mav.heartbeat_send(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID,
+                                              0, 0, 0)  # fmt: skip
+                self._ask_streams()
+                asked = time.monotonic()
+            msg = self._conn.recv_match(blocking=True, timeout=0.2)
+            if msg is None or msg.get_srcSystem() != self.sysid or msg.get_srcComponent() != 1:
+                continue
+            with self._lock:
+                self._update(msg)
+
+    def _update(self, msg: object) -> None:
+        t = self.trace
+        kind = msg.get_type()  # type: ignore[attr-defined]
+        if kind == "HEARTBEAT" and msg.type != mavlink2.MAV_TYPE_GCS:  # type: ignore[attr-defined]
+            t.armed = bool(msg.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)  # type: ignore[attr-defined]
+            t.armed_ever |= t.armed
+            if msg.custom_mode != t.mode:  # type: ignore[attr-defined]
+                t.mode = msg.custom_mode  # type: ignore[attr-defined]
+                t.modes.append(t.mode)
+        elif kind == "GLOBAL_POSITION_INT":
+            t.alt = msg.relative_alt / 1000.0  # type: ignore[attr-defined]
+            t.max_alt = max(t.max_alt, t.alt)
+            here = (msg.lat * 1e-7, msg.lon * 1e-7)  # type: ignore[attr-defined]
+            if t.last_position is not None and t.alt > 1.0:
+                t.distance += _metres(t.last_position, here)
+            t.last_position = here
+            t.max_speed = max(t.max_speed, math.hypot(msg.vx, msg.vy) / 100.0)  # type: ignore[attr-defined]
+        elif kind == "EXTENDED_SYS_STATE":
+            t.landed_state = msg.landed_state  # type: ignore[attr-defined]
+        elif kind == "STATUSTEXT":
+            t.texts.append(msg.text)  # type: ignore[attr-defined]
+
+    def snapshot(self) -> Trace:
+        with self._lock:
+            t = self.trace
+            return Trace(t.armed_ever, t.armed, t.mode, list(t.modes), t.max_alt, t.alt,
+                         t.distance, t.max_speed, t.landed_state, list(t.texts), t.last_position)  # fmt: skip
+
+    def wait_for(self, what: str, predicate: object, timeout: float) -> Trace:
+        """Poll the trace until ``predicate(trace)`` holds; fails naming ``what`` and the trace."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            snap = self.snapshot()
+            if predicate(snap):  # type: ignore[operator]
+                return snap
+            time.sleep(0.2)
+        raise AssertionError(f"observer: {what} not seen in {timeout} s; trace {self.snapshot()}")
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        self._conn.close()
+
+
+def _metres(a: tuple[float, float], b: tuple[float, float]) -> float:
+    """Flat-earth distance, plenty for steps of a few metres."""
+    north = math.radians(b[0] - a[0]) * 6_371_000.0
+    east = math.radians(b[1] - a[1]) * 6_371_000.0 * math.cos(math.radians(a[0]))
+    return math.hypot(north, east)
