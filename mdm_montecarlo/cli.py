@@ -4,25 +4,41 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 from tqdm import tqdm
 
 from mdm_montecarlo.report import write_report
-from mdm_montecarlo.runner import MissionResults, run_many
+from mdm_montecarlo.runner import MissionResults, RunInterruptedError, run_many
 from mdm_montecarlo.study import TABLES, Case, Row, study_rows
 from mdm_montecarlo.tables import MeasuredRow, format_table, measured_rows
 from mdm_montecarlo.variants import with_method
 from mdm_profiles import MissionProfile, ProfileError, load_profile
 from mdm_profiles.overrides import apply_overrides
 
+INTERRUPTED = 130
+"""Exit status after Ctrl-C (128 + SIGINT, as a shell reports it)."""
+
+
+def _at_least_one(text: str) -> int:
+    """argparse type of --runs and --workers: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
 
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--runs",
-        type=int,
+        type=_at_least_one,
         default=1000,
         help="Monte-Carlo runs per row (default 1000, as the paper)",
     )
@@ -30,7 +46,10 @@ def _common(p: argparse.ArgumentParser) -> None:
         "--seed", type=int, default=2024, help="master seed (same seed -> identical tables)"
     )
     p.add_argument(
-        "--workers", type=int, default=0, help="local worker processes (default: all cores)"
+        "--workers",
+        type=_at_least_one,
+        default=None,
+        help="local worker processes, >= 1 (default: all cores)",
     )
     p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://10.0.0.5:8786")
     p.add_argument(
@@ -69,10 +88,18 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _workers(n: int) -> int:
-    import os
+def _workers(n: int | None) -> int:
+    return n if n is not None else (os.cpu_count() or 1)
 
-    return n if n > 0 else (os.cpu_count() or 1)
+
+def _check_writable(folder: Path) -> None:
+    """Fail before any simulation if the report folder cannot be created or written."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise ValueError(f"--out {folder}: not a writable folder ({exc.strerror or exc})") from None
 
 
 def _simulate(
@@ -86,16 +113,17 @@ def _simulate(
         disable=args.no_progress or args.json,
         file=sys.stderr,
     )
-    out = run_many(
-        profiles,
-        runs=args.runs,
-        seed=args.seed,
-        workers=_workers(args.workers),
-        scheduler=args.scheduler,
-        progress=bar.update,
-    )
-    bar.close()
-    return out
+    try:
+        return run_many(
+            profiles,
+            runs=args.runs,
+            seed=args.seed,
+            workers=_workers(args.workers),
+            scheduler=args.scheduler,
+            progress=bar.update,
+        )
+    finally:
+        bar.close()
 
 
 def _emit(rows: list[MeasuredRow], as_json: bool) -> None:
@@ -111,7 +139,15 @@ def _run(args: argparse.Namespace) -> int:
     if args.method:
         profile = with_method(profile, args.method)
     start = time.perf_counter()
-    res = _simulate([profile], args, profile.name)[0]
+    try:
+        res = _simulate([profile], args, profile.name)[0]
+        note = ""
+    except RunInterruptedError as stop:
+        if not stop.partial and not stop.finished:
+            print("mdm-montecarlo: interrupted before any block of runs finished", file=sys.stderr)
+            return INTERRUPTED
+        res = (stop.finished or stop.partial)[0]
+        note = f"interrupted: PARTIAL row from the {res.runs} of {args.runs} runs that finished"
     pol = profile.policy
     names = [lv.distribution for lv in pol.levels]
     method = "MDM:" + "+".join(names) if pol.kind == "mdm" else names[0]
@@ -131,6 +167,9 @@ def _run(args: argparse.Namespace) -> int:
     )
     rows = measured_rows([Row("run", case, None)], {case: res})
     _emit(rows, args.json)
+    if note:
+        print(f"mdm-montecarlo: {note}", file=sys.stderr)
+        return INTERRUPTED
     if not args.json:
         print(
             f"{res.runs} runs in {time.perf_counter() - start:.1f} s (seed {args.seed})",
@@ -144,18 +183,34 @@ def _reproduce(args: argparse.Namespace) -> int:
     rows = study_rows(tables)
     cases = list(dict.fromkeys(r.case for r in rows))
     profiles = [apply_overrides(c.profile(), args.set) for c in cases]
+    out = Path(args.out)
+    _check_writable(out)
     start = time.perf_counter()
-    results = dict(zip(cases, _simulate(profiles, args, "reproduce"), strict=True))
+    partial = ""
+    try:
+        results = dict(zip(cases, _simulate(profiles, args, "reproduce"), strict=True))
+    except RunInterruptedError as stop:
+        # Rows whose runs all finished are kept; a row with only some blocks done is dropped
+        # (its figures would be from fewer runs than the others).
+        results = {cases[i]: res for i, res in stop.finished.items()}
+        partial = f"{len(results)} of {len(cases)} configurations finished"
+        rows = [r for r in rows if r.case in results]
     wall = time.perf_counter() - start
+    if partial and not rows:
+        print(f"mdm-montecarlo: interrupted; {partial}, no report written", file=sys.stderr)
+        return INTERRUPTED
     measured = measured_rows(rows, results)
     changed = f" Overrides: {', '.join(args.set)}." if args.set else ""
     header = (
         f"{args.runs} runs per row, seed {args.seed}, {len(cases)} configurations, "
         f"{wall:.1f} s wall time. Paper numbers from data/paper_tables.csv.{changed}"
     )
-    path = write_report(
-        Path(args.out), rows, measured, results, header, workers=_workers(args.workers)
-    )
+    if partial:
+        header = f"**PARTIAL REPORT: interrupted (Ctrl-C); {partial}.** " + header
+    path = write_report(out, rows, measured, results, header, workers=_workers(args.workers))
+    if partial:
+        print(f"mdm-montecarlo: interrupted; {partial}, partial report: {path}", file=sys.stderr)
+        return INTERRUPTED
     _emit(measured, args.json)
     if not args.json:
         print(f"\nreport: {path} ({wall:.1f} s)", file=sys.stderr)
@@ -164,14 +219,15 @@ def _reproduce(args: argparse.Namespace) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    if args.runs < 1:
-        print("mdm-montecarlo: --runs must be >= 1", file=sys.stderr)
-        return 2
     try:
         return _run(args) if args.command == "run" else _reproduce(args)
     except (ProfileError, ValueError) as exc:
         print(f"mdm-montecarlo: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        # Outside the simulation (loading profiles, drawing the report): nothing to keep.
+        print("mdm-montecarlo: interrupted", file=sys.stderr)
+        return INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import signal
 from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,6 +54,35 @@ class MissionResults:
     def ts(self) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """T_S of every run (capped at mission.ts_cap) and which runs were capped."""
         return metrics.time_to_all(self.team_times, self.real, self.profile.mission.ts_cap)
+
+
+class RunInterruptedError(Exception):
+    """Ctrl-C during ``run_many``: the workers are stopped; ``finished`` holds the profiles
+    (by index) all of whose blocks were done, ``partial`` those with only some blocks done
+    (their results cover fewer runs than asked)."""
+
+    def __init__(
+        self, finished: dict[int, MissionResults], partial: dict[int, MissionResults]
+    ) -> None:
+        super().__init__("interrupted")
+        self.finished = finished
+        self.partial = partial
+
+
+def _ignore_sigint() -> None:
+    """Worker initializer: Ctrl-C reaches the whole process group; only the parent handles it
+    (a worker that raised KeyboardInterrupt would print a traceback per process)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _stop_pool(pool: ProcessPoolExecutor, pending: dict[Future[BlockResult], int]) -> None:
+    """Cancel queued blocks and kill the running ones: a block can take seconds, and Ctrl-C
+    must stop the command within 2 s."""
+    for fut in pending:
+        fut.cancel()
+    for process in list(pool._processes.values()):
+        process.kill()
+    pool.shutdown(wait=True, cancel_futures=True)
 
 
 def simulate_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
@@ -115,11 +145,41 @@ def run_many(
     """``run_missions`` for several profiles at once, sharing one pool (or Dask client)."""
     if runs < 1:
         raise ValueError(f"runs must be >= 1, got {runs}")
+    if workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
     jobs = [(i, b, n) for i in range(len(profiles)) for b, n in _blocks(runs, block_runs)]
     # Longest first, so no worker is left alone with a long block at the end.
     jobs.sort(key=lambda job: _relative_cost(profiles[job[0]]) * job[2], reverse=True)
     blocks: dict[int, list[BlockResult]] = {i: [] for i in range(len(profiles))}
+    expected = {i: sum(1 for job in jobs if job[0] == i) for i in range(len(profiles))}
     done = progress or (lambda _n: None)
+    try:
+        _run_jobs(profiles, jobs, seed, workers, scheduler, blocks, done)
+    except KeyboardInterrupt:
+        finished = {
+            i: _collect(profiles[i], seed, got)
+            for i, got in blocks.items()
+            if got and len(got) == expected[i]
+        }
+        partial = {
+            i: _collect(profiles[i], seed, got)
+            for i, got in blocks.items()
+            if got and len(got) < expected[i]
+        }
+        raise RunInterruptedError(finished, partial) from None
+    return [_collect(profiles[i], seed, blocks[i]) for i in range(len(profiles))]
+
+
+def _run_jobs(
+    profiles: list[MissionProfile],
+    jobs: list[tuple[int, int, int]],
+    seed: int,
+    workers: int,
+    scheduler: str | None,
+    blocks: dict[int, list[BlockResult]],
+    done: Progress,
+) -> None:
+    """Compute every (profile, block, runs) job into ``blocks`` (in place)."""
     if scheduler is not None:
         from distributed import Client
         from distributed import as_completed as dask_completed
@@ -133,16 +193,20 @@ def run_many(
                 blocks[futures[fut]].append(fut.result())
                 done(blocks[futures[fut]][-1].per_vehicle.shape[0])
     elif workers > 1:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            pending = {pool.submit(simulate_block, profiles[i], seed, b, n): i for i, b, n in jobs}
+        pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
+        pending = {pool.submit(simulate_block, profiles[i], seed, b, n): i for i, b, n in jobs}
+        try:
             for f in as_completed(pending):
                 blocks[pending[f]].append(f.result())
                 done(blocks[pending[f]][-1].per_vehicle.shape[0])
+        except BaseException:
+            _stop_pool(pool, pending)
+            raise
+        pool.shutdown()
     else:
         for i, b, n in jobs:
             blocks[i].append(simulate_block(profiles[i], seed, b, n))
             done(n)
-    return [_collect(profiles[i], seed, blocks[i]) for i in range(len(profiles))]
 
 
 def _collect(profile: MissionProfile, seed: int, results: list[BlockResult]) -> MissionResults:

@@ -81,3 +81,29 @@ def test_bad_input_exits_2_naming_the_problem(
     out = ["--out", str(tmp_path)] if argv[0] == "reproduce" else []
     assert main([*argv, *out, "--runs", "2", "--no-progress"]) == 2
     assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("flag", ["--workers", "--runs"])
+@pytest.mark.parametrize("value", ["0", "-3", "two"])
+def test_workers_and_runs_below_one_are_refused(
+    flag: str, value: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["run", "--profile", "paper-fixed", flag, value])
+    assert exit_info.value.code == 2
+    assert f"argument {flag}" in capsys.readouterr().err
+
+
+def test_unwritable_out_is_refused_before_any_simulation(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A regular file where the report folder's parent should be: mkdir fails even as root.
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    out = blocker / "report"
+    # 10^6 runs per row would take minutes: returning at once shows nothing was simulated.
+    argv = ["reproduce", "--tables", "simtable1", "--runs", "1000000", "--no-progress"]
+    assert main([*argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"--out {out}: not a writable folder" in err
+    assert "Traceback" not in err
