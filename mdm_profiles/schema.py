@@ -11,6 +11,17 @@ from mdm_profiles.mqtt_spec import MqttSpec
 from mdm_profiles.sensor_source import SensorSourceSpec
 from mdm_profiles.swarm import SwarmSpec
 
+MAX_SPEED = 300.0
+"""m/s: faster than any UAV this search is for; a vehicle at 1e9 m/s would fly legs of
+microseconds and a mission would take forever to simulate."""
+MAX_MISSION_TIME = 1_000_000.0
+"""s (11.6 days): longest mission duration and T_S cap; the engine simulates up to them."""
+MIN_STEP = 1.0
+"""m: shortest step length delta_k."""
+MAX_LEGS = 100_000
+"""Most legs (or swarm iterations) one vehicle may need to reach mission.ts_cap: more is a
+simulation that effectively never ends."""
+
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -41,7 +52,7 @@ class TargetEntry(_Strict):
 class RandomWalkSpec(_Strict):
     """Dynamic targets: X(k+1) = X(k) + R(low, high) * speed * sample_time (eq. 2)."""
 
-    speed: float = Field(default=5.0, gt=0)
+    speed: float = Field(default=5.0, gt=0, le=MAX_SPEED)
     low: float = -0.2
     high: float = 1.0
     sample_time: float = Field(default=0.1, gt=0)
@@ -65,7 +76,9 @@ class SensorSpec(_Strict):
 
 class FleetSpec(_Strict):
     vehicles: int = Field(default=12, ge=1, le=1000)
-    speed: float = Field(default=20.0, gt=0, description="||V_U||, m/s.")
+    speed: float = Field(
+        default=20.0, gt=0, le=MAX_SPEED, description=f"||V_U||, m/s (at most {MAX_SPEED:g})."
+    )
     tau: float = Field(default=0.33, gt=0, description="Velocity-loop time constant, s.")
     start: Literal["periphery_random", "periphery_even"] = "periphery_random"
     altitude: float = Field(default=30.0, gt=0, description="Altitude of vehicle 1 above home, m.")
@@ -94,7 +107,7 @@ class DecayIndexSpec(_Strict):
 
 class LevelSpec(_Strict):
     distribution: Literal["LS", "BS", "US"]
-    step: float = Field(gt=0, description="Step length delta_k, m.")
+    step: float = Field(ge=MIN_STEP, description=f"Step length delta_k, m (at least {MIN_STEP:g}).")
     index: DecayIndexSpec | None = Field(default=None, description="C_I / D_I; levels >= 2 only.")
     step_law: Literal["fixed", "levy"] = "fixed"
 
@@ -127,8 +140,18 @@ class PolicySpec(_Strict):
 
 
 class MissionSpec(_Strict):
-    duration: float = Field(default=1000.0, gt=0, description="Fixed duration for T_nc, s.")
-    ts_cap: float = Field(default=40000.0, gt=0, description="T_S of runs that never finish, s.")
+    duration: float = Field(
+        default=1000.0,
+        gt=0,
+        le=MAX_MISSION_TIME,
+        description=f"Fixed duration for T_nc, s (at most {MAX_MISSION_TIME:g}).",
+    )
+    ts_cap: float = Field(
+        default=40000.0,
+        gt=0,
+        le=MAX_MISSION_TIME,
+        description=f"T_S of runs that never finish, s (at most {MAX_MISSION_TIME:g}).",
+    )
 
 
 class GeoPoint(_Strict):
@@ -195,7 +218,29 @@ class MissionProfile(_Strict):
                 raise ValueError(f"target at ({t.north}, {t.east}) lies outside the area")
         if all(t.false_target for t in self.targets):
             raise ValueError("at least one target must be real")
+        self._check_work()
         return self
+
+    def _check_work(self) -> None:
+        """Refuse combinations that are each valid but would take a vehicle more than
+        MAX_LEGS legs (or swarm iterations) to simulate up to the longest mission time."""
+        horizon = max(self.mission.duration, self.mission.ts_cap)
+        shortest = min(level.step for level in self.policy.levels)
+        legs = horizon * self.fleet.speed / shortest
+        if legs > MAX_LEGS:
+            raise ValueError(
+                f"mission.ts_cap/duration ({horizon:g} s) x fleet.speed ({self.fleet.speed:g} m/s)"
+                f" / the shortest policy.levels step ({shortest:g} m) = {legs:.3g} legs per "
+                f"vehicle, more than {MAX_LEGS:g}: the simulation would not end"
+            )
+        if self.policy.kind in ("pso", "spso", "arpso"):
+            iterations = horizon / self.policy.swarm.update_interval
+            if iterations > MAX_LEGS:
+                raise ValueError(
+                    f"mission.ts_cap/duration ({horizon:g} s) / policy.swarm.update_interval "
+                    f"({self.policy.swarm.update_interval:g} s) = {iterations:.3g} iterations, "
+                    f"more than {MAX_LEGS:g}: the simulation would not end"
+                )
 
     def with_policy(self, policy: PolicySpec) -> MissionProfile:
         """The same mission flown with another policy."""

@@ -23,7 +23,10 @@ class SwarmSpec(BaseModel):
         "(default r_2: the baselines carry only the confirmation sensor).",
     )
     update_interval: float = Field(
-        default=5.0, gt=0, description="Time between two velocity updates (one PSO iteration), s."
+        default=5.0,
+        ge=0.1,
+        le=600,
+        description="Time between two velocity updates (one PSO iteration), s (0.1 to 600).",
     )
     constant_speed: bool = Field(
         default=True,
@@ -48,5 +51,8 @@ class SwarmSpec(BaseModel):
         default=0.0, ge=0, le=1, description="Probability that a shared-best message is lost."
     )
     message_delay: float = Field(
-        default=0.0, ge=0, description="Delay of shared-best messages, s (whole update intervals)."
+        default=0.0,
+        ge=0,
+        le=3600,
+        description="Delay of shared-best messages, s (whole update intervals; at most 3600).",
     )

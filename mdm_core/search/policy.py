@@ -26,6 +26,8 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 IntArray = NDArray[np.intp]
 _REDRAWS = 16
+_STUCK = 1e-6
+"""Metres: a waypoint this close to the vehicle would give a leg that takes no time."""
 _BATCH = 64
 """Redraw candidates drawn per call once few lanes are left (see SearchPolicy._draw)."""
 
@@ -236,17 +238,29 @@ class SearchPolicy:
             origin = position[rows]
             if k > 0 and self.config.waypoint_origin == "anchor":
                 origin = state.anchor[lanes[rows]]
-            out[rows] = self._draw(k, origin, state.anchor[lanes[rows]], rng)
+            out[rows] = self._draw(k, origin, state.anchor[lanes[rows]], position[rows], rng)
         return out
 
     def _draw(
-        self, k: int, origin: FloatArray, anchor: FloatArray, rng: np.random.Generator
+        self,
+        k: int,
+        origin: FloatArray,
+        anchor: FloatArray,
+        position: FloatArray,
+        rng: np.random.Generator,
     ) -> FloatArray:
         """P_q + delta_k D(S_t) from each origin; with the 'redraw' rule, the first of up to
-        1 + _REDRAWS candidates that lies in the area (the last one clipped if none does)."""
+        1 + _REDRAWS candidates that lies in the area (the last one mirrored into the area if
+        none does). With 'clip', a candidate clipped onto the vehicle's own ``position`` (a
+        vehicle at a wall or corner stepping outwards) is mirrored instead: a leg of length 0
+        takes no time and the mission would never advance."""
         points = self._candidates(k, origin, anchor, rng)
         if self.config.out_of_area != "redraw":
-            return _fold_into_area(points, self._area, self.config.out_of_area)
+            folded = _fold_into_area(points, self._area, self.config.out_of_area)
+            stuck = np.flatnonzero(length(folded - position) <= _STUCK)
+            if stuck.size:
+                folded[stuck] = _fold_into_area(points[stuck], self._area, "reflect")
+            return folded
         pending = np.flatnonzero(~self._inside(points))
         left = _REDRAWS
         while pending.size:
@@ -260,7 +274,7 @@ class SearchPolicy:
             inside = self._inside(candidate)
             if left == 0:
                 inside[:, -1] = True
-                candidate[:, -1] = _fold_into_area(candidate[:, -1], self._area, "clip")
+                candidate[:, -1] = _fold_into_area(candidate[:, -1], self._area, "reflect")
             found = inside.any(axis=1)
             first = inside.argmax(axis=1)
             points[pending[found]] = candidate[found, first[found]]
