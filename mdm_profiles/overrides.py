@@ -18,7 +18,9 @@ def _index(node: list[Any], key: str, item: str, where: list[str]) -> int:
     try:
         i = int(key)
     except ValueError:
-        raise ProfileError(f"--set {item!r}: {name} is a list; expected an index, got {key!r}")
+        raise ProfileError(
+            f"--set {item!r}: {name} is a list; expected an index, got {key!r}"
+        ) from None
     if not 0 <= i < len(node):
         raise ProfileError(
             f"--set {item!r}: {name} has {len(node)} entries (0 to {len(node) - 1}), no {i}"
