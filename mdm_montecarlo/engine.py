@@ -49,6 +49,9 @@ class BlockResult:
     """Policy steps taken (a measure of work)."""
     sim_seconds: float
     """Vehicle-seconds simulated (sum over lanes)."""
+    followed: int | None = None
+    """Swarm baselines: particle-iterations that followed a best heard from a peer (``events``
+    counts all particle-iterations); None for the methods without communication."""
 
 
 def block_rngs(seed: int, block: int) -> tuple[np.random.Generator, ...]:

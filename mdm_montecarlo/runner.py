@@ -28,10 +28,17 @@ class MissionResults:
     """(runs, targets) earliest confirmation of each target by any vehicle; inf if never."""
     events: int
     sim_seconds: float
+    followed: int | None = None
+    """Swarm baselines: particle-iterations that followed a peer's best (of ``events``)."""
 
     @property
     def runs(self) -> int:
         return len(self.team_times)
+
+    @property
+    def follow_share(self) -> float | None:
+        """Share of the swarm's particle-iterations that followed a best heard from a peer."""
+        return None if self.followed is None else self.followed / max(self.events, 1)
 
     @property
     def real(self) -> NDArray[np.bool_]:
@@ -218,4 +225,7 @@ def _collect(profile: MissionProfile, seed: int, results: list[BlockResult]) -> 
         team_times=metrics.team_times(per_vehicle),
         events=sum(r.events for r in results),
         sim_seconds=sum(r.sim_seconds for r in results),
+        followed=None
+        if any(r.followed is None for r in results)
+        else sum(r.followed or 0 for r in results),
     )

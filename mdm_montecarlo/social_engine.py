@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mdm_core.search import SearchPolicy
-from mdm_core.search.from_profile import policy_config, swarm_config
+from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.planar import length
 from mdm_core.search.pso import Best, forget, random_informants, signal_fitness
 from mdm_core.search.swarm_iteration import (
@@ -276,7 +276,7 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
         real=real,
         appear=targets.appear_times,
         confirm_radius=scenario.confirmation.radius,
-        signal_radius=spec.signal_radius,
+        signal_radius=signal_radius(profile),
         dt=dt,
     )
     position = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
@@ -305,9 +305,10 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
     duration = profile.mission.duration
     t = 0.0
     steps = 0
+    followed = 0
 
     while t < stop - 1e-9:
-        move, follow, _ = choose_move(
+        move, follow, from_peer = choose_move(
             config,
             explorer,
             position=position,
@@ -326,6 +327,7 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
         new_position = np.clip(position + move, 0.0, area)
         step = new_position - position
         guided = follow
+        followed += int(np.count_nonzero(from_peer))
 
         # Confirmations along the straight segment flown in this iteration.
         sensors.confirm(position, step, gaps, t, first, known)
@@ -360,7 +362,7 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
         if t >= duration and _all_confirmed(first, real):
             break
 
-    return BlockResult(block, first, steps * n, float(t * n))
+    return BlockResult(block, first, steps * n, float(t * n), followed)
 
 
 def _as_complex(points: FloatArray) -> NDArray[np.complex128]:

@@ -37,6 +37,8 @@ class MeasuredRow:
     paper_ts_mean_s: float | None
     tnc_within: bool | None
     ts_within: bool | None
+    peer_follow_pct: float | None = None
+    """Swarm rows: per cent of particle-iterations that followed a best heard from a peer."""
 
     def as_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -46,6 +48,10 @@ def _within(value: float, paper: float | None, tolerance: float) -> bool | None:
     if paper is None:
         return None
     return abs(value - paper) <= tolerance * abs(paper)
+
+
+def _pct(share: float | None) -> float | None:
+    return None if share is None else round(100.0 * share, 1)
 
 
 def measured_rows(rows: list[Row], results: dict[Case, MissionResults]) -> list[MeasuredRow]:
@@ -104,6 +110,7 @@ def measured_rows(rows: list[Row], results: dict[Case, MissionResults]) -> list[
                 ts_within=_within(
                     ts.mean, paper.ts_mean_s if paper and has_ts else None, TS_TOLERANCE
                 ),
+                peer_follow_pct=_pct(results[case].follow_share),
             )
         )
     return out
@@ -113,8 +120,8 @@ def format_table(rows: list[MeasuredRow]) -> str:
     """A Markdown table of measured rows beside the paper's numbers."""
     head = (
         "| table | scenario | method | L1 | L2 | δ1 %L | UAVs | false | T_nc (ours) | T_nc (paper) | in tol |"
-        " T_S s (ours) | T_S s (paper) | in tol | AISE % | AISC % | runs | capped |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        " T_S s (ours) | T_S s (paper) | in tol | AISE % | AISC % | runs | capped | follows peer % |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     )
     lines = [head]
     for r in rows:
@@ -131,5 +138,6 @@ def format_table(rows: list[MeasuredRow]) -> str:
             f"{r.n_uav} | {r.n_false} | {r.tnc_mean:.3f} ± {r.tnc_std:.3f} | {num(r.paper_tnc_mean, '.3f')} | "
             f"{mark(r.tnc_within)} | {ts} | {num(r.paper_ts_mean_s, '.0f')} | "
             f"{mark(r.ts_within)} | {num(r.aise_pct, '.1f')} | {num(r.aisc_pct, '.1f')} | {r.runs} | {num(r.capped, 'd')} |"
+            f" {num(r.peer_follow_pct, '.1f')} |"
         )
     return "\n".join(lines)

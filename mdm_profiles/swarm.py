@@ -16,11 +16,12 @@ class SwarmSpec(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    signal_radius: float = Field(
-        default=400.0,
+    signal_radius: float | None = Field(
+        default=None,
         gt=0,
-        description="Range r of the sensor whose strength exp(-d / r) is the fitness, m "
-        "(default r_2: the baselines carry only the confirmation sensor).",
+        description="Range r of the sensor whose strength exp(-d / r) is the fitness, m; it "
+        "reads targets nearer than r (eq. 5). Default (null): the detection sensor's, r_1 = "
+        "the first sensor's radius, so the signal reaches beyond the confirmation radius.",
     )
     update_interval: float = Field(
         default=5.0,

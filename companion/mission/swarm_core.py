@@ -19,7 +19,7 @@ import numpy as np
 
 from companion.mission.search_core import Decision
 from mdm_core.search import SearchPolicy
-from mdm_core.search.from_profile import policy_config, swarm_config
+from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.pso import (
     Best,
     BoolArray,
@@ -65,6 +65,7 @@ class SwarmCore:
         self.profile = profile
         self.config = swarm_config(profile)
         self.spec = profile.policy.swarm
+        self.signal_radius = signal_radius(profile)
         self.explorer = SearchPolicy(policy_config(profile))
         self.rng = np.random.default_rng([seed, vehicle])
         self.peers = peers
@@ -163,16 +164,16 @@ class SwarmCore:
         known = np.array(self.known).reshape(-1, 2)
         is_known = np.ones((1, max(len(known), 1)), dtype=bool) & (len(known) > 0)
         fitness = fitness_from_signal(
-            self.signal(), self.profile.sensors[-1].radius, self.spec.signal_radius,
+            self.signal(), self.profile.sensors[-1].radius, self.signal_radius,
             position, known, self.tolerance,
         )  # fmt: skip
         self.current = np.array([fitness])
-        own = attribute(self.own, self.spec.signal_radius, known, self.tolerance)
+        own = attribute(self.own, self.signal_radius, known, self.tolerance)
         self.own, self.previous_best = read_into_best(
             own, is_known, here, self.current, np.full(1, -1, dtype=np.intp)
         )
         heard = forget(
-            attribute(heard, self.spec.signal_radius, known, self.tolerance),
+            attribute(heard, self.signal_radius, known, self.tolerance),
             np.broadcast_to(is_known[:, None, :], (*heard.fitness.shape, is_known.shape[-1])),
         )
         self._publish(time)

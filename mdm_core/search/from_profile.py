@@ -69,6 +69,15 @@ def sensor_for_level(profile: MissionProfile, level: int) -> int:
     return level
 
 
+def signal_radius(profile: MissionProfile) -> float:
+    """Range of the swarm's signal sensor: ``policy.swarm.signal_radius``, or by default the
+    detection sensor's r_1 (the first sensor). Section IV: the swarms' sensor gives "a signal
+    with strength proportional to the distance from the target"; read only within r_2 it would
+    confirm the target at once and no best would ever form."""
+    chosen = profile.policy.swarm.signal_radius
+    return chosen if chosen is not None else profile.sensors[0].radius
+
+
 def swarm_config(profile: MissionProfile) -> SwarmConfig:
     """SwarmConfig of a pso/spso/arpso profile: steps clamped to speed x update interval."""
     kind = profile.policy.kind

@@ -61,6 +61,7 @@ def test_swarm_rows_have_no_completion_time(capsys: pytest.CaptureFixture[str]) 
     (row,) = _json_rows(capsys)
     assert (row["ts_mean_s"], row["ts_std_s"], row["capped"], row["aisc_pct"]) == (None,) * 4
     assert row["method"] == "PSO"
+    assert 0 < float(row["peer_follow_pct"]) <= 100  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(
