@@ -86,9 +86,7 @@ class SitlInstance:
     @property
     def companion_url(self) -> str:
         """The vehicle's primary link: ArduCopter SERIAL0 (TCP), PX4's offboard link (UDP)."""
-        if self.kind == "arducopter":
-            return f"tcp:127.0.0.1:{5760 + 10 * self.index}"
-        return f"udpin:0.0.0.0:{14540 + self.index}"
+        return companion_url(self.kind, self.index)
 
     @property
     def observer_url(self) -> str:
@@ -117,27 +115,44 @@ class SitlInstance:
                     continue
 
 
+def free_index(kind: Kind) -> int:
+    """The first instance index, from ``MDM_SITL_INSTANCE_BASE`` up, whose ports are all free."""
+    index = int(os.environ.get(INSTANCE_BASE_ENV, "0"))
+    while not _free(*_ports(kind, index)):
+        index += 1
+        if index > _MAX_INSTANCE[kind]:
+            raise RuntimeError(f"no free {kind} SITL instance index (ports of 0..{index - 1} busy)")
+    return index
+
+
+def companion_url(kind: Kind, index: int) -> str:
+    """The primary link of instance ``index`` (see ``SitlInstance.companion_url``)."""
+    if kind == "arducopter":
+        return f"tcp:127.0.0.1:{5760 + 10 * index}"
+    return f"udpin:0.0.0.0:{14540 + index}"
+
+
 def start(
     kind: Kind,
     workdir: Path,
     *,
+    index: int | None = None,
     home: str | None = None,
     speedup: float | None = None,
     defaults: Path | None = None,
 ) -> SitlInstance:
     """Start one instance of ``kind`` in ``workdir`` on the first free instance index.
 
-    ``home`` is ``LAT,LON,ALT[,HDG]``; ``speedup`` and ``defaults`` (an extra .parm file) are
-    ArduCopter only. Returns once the process runs; readiness (GPS, EKF) is the caller's to await.
+    ``index`` is taken as given (a test that starts its client first picks it with
+    :func:`free_index`); ``home`` is ``LAT,LON,ALT[,HDG]``; ``speedup`` and ``defaults`` (an extra
+    .parm file) are ArduCopter only. Returns once the process runs; readiness (GPS, EKF) is the
+    caller's to await.
     """
     folder = sitl_dir(kind)
     if folder is None:
         raise FileNotFoundError(skip_reason(kind))
-    index = int(os.environ.get(INSTANCE_BASE_ENV, "0"))
-    while not _free(*_ports(kind, index)):
-        index += 1
-        if index > _MAX_INSTANCE[kind]:
-            raise RuntimeError(f"no free {kind} SITL instance index (ports of 0..{index - 1} busy)")
+    if index is None:
+        index = free_index(kind)
     workdir.mkdir(parents=True, exist_ok=True)
     cmd = [str(_script(kind, folder, workdir)), str(index), "--dir", str(workdir / "run")]
     if home is not None:

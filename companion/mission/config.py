@@ -34,6 +34,8 @@ class MissionConfig:
     the link, so this one timer cannot be in vehicle time)."""
     heartbeat_period: float = 1.0
     """Companion HEARTBEAT period, wall seconds."""
+    waiting_line_period: float = 5.0
+    """Wall seconds between 'waiting for system N' lines while the vehicle is not heard."""
     land_wait: float = 600.0
     """Vehicle seconds to wait for touchdown after the end action; 0 = exit at once."""
     climb_timeout: float = 120.0

@@ -41,8 +41,6 @@ log = logging.getLogger(__name__)
 _COMMANDING = (Phase.PREPARE, Phase.CLIMB, Phase.SEARCH)
 _SETPOINT_GAP_S = 0.5
 """A gap in our setpoints this long (vehicle s) can explain a HOLD: PX4's COM_OF_LOSS_T is 1 s."""
-_WAIT_LINE_S = 5.0
-"""Wall seconds between 'waiting for system N' lines."""
 _OPEN_BACKOFF_MAX_S = 8.0
 _TEXT_LEVEL = {0: logging.ERROR, 1: logging.ERROR, 2: logging.ERROR, 3: logging.ERROR,
                4: logging.WARNING, 5: logging.INFO, 6: logging.INFO}  # fmt: skip
@@ -446,7 +444,7 @@ class VehicleMission:
         while self.heartbeat is None and self.end_reason is None:
             self._changed.clear()
             with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._changed.wait(), _WAIT_LINE_S)
+                await asyncio.wait_for(self._changed.wait(), self.config.waiting_line_period)
             if self.heartbeat is None:
                 heard = sorted(self.link.heard)
                 log.warning("vehicle %d: waiting on %s for system %d; heard %s",

@@ -49,6 +49,7 @@ class Observer:
         self.sysid = sysid
         self.trace = Trace()
         self._lock = threading.Lock()
+        self._send_lock = threading.Lock()
         self._stop = threading.Event()
         self._conn = mavutil.mavlink_connection(url, source_system=250, source_component=190)
         self._thread = threading.Thread(target=self._run, name="observer", daemon=True)
@@ -60,13 +61,17 @@ class Observer:
                                              0, msg_id, 100_000, 0, 0, 0, 0, 0)  # fmt: skip
 
     def _run(self) -> None:
-        asked = 0.0
+        asked = beat = 0.0
         while not self._stop.is_set():
-            if time.monotonic() - asked > 5.0:  # again after a reboot or a lost request
-                self._conn.mav.heartbeat_send(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID,
-                                              0, 0, 0)  # fmt: skip
-                self._ask_streams()
-                asked = time.monotonic()
+            now = time.monotonic()
+            with self._send_lock:
+                if now - beat > 1.0:  # a ground station, as the autopilot routes it
+                    self._conn.mav.heartbeat_send(mavlink2.MAV_TYPE_GCS,
+                                                  mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0)  # fmt: skip
+                    beat = now
+                if now - asked > 5.0:  # again after a reboot or a lost request
+                    self._ask_streams()
+                    asked = now
             msg = self._conn.recv_match(blocking=True, timeout=0.2)
             if msg is None or msg.get_srcSystem() != self.sysid or msg.get_srcComponent() != 1:
                 continue
@@ -94,6 +99,13 @@ class Observer:
             t.landed_state = msg.landed_state  # type: ignore[attr-defined]
         elif kind == "STATUSTEXT":
             t.texts.append(msg.text)  # type: ignore[attr-defined]
+
+    def set_mode(self, custom_mode: int) -> None:
+        """A pilot's mode change (DO_SET_MODE with the autopilot's custom mode)."""
+        with self._send_lock:
+            self._conn.mav.command_long_send(self.sysid, 1, mavlink2.MAV_CMD_DO_SET_MODE, 0,
+                                             mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                                             custom_mode, 0, 0, 0, 0, 0)  # fmt: skip
 
     def snapshot(self) -> Trace:
         with self._lock:
