@@ -1,4 +1,5 @@
-"""The `companion` command: `run` flies one vehicle, `fleet` runs the emulator and N companions."""
+"""The `companion` command: `run` flies one vehicle, `fleet` runs the emulator and N companions,
+`map` draws a run directory's map."""
 
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from companion.link.factory import BACKENDS, Backend, make_link
 from companion.mission import MissionConfig, VehicleMission
 from companion.mission.core_for import core_for, is_swarm
 from companion.mission.swarm_core import SwarmCore
+from companion.run_map.cli_args import add_map_parser, map_after_run, map_command
 from companion.sensors.factory import SENSOR_SOURCES, DetectorFeed, make_sensor_source
 from companion.telemetry import EventSink, MissionLog, read_log
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
@@ -64,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     _run_parser(sub)
     add_fleet_parser(sub)
+    add_map_parser(sub)
     return parser
 
 
@@ -77,6 +80,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "run":
             return run_command(args)
+        if args.command == "map":
+            return map_command(args)
         from companion.fleet.runner import fleet_command
 
         return fleet_command(args)
@@ -128,9 +133,11 @@ def run_command(args: argparse.Namespace) -> int:
     if args.backend == "mavsdk":
         reason = _run_mavsdk(fly)
         print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
+        map_after_run(config.log_dir, profile, [args.vehicle], f"map-{args.vehicle}")
         os._exit(_exit_status(reason))  # see _run_mavsdk: never join MAVSDK's blocked threads
     reason = asyncio.run(fly)
     print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
+    map_after_run(config.log_dir, profile, [args.vehicle], f"map-{args.vehicle}")
     return _exit_status(reason)
 
 

@@ -16,6 +16,7 @@ from pathlib import Path
 from companion.fleet.progress import progress_line, read_progress
 from companion.fleet.scoring import EMULATOR_EVENTS, FleetResult, score
 from companion.link.factory import check_signing_support
+from companion.run_map.cli_args import map_after_run
 from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
 from mavlink_signing import load_signing_key
 from mdm_core.search.pso import VARIANTS
@@ -124,6 +125,7 @@ def run_fleet(o: FleetOptions) -> FleetResult:
             _stop(emulator)
     result = score(profile, o.out, n, o.duration, virtual_seed=_virtual_seed(o, profile))
     (o.out / "results.json").write_text(json.dumps(result.as_json(), indent=2, default=str))
+    map_after_run(o.out, profile, list(range(n)), "map")
     log.info("fleet done in %.1f s wall", time.perf_counter() - started)
     return result
 

@@ -1,0 +1,147 @@
+"""The map after a live run: `companion fleet` (and each `companion run` in it) writes GeoJSON
+(RFC 7946: [lon, lat], closed counter-clockwise rings) whose paths and confirmations are the
+mission logs', and a PNG."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pymap3d
+import pytest
+
+from companion.run_map.png import scale_bar_length
+from companion.telemetry import read_records
+from mdm_core.world import Scenario
+from mdm_profiles import load_profile
+from mdm_profiles.loader import parse_profile
+from tests.emulator_harness import free_udp_base
+
+PROFILE = """
+name: run-map-test
+area: {north: 1000.0, east: 1500.0}
+origin: {lat: 47.3960, lon: 8.6380, alt: 440.0}
+targets:
+  - {north: NORTH, east: EAST}
+  - {north: 300.0, east: 300.0, false_target: true}
+fleet: {vehicles: 2, speed: 20.0, tau: 0.33, altitude: 30.0, start: periphery_even}
+sensors:
+  - {name: detection, radius: 400.0}
+  - {name: confirmation, radius: 100.0}
+sensor_source: {kind: virtual}
+policy:
+  kind: mdm
+  levels:
+    - {distribution: LS, step: 400.0}
+    - distribution: BS
+      step: 200.0
+      index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 400.0}
+mission: {duration: 150.0, ts_cap: 150.0}
+site:
+  geofence:
+    - {lat: 47.39636, lon: 8.63853}
+    - {lat: 47.40464, lon: 8.63853}
+    - {lat: 47.40464, lon: 8.65731}
+    - {lat: 47.39636, lon: 8.65731}
+"""
+
+
+SEED = 4
+
+
+def _profile_text() -> str:
+    """The profile with its real target where vehicle 0 starts (start points do not depend on
+    the targets): a confirmation on the map whatever the search does."""
+    draft = parse_profile(PROFILE.replace("NORTH", "0.0").replace("EAST", "0.0"), "draft")
+    start, _ = Scenario.from_profile(draft).live_run(SEED, 2, draft.fleet.start)
+    north, east = (round(float(x), 1) for x in start[0])
+    return PROFILE.replace("NORTH", str(north)).replace("EAST", str(east))
+
+
+def _features(doc: dict[str, Any], kind: str) -> list[dict[str, Any]]:
+    return [f for f in doc["features"] if f["properties"]["kind"] == kind]
+
+
+def _lon_lat(north: float, east: float) -> tuple[float, float]:
+    lat, lon, _ = pymap3d.ned2geodetic(north, east, 0.0, 47.3960, 8.6380, 440.0)
+    return float(lon), float(lat)
+
+
+def _signed_area(ring: list[list[float]]) -> float:
+    return sum(a[0] * b[1] - b[0] * a[1] for a, b in itertools.pairwise(ring)) / 2
+
+
+@pytest.mark.timeout(150)
+def test_fleet_writes_a_geojson_that_matches_the_mission_logs_and_a_png(tmp_path: Path) -> None:
+    path = tmp_path / "profile.yaml"
+    path.write_text(_profile_text())
+    out = tmp_path / "run"
+    done = subprocess.run(
+        [sys.executable, "-m", "companion.cli", "fleet", "--profile", str(path), "--out", str(out),
+         "--speedup", "50", "--duration", "150", "--seed", str(SEED), "--quiet",
+         "--base-port", str(free_udp_base(2))],
+        capture_output=True, text=True, timeout=140, check=False,
+        env=dict(os.environ, PYTHONUNBUFFERED="1"),
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert f"map: {out / 'map.geojson'} {out / 'map.png'}" in done.stdout
+    doc = json.loads((out / "map.geojson").read_text())
+    assert doc["type"] == "FeatureCollection"
+    for f in doc["features"]:
+        assert f["type"] == "Feature"
+        assert set(f) == {"type", "geometry", "properties"}
+    (fence,) = _features(doc, "fence")
+    (area,) = _features(doc, "search_area")
+    for polygon in (fence, area):
+        assert polygon["geometry"]["type"] == "Polygon"
+        (ring,) = polygon["geometry"]["coordinates"]
+        assert len(ring) >= 4
+        assert ring[0] == ring[-1], "ring not closed"
+        assert _signed_area(ring) > 0, "exterior ring not counter-clockwise"
+    # [lon, lat]: the profile's fence corners come back in that order (lon ~8.6, lat ~47.4)
+    corners = {(round(lon, 5), round(lat, 5)) for lon, lat in fence["geometry"]["coordinates"][0]}
+    site = load_profile(path).site
+    assert site is not None
+    assert corners == {(round(p.lon, 5), round(p.lat, 5)) for p in site.geofence}
+    targets = _features(doc, "target")
+    assert [t["properties"]["false_target"] for t in targets] == [False, True]
+    assert targets[1]["geometry"]["coordinates"] == pytest.approx(_lon_lat(300.0, 300.0), abs=1e-7)
+
+    paths = {f["properties"]["vehicle"]: f for f in _features(doc, "path")}
+    assert sorted(paths) == [0, 1]
+    confirmations = _features(doc, "confirmation")
+    assert confirmations, "the run confirmed nothing to put on the map"
+    logged_confirmations = []
+    for i in (0, 1):
+        records = read_records(out / f"mission-{i}.jsonl")
+        ticks = [r for r in records if r["event"] == "tick"]
+        line = paths[i]["geometry"]["coordinates"]
+        assert paths[i]["geometry"]["type"] == "LineString"
+        assert len(line) == len(ticks) >= 2
+        for (lon, lat), r in zip(line, ticks, strict=True):
+            assert (lon, lat) == pytest.approx(_lon_lat(r["north"], r["east"]), abs=2e-7)
+        logged_confirmations += [(i, r["t"], r["north"], r["east"]) for r in records
+                                 if r["event"] == "confirmation"]  # fmt: skip
+    mapped = [(f["properties"]["vehicle"], f["properties"]["t"], f["properties"]["north"],
+               f["properties"]["east"]) for f in confirmations]  # fmt: skip
+    assert len(mapped) == len(logged_confirmations)
+    for got, logged in zip(sorted(mapped), sorted(logged_confirmations), strict=True):
+        assert got == pytest.approx(logged, abs=0.05)
+    for f in confirmations:
+        p = f["properties"]
+        assert f["geometry"]["coordinates"] == pytest.approx(
+            _lon_lat(p["north"], p["east"]), abs=2e-7
+        )
+    for name in ("map.png", "map-0.png", "map-1.png"):
+        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+
+
+@pytest.mark.parametrize(("span", "bar"), [(2200.0, 200.0), (1000.0, 200.0), (12000.0, 2000.0),
+                                           (90.0, 10.0), (26000.0, 5000.0)])  # fmt: skip
+def test_scale_bar_is_a_round_length_near_a_fifth_of_the_map(span: float, bar: float) -> None:
+    assert scale_bar_length(span) == bar
