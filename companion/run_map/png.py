@@ -44,10 +44,10 @@ def draw_png(profile: MissionProfile, tracks: list[VehicleTrack], path: Path, ti
                          ls="--", label="fence"))  # fmt: skip
     radius = profile.sensors[-1].radius
     for t in profile.targets:
-        colour = "0.45" if t.false_target else "darkgreen"
+        colour = "0.45" if t.false_target else "purple"  # not in the vehicles' colour cycle
         ax.add_patch(Circle((t.east, t.north), radius, fill=False, edgecolor=colour, lw=0.8))
         ax.plot(t.east, t.north, "x" if t.false_target else "o", color=colour, ms=7, mew=2)
-    ax.plot([], [], "o", color="darkgreen", label=f"target (circle: {_label(radius)} confirmation)")
+    ax.plot([], [], "o", color="purple", label=f"target (circle: {_label(radius)} confirmation)")
     if any(t.false_target for t in profile.targets):
         ax.plot([], [], "x", color="0.45", mew=2, label="false target")
     cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]

@@ -25,6 +25,8 @@ def write_run_map(
     png = log_dir / f"{stem}.png"
     found = sum(len(t.confirmations) for t in tracks)
     who = f"vehicle {vehicles[0]}" if len(vehicles) == 1 else f"{len(vehicles)} vehicles"
-    draw_png(profile, tracks, png, f"{profile.name}: {who}, {found} confirmation(s) - {log_dir}")
+    draw_png(
+        profile, tracks, png, f"{profile.name}: {who}, {found} confirmation(s) ({log_dir.name})"
+    )
     log.info("run map: %s, %s", geojson, png)
     return geojson, png

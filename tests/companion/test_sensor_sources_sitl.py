@@ -1,0 +1,155 @@
+"""Sensor sources on stock ArduCopter SITL (one boot, two flights): the companion's virtual
+sensors confirm a rehearsal target, then MQTT detections published by the test switch the level
+and confirm; each flight ends with RTL, seen landed and disarmed from a second connection.
+
+The profile's origin is the vehicle's home, so the autopilot's local frame (its EKF origin, the
+boot point) is the profile's frame: these tests are about the sensors, not the frame."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from companion.link.geo import LocalFrame
+from companion.telemetry.mission_log import read_records
+from tests import sitl
+from tests.companion.sitl_observer import Observer
+from tests.mqtt_harness import publish
+
+SPEEDUP = 5
+HOME = (47.405893, 8.663214, 440.0)  # inside the Duebendorf fence (issue 11)
+RTL = 6  # ArduCopter custom mode
+ON_GROUND = 1  # MAV_LANDED_STATE_ON_GROUND
+
+
+def _profile(path: Path, vehicles: int) -> Path:
+    lat, lon, alt = HOME
+    path.write_text(f"""
+name: sitl-sensors-{os.getpid()}
+area: {{north: 600.0, east: 600.0}}
+origin: {{lat: {lat}, lon: {lon}, alt: {alt}}}
+targets:
+  - {{north: 220.0, east: 160.0}}
+  - {{north: 60.0, east: 300.0, false_target: true}}
+fleet: {{vehicles: {vehicles}, speed: 10.0, tau: 0.5, altitude: 20.0, altitude_step: 0.0}}
+sensors:
+  - {{name: detection, radius: 400.0}}
+  - {{name: confirmation, radius: 60.0}}
+sensor_source: {{kind: virtual, silence_timeout: 30.0}}
+policy:
+  kind: mdm
+  levels:
+    - {{distribution: LS, step: 200.0}}
+    - distribution: BS
+      step: 80.0
+      index: {{gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 600.0}}
+mission: {{duration: 900.0, ts_cap: 900.0}}
+""")
+    return path
+
+
+def _run(out: Path, profile: Path, inst: sitl.SitlInstance, *extra: str) -> subprocess.Popen[bytes]:
+    out.mkdir(parents=True, exist_ok=True)
+    with (out / "companion.out").open("ab") as f:
+        return subprocess.Popen(
+            [sys.executable, "-m", "companion.cli", "run", "--profile", str(profile),
+             "--vehicle", str(inst.index), "--connect", inst.companion_url, "--log-dir", str(out),
+             "--land-wait", "300", *extra],
+            stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
+            env=dict(os.environ, PYTHONUNBUFFERED="1"),
+        )  # fmt: skip
+
+
+def _until(
+    what: str, predicate: Callable[[], bool], timeout: float, context: Callable[[], str]
+) -> None:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{what}: not within {timeout} s\n{context()}")
+        time.sleep(0.2)
+
+
+def _stop(p: subprocess.Popen[bytes]) -> None:
+    if p.poll() is None:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.wait()
+
+
+def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
+    arducopter: Callable[..., sitl.SitlInstance], tmp_path: Path
+) -> None:
+    inst = arducopter(speedup=SPEEDUP, home=",".join(map(str, (*HOME, 0))))
+    profile = _profile(tmp_path / "profile.yaml", vehicles=inst.index + 1)
+    obs = Observer(inst.observer_url, inst.sysid)
+    flights: list[subprocess.Popen[bytes]] = []
+
+    def context(out: Path) -> Callable[[], str]:
+        return lambda: (f"trace {obs.snapshot()}\ncompanion:\n"
+                        f"{(out / 'companion.out').read_text(errors='replace')[-3000:]}")  # fmt: skip
+
+    def events(out: Path) -> list[dict[str, Any]]:
+        return read_records(out / f"mission-{inst.index}.jsonl")
+
+    modes_before = 0
+
+    def landed_after_rtl() -> bool:
+        t = obs.snapshot()
+        return t.landed_state == ON_GROUND and not t.armed and RTL in t.modes[modes_before:]
+
+    try:
+        # 1. Virtual sensors: the profile's targets against the vehicle's real position.
+        virtual = tmp_path / "virtual"
+        flights.append(_run(virtual, profile, inst))
+        _until("virtual: confirmed, RTL, landed, disarmed", landed_after_rtl, 400.0,
+               context(virtual))  # fmt: skip
+        assert flights[-1].wait(timeout=60) == 0, context(virtual)()
+        records = events(virtual)
+        (confirmation,) = [r for r in records if r["event"] == "confirmation"]
+        assert (confirmation["north"], confirmation["east"]) == (220.0, 160.0)
+        assert next(r for r in records if r["event"] == "end")["reason"] == "all targets"
+        first = obs.snapshot()
+        assert first.max_alt >= 15.0
+        assert first.distance >= 100.0, context(virtual)()
+        assert (virtual / f"map-{inst.index}.png").stat().st_size > 10_000
+        print(f"\nvirtual on ArduCopter: confirmed at t={confirmation['t']} s; observer: "
+              f"{first.distance:.0f} m flown, max {first.max_alt:.1f} m, modes {first.modes}; "
+              f"map {virtual / f'map-{inst.index}.png'}")  # fmt: skip
+
+        # 2. MQTT: the test is the detector.
+        mqtt = tmp_path / "mqtt"
+        prefix = f"mdm/sitl-{os.getpid()}"
+        topic = f"{prefix}/uav{inst.index}/detections"
+        modes_before = len(obs.snapshot().modes)
+        flights.append(_run(mqtt, profile, inst, "--sensor-source", "mqtt", "--mqtt",
+                            "127.0.0.1:1883", "--mqtt-prefix", prefix))  # fmt: skip
+        _until("mqtt: searching", lambda: any(r.get("phase") == "search" for r in events(mqtt)),
+               200.0, context(mqtt))  # fmt: skip
+        frame = LocalFrame(*HOME)
+        lat, lon, _ = frame.to_geodetic(400.0, 450.0, 0.0)
+        detection = {"time": time.time(), "sensor": "detection", "lat": lat, "lon": lon}
+        assert publish(1883, topic, json.dumps(detection)).returncode == 0
+        _until("mqtt: level 1", lambda: any(r["event"] == "level" and r["level"] == 1
+                                            for r in events(mqtt)), 20.0, context(mqtt))  # fmt: skip
+        confirm = {"time": time.time(), "sensor": "confirmation", "north": 400.0, "east": 450.0,
+                   "confidence": 0.9}  # fmt: skip
+        assert publish(1883, topic, json.dumps(confirm)).returncode == 0
+        _until("mqtt: confirmed, RTL, landed, disarmed", landed_after_rtl, 300.0, context(mqtt))
+        assert flights[-1].wait(timeout=60) == 0, context(mqtt)()
+        records = events(mqtt)
+        (confirmation,) = [r for r in records if r["event"] == "confirmation"]
+        assert (confirmation["north"], confirmation["east"]) == (400.0, 450.0)
+        assert next(r for r in records if r["event"] == "end")["reason"] == "all targets"
+        print(f"mqtt on ArduCopter: level 1 and confirmation from published detections at "
+              f"t={confirmation['t']} s; modes {obs.snapshot().modes}")  # fmt: skip
+    finally:
+        for p in flights:
+            _stop(p)
+        obs.close()
