@@ -71,5 +71,5 @@ def run_geojson(profile: MissionProfile, tracks: list[VehicleTrack]) -> dict[str
             features.append(_point(frame, s, kind="detection", vehicle=v, level=level))
         for s in track.confirmations:
             features.append(_point(frame, s, kind="confirmation", vehicle=v))
-    return {"type": "FeatureCollection", "features": features,
-            "properties": {"profile": profile.name}}  # fmt: skip
+    # Only the members RFC 7946 defines: a reader owes nothing to foreign ones.
+    return {"type": "FeatureCollection", "features": features}

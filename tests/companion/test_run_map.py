@@ -1,6 +1,6 @@
 """The map after a live run: `companion fleet` (and each `companion run` in it) writes GeoJSON
-(RFC 7946: [lon, lat], closed counter-clockwise rings) whose paths and confirmations are the
-mission logs', and a PNG."""
+(RFC 7946: [lon, lat], closed counter-clockwise rings; read by GDAL as QGIS reads it) whose
+paths and confirmations are the mission logs', and a PNG."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import pymap3d
+import pyogrio
 import pytest
 
 from companion.run_map.png import scale_bar_length
@@ -92,6 +93,13 @@ def test_fleet_writes_a_geojson_that_matches_the_mission_logs_and_a_png(tmp_path
     assert f"map: {out / 'map.geojson'} {out / 'map.png'}" in done.stdout
     doc = json.loads((out / "map.geojson").read_text())
     assert doc["type"] == "FeatureCollection"
+    # GDAL's GeoJSON driver (what QGIS opens it with) reads every feature, in WGS84, lon/lat
+    info = pyogrio.read_info(out / "map.geojson")
+    assert (info["driver"], info["crs"]) == ("GeoJSON", "EPSG:4326")
+    assert info["features"] == len(doc["features"])
+    west, south, east, north = info["total_bounds"]
+    assert 8.63 < west < east < 8.66
+    assert 47.39 < south < north < 47.41
     for f in doc["features"]:
         assert f["type"] == "Feature"
         assert set(f) == {"type", "geometry", "properties"}
