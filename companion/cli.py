@@ -82,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
             return run_command(args)
         if args.command == "map":
             return map_command(args)
-        from companion.fleet.runner import fleet_command
+        from companion.fleet.command import fleet_command
 
         return fleet_command(args)
     except ProfileError as exc:

@@ -148,3 +148,16 @@ def publish(
          "-m", payload, *auth],
         capture_output=True, text=True, timeout=20, check=False,
     )  # fmt: skip
+
+
+def retained_topics(port: int, topic_filter: str, *, remove: bool = False) -> list[str]:
+    """Topics under ``topic_filter`` that hold a retained message on the broker at ``port``;
+    ``remove``: clear them too, so a test leaves nothing on a user's broker. Mosquitto sends
+    retained messages right after the subscription, so a one-second wait sees them all."""
+    done = subprocess.run(
+        ["mosquitto_sub", "-h", "127.0.0.1", "-p", str(port), "-t", topic_filter,
+         "--retained-only", "-W", "1", "-F", "%t",
+         *(["--remove-retained"] if remove else [])],
+        capture_output=True, text=True, timeout=20, check=False,
+    )  # fmt: skip
+    return done.stdout.split()

@@ -24,8 +24,17 @@ def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
     p.add_argument("--persona", choices=("px4", "ardupilot"), default="px4")
     p.add_argument("--setpoints", choices=("velocity", "position"), default="velocity")
     p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--base-port", type=int, default=14540)
-    p.add_argument("--out", type=Path, help="run directory (default runs/fleet-<time>)")
+    p.add_argument("--base-port", type=int,
+                   help="first of 2N UDP ports: companions BASE+i, the emulator BASE+N+i; "
+                   "refused when busy (default: a free block, printed at start)")  # fmt: skip
+    p.add_argument("--out", type=Path,
+                   help="run directory, new or empty (default runs/fleet-<time>)")  # fmt: skip
+    p.add_argument("--resume", action="store_true",
+                   help="continue the run in --out: vehicles that had not ended fly on from "
+                   "their mission logs (README: what a fleet run leaves on disk)")  # fmt: skip
+    p.add_argument("--land-wait", type=float, default=900.0,
+                   help="after a stop (Ctrl-C), sim s the emulator runs on so the vehicles "
+                   "can land (default 900)")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     p.add_argument("--lockstep", action=argparse.BooleanOptionalAction, default=True,
                    help="sim time waits for every companion's setpoint each tick, so setpoints "

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 import logging
 import os
@@ -11,52 +10,29 @@ import subprocess
 import sys
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
-from companion.fleet.progress import progress_line, read_progress
+from companion.fleet import processes
+from companion.fleet.options import FleetOptions
+from companion.fleet.outcome import emulator_end, vehicle_end
+from companion.fleet.preflight import RUN_FILE, FleetPlan, plan_fleet
+from companion.fleet.processes import StopRequests
+from companion.fleet.progress import LEGEND, airborne, progress_line, read_progress
 from companion.fleet.scoring import EMULATOR_EVENTS, FleetResult, score
 from companion.link.factory import check_signing_support
 from companion.run_map.cli_args import map_after_run
-from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
 from mavlink_signing import load_signing_key
-from mdm_core.search.pso import VARIANTS
 from mdm_profiles import MissionProfile, load_profile
 
+__all__ = ["FleetOptions", "companion_command", "emulator_command", "run_fleet"]
+
 log = logging.getLogger(__name__)
+RESULTS = "results.json"
+_POLL_S = 0.2
+_HARD_STOP_S = 3.0
+"""Wall seconds companions get to exit after a second stop signal before SIGKILL."""
 
 
-@dataclass(frozen=True)
-class FleetOptions:
-    """One fleet run on this machine."""
-
-    profile: str
-    out: Path
-    vehicles: int | None = None
-    speedup: float = 100.0
-    duration: float = 300.0
-    backend: str = "pymavlink"
-    persona: str = "px4"
-    setpoints: str = "velocity"
-    seed: int = 1
-    base_port: int = 14540
-    quiet: bool = True
-    wall_limit: float = 900.0
-    """Wall seconds after which the run is stopped (companions get SIGTERM)."""
-    mqtt_args: tuple[str, ...] = ()
-    """--mqtt* flags passed to every companion (none: no MQTT unless the profile has it)."""
-    signing_key_file: Path | None = None
-    """MAVLink signing passphrase file for the emulator and the companions (they also inherit
-    $MDM_MAVLINK_KEY)."""
-    sensor_source: str | None = None
-    """--sensor-source of every companion (None: the profile's sensor_source.kind)."""
-    lockstep: bool = False
-    """The emulator holds sim time until every companion answered the last position
-    (sim-vehicle --lockstep): a loaded host slows the run instead of the companions skipping
-    stale positions, so setpoints stay at the telemetry rate (10 Hz) in vehicle time. Costs
-    speed (docs/companion.md). Always on flat out (speedup 0)."""
-
-
-def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
+def emulator_command(o: FleetOptions, vehicles: int, base_port: int) -> list[str]:
     """The sim-vehicle command line for this run."""
     return [
         sys.executable, "-m", "sim_vehicle_stub.cli",
@@ -64,8 +40,8 @@ def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
         "--vehicles", str(vehicles),
         "--speedup", str(o.speedup) if o.speedup > 0 else "max",
         "--persona", o.persona,
-        "--base-port", str(o.base_port),
-        "--bind-port-base", str(o.base_port + 200),
+        "--base-port", str(base_port),
+        "--bind-port-base", str(base_port + vehicles),
         "--seed", str(o.seed),
         "--events", str(o.out / EMULATOR_EVENTS),
         # flat out, the emulator would outrun the companions at unscaled failsafe time-outs
@@ -74,18 +50,19 @@ def emulator_command(o: FleetOptions, vehicles: int) -> list[str]:
     ]  # fmt: skip
 
 
-def companion_command(o: FleetOptions, vehicle: int) -> list[str]:
+def companion_command(o: FleetOptions, vehicle: int, base_port: int) -> list[str]:
     """The `companion run` command line of one vehicle."""
     return [
         sys.executable, "-m", "companion.cli", "run",
         "--profile", o.profile,
         "--vehicle", str(vehicle),
-        "--base-port", str(o.base_port),
+        "--base-port", str(base_port),
         "--backend", o.backend,
         "--setpoints", o.setpoints,
         "--seed", str(o.seed),
         "--log-dir", str(o.out),
         "--duration", str(o.duration),
+        # the fleet, not each companion, waits for the landing (it reads the emulator's log)
         "--land-wait", "0",
         *(["--sensor-source", o.sensor_source] if o.sensor_source else []),
         "--dedicated-link",
@@ -98,65 +75,141 @@ def _signing_args(o: FleetOptions) -> list[str]:
     return ["--signing-key-file", str(o.signing_key_file)] if o.signing_key_file else []
 
 
+def _say(text: str) -> None:
+    """What the fleet does, on stderr (stdout may carry --json)."""
+    print(text, file=sys.stderr, flush=True)
+
+
+@dataclass
+class _Stopped:
+    """Why the watch ended early."""
+
+    by: str | None = None
+    emulator_early: bool = False
+    at_once: bool = False
+
+
 def run_fleet(o: FleetOptions) -> FleetResult:
-    """Fly one fleet mission; returns its scored result (also written to out/results.json)."""
+    """Fly one fleet mission; returns its scored result (also written to out/results.json).
+
+    Everything is checked before a process starts (FleetInputError, PortError). A SIGINT or
+    SIGTERM to the fleet (main thread only) ends every vehicle's mission with its end action and
+    waits for the landing; a second one stops at once. results.json is written either way.
+    """
     profile = load_profile(o.profile)
-    n = o.vehicles or profile.fleet.vehicles
     # a bad key or a backend that cannot sign fails here, not in every process
     check_signing_support(o.backend, load_signing_key(o.signing_key_file))
-    o.out.mkdir(parents=True, exist_ok=True)
+    plan = plan_fleet(o, profile)
+    _say(f"fleet: {plan.ports.describe()}; logs in {o.out}")
+    _write_run_file(o, profile, plan)
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    started = time.perf_counter()
-    with (o.out / "emulator.log").open("w") as emu_log:
-        emulator = subprocess.Popen(
-            emulator_command(o, n), stdout=emu_log, stderr=subprocess.STDOUT, env=env
-        )
-        companions: list[subprocess.Popen[bytes]] = []
+    # present from the start, so a run whose emulator never wrote is scored (nothing in range)
+    (o.out / EMULATOR_EVENTS).touch()
+    emulator = processes.start(emulator_command(o, plan.vehicles, plan.ports.base),
+                               o.out / "emulator.log", env, append=o.resume)  # fmt: skip
+    companions: dict[int, subprocess.Popen[bytes]] = {}
+    stopped = _Stopped()
+    requests = StopRequests()
+    with requests.installed():
         try:
-            for i in range(n):
-                with (o.out / f"companion-{i}.log").open("w") as f:
-                    companions.append(
-                        subprocess.Popen(companion_command(o, i), stdout=f, stderr=subprocess.STDOUT, env=env)
-                    )  # fmt: skip
-            _watch(o, profile, n, companions, started, emulator)
+            for i in plan.start:
+                companions[i] = processes.start(
+                    companion_command(o, i, plan.ports.base), o.out / f"companion-{i}.log", env,
+                    append=o.resume,
+                )  # fmt: skip
+            stopped = _watch(o, profile, plan, companions, emulator, requests)
         finally:
-            for p in companions:
-                _stop(p)
-            _stop(emulator)
-    result = score(profile, o.out, n, o.duration, virtual_seed=_virtual_seed(o, profile))
-    (o.out / "results.json").write_text(json.dumps(result.as_json(), indent=2, default=str))
-    map_after_run(o.out, profile, list(range(n)), "map")
-    log.info("fleet done in %.1f s wall", time.perf_counter() - started)
-    return result
+            if stopped.at_once or any(p.poll() is None for p in companions.values()):
+                _stop_at_once(companions)
+            processes.stop(emulator, 10.0)
+    return _finish(o, profile, plan, companions, emulator, stopped)
+
+
+def _write_run_file(o: FleetOptions, profile: MissionProfile, plan: FleetPlan) -> None:
+    run = {
+        "profile": profile.name, "profile_arg": o.profile, "vehicles": plan.vehicles,
+        "seed": o.seed, "duration": o.duration, "speedup": o.speedup, "backend": o.backend,
+        "persona": o.persona, "base_port": plan.ports.base, "started": time.time(),
+        "resumed_vehicles": list(plan.start) if o.resume else None,
+    }  # fmt: skip
+    if o.resume:  # keep the first run's description; note the restart beside it
+        earlier = json.loads((o.out / RUN_FILE).read_text(encoding="utf-8"))
+        run = earlier | {"resumes": [*earlier.get("resumes", []), run]}
+    (o.out / RUN_FILE).write_text(json.dumps(run, indent=2))
 
 
 def _watch(
     o: FleetOptions,
     profile: MissionProfile,
-    n: int,
-    companions: list[subprocess.Popen[bytes]],
-    started: float,
+    plan: FleetPlan,
+    companions: dict[int, subprocess.Popen[bytes]],
     emulator: subprocess.Popen[bytes],
-) -> None:
+    requests: StopRequests,
+) -> _Stopped:
+    started = time.monotonic()
+    stopped = _Stopped()
+    land_by: float | None = None
     real = sum(not t.false_target for t in profile.targets)
     last_print, last_line = 0.0, ""
-    while any(p.poll() is None for p in companions):
-        time.sleep(0.5)
-        now = time.perf_counter()
+    if not o.quiet:
+        print(LEGEND, flush=True)
+    while True:
+        time.sleep(_POLL_S)
+        now = time.monotonic()
+        if requests.count >= 2:
+            _say(f"fleet: second {requests.signal_name}: stopping every process at once")
+            stopped.by = stopped.by or requests.signal_name
+            stopped.at_once = True
+            return stopped
         if emulator.poll() is not None:
             log.error("the emulator exited (code %s); see %s", emulator.returncode,
                       o.out / "emulator.log")  # fmt: skip
-            break
-        if now - started > o.wall_limit:
-            log.warning("wall limit %.0f s reached; stopping the companions", o.wall_limit)
-            break
-        if not o.quiet and now - last_print >= 2.0:
-            views = read_progress(o.out, n)
-            found = score(profile, o.out, n, o.duration, virtual_seed=_virtual_seed(o, profile)).tnc
-            line = progress_line(views, found, real)
-            if line != last_line or now - last_print >= 10.0:
-                print(line, flush=True)
-                last_print, last_line = now, line
+            stopped.by = stopped.by or "the emulator exited"
+            stopped.emulator_early = True
+            return stopped
+        if stopped.by is None and (requests.count or now - started > o.wall_limit):
+            stopped.by = requests.signal_name if requests.count else "wall limit"
+            _say(f"fleet: {stopped.by}: every vehicle flies its end action; waiting for the "
+                 "companions and the landing (Ctrl-C again to stop at once)")  # fmt: skip
+            for p in companions.values():
+                processes.signal_one(p, signal.SIGINT)
+        if any(p.poll() is None for p in companions.values()):
+            if not o.quiet and now - last_print >= 2.0:
+                line = _progress(o, profile, plan, companions, real)
+                if line != last_line or now - last_print >= 10.0:
+                    print(line, flush=True)
+                    last_print, last_line = now, line
+            continue
+        if stopped.by is None:
+            return stopped
+        flying = airborne(o.out)
+        if not flying:
+            if land_by is not None:
+                _say("fleet: every vehicle has landed")
+            return stopped
+        if land_by is None:
+            wall = o.land_wait / o.speedup if o.speedup > 0 else o.land_wait / 50.0
+            land_by = now + wall
+            _say(f"fleet: waiting up to {wall:.0f} s wall ({o.land_wait:.0f} sim s) for "
+                 f"{len(flying)} vehicle(s) to land: {flying}")  # fmt: skip
+        elif now > land_by:
+            _say(f"fleet: still in the air after {o.land_wait:.0f} sim s: {flying}")
+            return stopped
+
+
+def _progress(
+    o: FleetOptions,
+    profile: MissionProfile,
+    plan: FleetPlan,
+    companions: dict[int, subprocess.Popen[bytes]],
+    real: int,
+) -> str:
+    views = read_progress(o.out, plan.vehicles)
+    for i, p in companions.items():
+        views[i].failed = p.poll() not in (None, 0)
+    found = score(profile, o.out, plan.vehicles, o.duration,
+                  virtual_seed=_virtual_seed(o, profile)).tnc  # fmt: skip
+    return progress_line(views, found, real)
 
 
 def _virtual_seed(o: FleetOptions, profile: MissionProfile) -> int | None:
@@ -165,49 +218,35 @@ def _virtual_seed(o: FleetOptions, profile: MissionProfile) -> int | None:
     return o.seed if virtual else None
 
 
-def _stop(p: subprocess.Popen[bytes]) -> None:
-    if p.poll() is None:
-        p.send_signal(signal.SIGTERM)
-        try:
-            p.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            p.wait()
+def _stop_at_once(companions: dict[int, subprocess.Popen[bytes]]) -> None:
+    """A second signal to each companion (it stops commanding and exits), then SIGKILL."""
+    live = [p for p in companions.values() if p.poll() is None]
+    for p in live:
+        processes.signal_one(p, signal.SIGINT)
+    processes.wait_all(live, _HARD_STOP_S)
+    for p in live:
+        processes.kill_group(p)
 
 
-def fleet_command(args: argparse.Namespace) -> int:
-    """`companion fleet`: run, then print a summary (or JSON)."""
-    out = args.out or Path("runs") / time.strftime("fleet-%Y%m%d-%H%M%S")
-    profile = load_profile(args.profile)
-    # Bad --mqtt* flags, or a swarm kind without a broker, fail here, not N times.
-    if mqtt_spec(args, profile.mqtt) is None and profile.policy.kind in VARIANTS:
-        raise ValueError(
-            f"profile {profile.name!r}: policy.kind {profile.policy.kind!r} shares the swarm's "
-            "bests over MQTT; configure a broker (--mqtt HOST[:PORT] or the profile's mqtt:)"
-        )
-    opts = FleetOptions(
-        profile=args.profile, out=out, vehicles=args.vehicles, speedup=args.speedup,
-        duration=args.duration, backend=args.backend, persona=args.persona,
-        setpoints=args.setpoints, seed=args.seed, base_port=args.base_port,
-        quiet=args.quiet or args.json, mqtt_args=tuple(mqtt_argv(args)),
-        signing_key_file=args.signing_key_file, lockstep=args.lockstep,
-        sensor_source=args.sensor_source,
-    )  # fmt: skip
-    started = time.perf_counter()
-    result = run_fleet(opts)
-    wall = time.perf_counter() - started
-    if args.json:
-        print(json.dumps(result.as_json() | {"wall_s": round(wall, 1)}, default=str))
-        return 0
-    real = sum(1 for t in result.first_confirmation if t != float("inf"))
-    print(f"\n{result.profile}: {result.vehicles} vehicles, {result.duration:.0f} sim s "
-          f"in {wall:.1f} s wall")  # fmt: skip
-    print(f"  targets confirmed (T_nc): {result.tnc}; distinct ever: {real}")
-    ts = f"{result.ts:.1f} s" if not result.ts_capped else f"not all (capped {result.ts:.0f} s)"
-    print(f"  time to all targets (T_S): {ts}")
-    print(f"  false confirmations: {result.false_confirmations}")
-    for c in result.confirmations:
-        print(f"    vehicle {c.vehicle} t={c.time:7.1f} s target T{c.target + 1} "
-              f"({c.north:.0f}, {c.east:.0f}) {c.distance:.0f} m off")  # fmt: skip
-    print(f"  results: {out / 'results.json'}")
-    return 0
+def _finish(
+    o: FleetOptions,
+    profile: MissionProfile,
+    plan: FleetPlan,
+    companions: dict[int, subprocess.Popen[bytes]],
+    emulator: subprocess.Popen[bytes],
+    stopped: _Stopped,
+) -> FleetResult:
+    result = score(profile, o.out, plan.vehicles, o.duration,
+                   virtual_seed=_virtual_seed(o, profile))  # fmt: skip
+    result.ends = [
+        vehicle_end(o.out, i, companions[i].returncode if i in companions else None,
+                    plan.earlier.get(i))
+        for i in range(plan.vehicles)
+    ]  # fmt: skip
+    result.ends.append(emulator_end(o.out, emulator.returncode, stopped.emulator_early))
+    result.stopped_by = stopped.by
+    result.complete = stopped.by is None and all(e.ok for e in result.ends)
+    path = o.out / RESULTS
+    path.write_text(json.dumps(result.as_json(), indent=2, default=str))
+    map_after_run(o.out, profile, list(range(plan.vehicles)), "map")
+    return result

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from companion.fleet.outcome import ProcessEnd
 from companion.telemetry.mission_log import read_records
 from mdm_core.metrics import confirmed_within, team_times, time_to_all
 from mdm_core.world import Scenario
@@ -42,11 +43,25 @@ class FleetResult:
     ts: float
     """Time to confirm every real target (capped at the profile's ts_cap)."""
     ts_capped: bool
+    real_targets: int
+    sim_time: float
+    """The latest mission time any vehicle logged (what the progress lines show), sim s."""
+    search_time: float
+    """The longest search a vehicle flew (its end, else its last logged time, less its search
+    start), sim s."""
     first_confirmation: list[float]
     """Per target, the team's first confirmation time (inf: never)."""
     false_confirmations: int
     confirmations: list[Confirmation] = field(default_factory=list)
     end_reasons: dict[int, str] = field(default_factory=dict)
+    """Each vehicle's end reason from its mission log (absent: it never ended)."""
+    complete: bool = False
+    """The run ended by itself and every process ended normally (fleet/outcome.py): the
+    figures are those of a whole mission. Set by the fleet runner."""
+    stopped_by: str | None = None
+    """What stopped the run early (SIGINT, SIGTERM, wall limit, the emulator), if anything."""
+    ends: list[ProcessEnd] = field(default_factory=list)
+    """How every companion and the emulator ended."""
 
     def as_json(self) -> dict[str, Any]:
         out = asdict(self)
@@ -155,11 +170,31 @@ def score(
                 found.append(Confirmation(i, t, float(where[0]), float(where[1]), k, gap, ok))
                 if ok:
                     per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
-    return _result(profile, vehicles, duration, per_vehicle, real, found, reasons)
+    return _result(profile, log_dir, vehicles, duration, per_vehicle, real, found, reasons)
+
+
+def flown_times(log_dir: Path, vehicles: int) -> tuple[float, float]:
+    """The latest mission time logged and the longest search flown (end, else last record,
+    less the search start), sim s."""
+    sim_time = search_time = 0.0
+    for i in range(vehicles):
+        start = end = None
+        last = 0.0
+        for rec in read_records(log_dir / f"mission-{i}.jsonl"):
+            last = max(last, float(rec.get("t", 0.0)))
+            if start is None and "search_start" in rec:
+                start = float(rec["search_start"])
+            elif rec.get("event") == "end":
+                end = float(rec["t"])
+        sim_time = max(sim_time, last)
+        if start is not None:
+            search_time = max(search_time, (last if end is None else end) - start)
+    return round(sim_time, 3), round(search_time, 3)
 
 
 def _result(
     profile: MissionProfile,
+    log_dir: Path,
     vehicles: int,
     duration: float,
     per_vehicle: np.ndarray,
@@ -170,6 +205,7 @@ def _result(
     times = team_times(per_vehicle)
     tnc = int(confirmed_within(times, duration)[0])
     ts, capped = time_to_all(times, real, profile.mission.ts_cap)
+    sim_time, search_time = flown_times(log_dir, vehicles)
     return FleetResult(
         profile=profile.name,
         vehicles=vehicles,
@@ -177,6 +213,9 @@ def _result(
         tnc=tnc,
         ts=float(ts[0]),
         ts_capped=bool(capped[0]),
+        real_targets=int(real.sum()),
+        sim_time=sim_time,
+        search_time=search_time,
         first_confirmation=[float(x) for x in times[0]],
         false_confirmations=sum(not c.real for c in found),
         confirmations=found,
@@ -214,4 +253,4 @@ def _score_virtual(
                                           float(gaps[k]), ok))  # fmt: skip
                 if ok:
                     per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
-    return _result(profile, vehicles, duration, per_vehicle, real, found, reasons)
+    return _result(profile, log_dir, vehicles, duration, per_vehicle, real, found, reasons)

@@ -10,7 +10,7 @@ from companion.fleet.runner import FleetOptions, emulator_command
 
 def _lockstep(**kw: object) -> bool:
     options = FleetOptions(profile="paper-fixed", out=Path("runs/x"), **kw)  # type: ignore[arg-type]
-    return "--lockstep" in emulator_command(options, 12)
+    return "--lockstep" in emulator_command(options, 12, 20000)
 
 
 def test_lockstep_only_when_asked_or_flat_out() -> None:

@@ -16,7 +16,7 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from tests.mqtt_harness import Subscriber, publish, wait_until
+from tests.mqtt_harness import Subscriber, publish, retained_topics, wait_until
 
 PROFILE = """
 name: mqtt-command-test
@@ -60,7 +60,7 @@ def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> No
         assert done.returncode == 0, done.stderr
 
     fleet = threading.Thread(target=run_fleet, args=(FleetOptions(
-        profile=str(profile), out=out, speedup=50.0, duration=5000.0, base_port=35560, seed=4,
+        profile=str(profile), out=out, speedup=50.0, duration=5000.0, seed=4,
         wall_limit=100, mqtt_args=("--mqtt", "127.0.0.1:1883", "--mqtt-prefix", prefix,
                                    "--mqtt-state-rate", "10")),))  # fmt: skip
     try:
@@ -90,6 +90,8 @@ def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> No
         assert not fleet.is_alive(), "the fleet did not end after abort and land"
     finally:
         sub.stop()
+        retained_topics(1883, f"{prefix}/#", remove=True)
+    assert retained_topics(1883, f"{prefix}/#") == [], "retained messages left on the broker"
 
     v0 = read_records(out / "mission-0.jsonl")
     v1 = read_records(out / "mission-1.jsonl")

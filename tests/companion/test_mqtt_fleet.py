@@ -12,7 +12,7 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from tests.mqtt_harness import Subscriber, wait_until
+from tests.mqtt_harness import Subscriber, retained_topics, wait_until
 
 PROFILE = """
 name: mqtt-fleet-test
@@ -64,7 +64,7 @@ def test_fleet_publishes_every_event_in_order_state_and_status(tmp_path: Path) -
     try:
         sub.ready(1883, f"{prefix}/probe")
         run_fleet(FleetOptions(profile=str(profile), out=tmp_path / "run", speedup=50.0,
-                               duration=200.0, base_port=35540, seed=3, wall_limit=90))  # fmt: skip
+                               duration=200.0, seed=3, wall_limit=90))  # fmt: skip
 
         def offline(i: int) -> bool:
             status = [m.json() for m in sub.messages("status") if f"/uav{i}/" in m.topic]
@@ -73,6 +73,8 @@ def test_fleet_publishes_every_event_in_order_state_and_status(tmp_path: Path) -
         wait_until(lambda: offline(0) and offline(1), 15, "both vehicles' clean offline status")
     finally:
         sub.stop()
+        retained_topics(1883, f"{prefix}/#", remove=True)
+    assert retained_topics(1883, f"{prefix}/#") == [], "retained messages left on the broker"
     for i in range(2):
         logged = log_events(tmp_path / "run" / f"mission-{i}.jsonl")
         published = mqtt_events(sub, prefix, i)

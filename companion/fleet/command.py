@@ -1,0 +1,43 @@
+"""`companion fleet` on the command line: options in, summary (or JSON) and exit status out."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+from companion.fleet.options import FleetOptions
+from companion.fleet.runner import run_fleet
+from companion.fleet.summary import exit_status, summary_lines
+from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
+from mdm_core.search.pso import VARIANTS
+from mdm_profiles import load_profile
+
+
+def fleet_command(args: argparse.Namespace) -> int:
+    """`companion fleet`: run, print a summary (or JSON); 0 only for a complete run."""
+    out = args.out or Path("runs") / time.strftime("fleet-%Y%m%d-%H%M%S")
+    profile = load_profile(args.profile)
+    # Bad --mqtt* flags, or a swarm kind without a broker, fail here, not N times.
+    if mqtt_spec(args, profile.mqtt) is None and profile.policy.kind in VARIANTS:
+        raise ValueError(
+            f"profile {profile.name!r}: policy.kind {profile.policy.kind!r} shares the swarm's "
+            "bests over MQTT; configure a broker (--mqtt HOST[:PORT] or the profile's mqtt:)"
+        )
+    opts = FleetOptions(
+        profile=args.profile, out=out, vehicles=args.vehicles, speedup=args.speedup,
+        duration=args.duration, backend=args.backend, persona=args.persona,
+        setpoints=args.setpoints, seed=args.seed, base_port=args.base_port,
+        quiet=args.quiet or args.json, land_wait=args.land_wait, resume=args.resume,
+        mqtt_args=tuple(mqtt_argv(args)), signing_key_file=args.signing_key_file,
+        lockstep=args.lockstep, sensor_source=args.sensor_source,
+    )  # fmt: skip
+    started = time.perf_counter()
+    result = run_fleet(opts)
+    wall = time.perf_counter() - started
+    if args.json:
+        print(json.dumps(result.as_json() | {"wall_s": round(wall, 1)}, default=str))
+    else:
+        print("\n" + "\n".join(summary_lines(result, out, wall)))
+    return exit_status(result)

@@ -1,0 +1,45 @@
+"""What one `companion fleet` run is asked to do."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+
+@dataclass(frozen=True)
+class FleetOptions:
+    """One fleet run on this machine."""
+
+    profile: str
+    out: Path
+    vehicles: int | None = None
+    """None: the profile's fleet size."""
+    speedup: float = 100.0
+    duration: float = 300.0
+    backend: str = "pymavlink"
+    persona: str = "px4"
+    setpoints: str = "velocity"
+    seed: int = 1
+    base_port: int | None = None
+    """First UDP port (refused when busy); None: a free block chosen by the fleet."""
+    quiet: bool = True
+    wall_limit: float = 900.0
+    """Wall seconds after which the run is stopped as by one Ctrl-C (not complete)."""
+    land_wait: float = 900.0
+    """After a stop (Ctrl-C, wall limit), sim seconds the emulator keeps running so the vehicles
+    can fly their end action and land; converted to wall seconds at the requested speed-up."""
+    resume: bool = False
+    """Continue the run in ``out``: companions whose mission log has no end record start again
+    from it; the others stay ended (README "What a fleet run leaves on disk")."""
+    mqtt_args: tuple[str, ...] = ()
+    """--mqtt* flags passed to every companion (none: no MQTT unless the profile has it)."""
+    signing_key_file: Path | None = None
+    """MAVLink signing passphrase file for the emulator and the companions (they also inherit
+    $MDM_MAVLINK_KEY)."""
+    sensor_source: str | None = None
+    """--sensor-source of every companion (None: the profile's sensor_source.kind)."""
+    lockstep: bool = False
+    """The emulator holds sim time until every companion answered the last position
+    (sim-vehicle --lockstep): a loaded host slows the run instead of the companions skipping
+    stale positions, so setpoints stay at the telemetry rate (10 Hz) in vehicle time. Costs
+    speed (docs/companion.md). Always on flat out (speedup 0)."""

@@ -1,0 +1,55 @@
+"""A fleet run that went wrong says so: a non-zero exit status, a per-process table with the
+first error and the log, and results.json marked incomplete."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from companion.fleet.options import FleetOptions
+from companion.fleet.runner import run_fleet
+from companion.fleet.summary import exit_status
+from tests.fleet_cli import run_fleet_cli, small_profile
+
+
+@pytest.mark.timeout(120)
+def test_vehicles_that_never_climb_fail_the_run(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    done = run_fleet_cli("--profile", small_profile(tmp_path, tau=1e9), "--duration", "300",
+                         "--out", str(out))  # fmt: skip
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert "NOT COMPLETE (3 process(es) failed)" in done.stdout
+    for i in range(3):
+        row = re.compile(rf"vehicle {i} +climb timeout +- +{re.escape(str(out))}/companion-{i}.log")
+        assert row.search(done.stdout), done.stdout
+    result = json.loads((out / "results.json").read_text())
+    assert result["complete"] is False
+    assert result["stopped_by"] is None
+    assert result["end_reasons"] == {
+        "0": "climb timeout",
+        "1": "climb timeout",
+        "2": "climb timeout",
+    }
+
+
+@pytest.mark.timeout(120)
+def test_an_emulator_that_exits_fails_the_run_with_its_error(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    result = run_fleet(FleetOptions(profile=small_profile(tmp_path), out=out, persona="nosuch",
+                                    duration=300.0))  # fmt: skip
+    assert exit_status(result) == 1
+    assert not result.complete
+    assert result.stopped_by == "the emulator exited"
+    emulator = result.ends[-1]
+    assert emulator.name == "emulator"
+    assert emulator.how.startswith("exited on its own before the companions ended, exit code")
+    assert emulator.exit_code not in (None, 0)
+    assert emulator.error is not None
+    assert "unknown persona 'nosuch'" in emulator.error
+    for end in result.ends[:-1]:
+        assert end.how.startswith("no end in its mission log"), end
+        assert not end.ok
+    assert json.loads((out / "results.json").read_text())["complete"] is False
