@@ -28,6 +28,9 @@ class ProcessEnd:
     error: str | None
     log: str
     ok: bool
+    strays: tuple[str, ...] = ()
+    """Other senders with this vehicle's system id that its companion ignored (address: the
+    one it locked to), from the mission log's ``stray`` records."""
 
 
 def first_error(path: Path) -> str | None:
@@ -49,16 +52,14 @@ def first_error(path: Path) -> str | None:
     return None
 
 
-def end_reason(mission_log: Path) -> str | None:
-    """The last end reason a vehicle's mission log holds (None: it never ended)."""
-    reasons = [r.get("reason") for r in read_records(mission_log) if r.get("event") == "end"]
-    return str(reasons[-1]) if reasons else None
-
-
 def vehicle_end(out: Path, vehicle: int, exit_code: int | None, earlier: str | None) -> ProcessEnd:
     """How vehicle ``vehicle``'s companion ended (``earlier``: it ended in an earlier run)."""
     log = out / f"companion-{vehicle}.log"
-    reason = end_reason(out / f"mission-{vehicle}.jsonl")
+    records = read_records(out / f"mission-{vehicle}.jsonl")
+    reasons = [r.get("reason") for r in records if r.get("event") == "end"]
+    reason = str(reasons[-1]) if reasons else None
+    strays = tuple(f"{r.get('address')} (locked to {r.get('locked')})" for r in records
+                   if r.get("event") == "stray")  # fmt: skip
     if exit_code is None:
         how = f"{earlier or reason} (earlier run)"
         ok = (earlier or reason) in NORMAL_ENDS
@@ -68,7 +69,7 @@ def vehicle_end(out: Path, vehicle: int, exit_code: int | None, earlier: str | N
     else:
         how = reason + _exit_words(exit_code)
         ok = exit_code == 0 and reason in NORMAL_ENDS
-    return ProcessEnd(f"vehicle {vehicle}", how, exit_code, first_error(log), str(log), ok)
+    return ProcessEnd(f"vehicle {vehicle}", how, exit_code, first_error(log), str(log), ok, strays)
 
 
 def emulator_end(out: Path, exit_code: int | None, exited_early: bool) -> ProcessEnd:

@@ -16,9 +16,10 @@ from companion.fleet.options import FleetOptions
 from companion.fleet.outcome import emulator_end, vehicle_end
 from companion.fleet.preflight import RUN_FILE, FleetPlan, plan_fleet
 from companion.fleet.processes import StopRequests
-from companion.fleet.progress import LEGEND, airborne, progress_line, read_progress
+from companion.fleet.progress import LEGEND, VehicleView, airborne, progress_line, read_progress
 from companion.fleet.scoring import EMULATOR_EVENTS, FleetResult, score
 from companion.link.factory import check_signing_support
+from companion.mission.phase import Phase
 from companion.run_map.cli_args import map_after_run
 from mavlink_signing import load_signing_key
 from mdm_profiles import MissionProfile, load_profile
@@ -28,6 +29,9 @@ __all__ = ["FleetOptions", "companion_command", "emulator_command", "run_fleet"]
 log = logging.getLogger(__name__)
 RESULTS = "results.json"
 _POLL_S = 0.2
+_EXIT_GRACE_S = 30.0
+"""Wall seconds a companion gets to exit after a stop signal, or after its mission log says
+done (with --land-wait 0 it exits within a few seconds: MQTT delivery is bounded by 7 s)."""
 _HARD_STOP_S = 3.0
 """Wall seconds companions get to exit after a second stop signal before SIGKILL."""
 
@@ -146,11 +150,13 @@ def _watch(
     emulator: subprocess.Popen[bytes],
     requests: StopRequests,
 ) -> _Stopped:
+    """Until every companion has ended (and, after a stop, every vehicle has landed)."""
     started = time.monotonic()
     stopped = _Stopped()
-    land_by: float | None = None
+    stop_at = land_by = None
+    done_at: dict[int, float] = {}
     real = sum(not t.false_target for t in profile.targets)
-    last_print, last_line = 0.0, ""
+    last_look, last_print, last_line = 0.0, 0.0, ""
     if not o.quiet:
         print(LEGEND, flush=True)
     while True:
@@ -167,20 +173,31 @@ def _watch(
             stopped.by = stopped.by or "the emulator exited"
             stopped.emulator_early = True
             return stopped
-        if stopped.by is None and (requests.count or now - started > o.wall_limit):
+        if stop_at is None and (requests.count or now - started > o.wall_limit):
             stopped.by = requests.signal_name if requests.count else "wall limit"
+            stop_at = now
             _say(f"fleet: {stopped.by}: every vehicle flies its end action; waiting for the "
                  "companions and the landing (Ctrl-C again to stop at once)")  # fmt: skip
             for p in companions.values():
                 processes.signal_one(p, signal.SIGINT)
-        if any(p.poll() is None for p in companions.values()):
-            if not o.quiet and now - last_print >= 2.0:
-                line = _progress(o, profile, plan, companions, real)
-                if line != last_line or now - last_print >= 10.0:
-                    print(line, flush=True)
-                    last_print, last_line = now, line
+        alive = {i: p for i, p in companions.items() if p.poll() is None}
+        if alive:
+            if stop_at is not None and now - stop_at > _EXIT_GRACE_S:
+                _say(f"fleet: companions of vehicles {sorted(alive)} still running "
+                     f"{_EXIT_GRACE_S:.0f} s after the stop; stopping them at once")  # fmt: skip
+                stopped.at_once = True
+                return stopped
+            if now - last_look >= 2.0:
+                last_look = now
+                views = read_progress(o.out, plan.vehicles)
+                _end_hung(o, views, alive, done_at, now)
+                if not o.quiet:
+                    line = _progress(o, profile, plan, companions, views, real)
+                    if line != last_line or now - last_print >= 10.0:
+                        print(line, flush=True)
+                        last_print, last_line = now, line
             continue
-        if stopped.by is None:
+        if stop_at is None:
             return stopped
         flying = airborne(o.out)
         if not flying:
@@ -197,14 +214,33 @@ def _watch(
             return stopped
 
 
+def _end_hung(
+    o: FleetOptions,
+    views: list[VehicleView],
+    alive: dict[int, subprocess.Popen[bytes]],
+    done_at: dict[int, float],
+    now: float,
+) -> None:
+    """SIGKILL a companion still running _EXIT_GRACE_S after its mission log said done: a
+    process that never exits would hold the whole fleet (its outcome shows the kill)."""
+    for i, p in alive.items():
+        if views[i].phase != Phase.DONE.value:
+            continue
+        since = done_at.setdefault(i, now)
+        if now - since > _EXIT_GRACE_S:
+            _say(f"fleet: vehicle {i}'s companion still running {_EXIT_GRACE_S:.0f} s after its "
+                 f"mission ended; killing it (see {o.out / f'companion-{i}.log'})")  # fmt: skip
+            processes.kill_group(p)
+
+
 def _progress(
     o: FleetOptions,
     profile: MissionProfile,
     plan: FleetPlan,
     companions: dict[int, subprocess.Popen[bytes]],
+    views: list[VehicleView],
     real: int,
 ) -> str:
-    views = read_progress(o.out, plan.vehicles)
     for i, p in companions.items():
         views[i].failed = p.poll() not in (None, 0)
     found = score(profile, o.out, plan.vehicles, o.duration,

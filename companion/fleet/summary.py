@@ -66,5 +66,9 @@ def summary_lines(r: FleetResult, out: Path, wall: float) -> list[str]:
         why = f"stopped by {r.stopped_by}" if r.stopped_by else f"{len(bad)} process(es) failed"
         lines.append(f"  NOT COMPLETE ({why}); the figures above cover what was flown:")
         lines.extend(_table(r.ends))
+    for e in r.ends:
+        for stray in e.strays:
+            lines.append(f"  stray: {e.name} heard another sender with its system id, "
+                         f"{stray}; ignored")  # fmt: skip
     lines.append(f"  results: {out / 'results.json'}")
     return lines

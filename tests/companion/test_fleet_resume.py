@@ -13,8 +13,8 @@ import pytest
 from companion.fleet.options import FleetOptions
 from companion.fleet.runner import run_fleet
 from companion.telemetry import read_records
-from companion.telemetry.mqtt.testing import wait_until
 from tests.fleet_cli import processes_naming, run_fleet_cli, small_profile, start_fleet
+from tests.mqtt_harness import wait_until
 
 
 def _search_start(log: Path) -> float | None:

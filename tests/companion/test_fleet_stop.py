@@ -14,8 +14,8 @@ from typing import Any
 import pytest
 
 from companion.telemetry import read_records
-from companion.telemetry.mqtt.testing import wait_until
 from tests.fleet_cli import processes_naming, small_profile, start_fleet
+from tests.mqtt_harness import wait_until
 
 
 def _searching(out: Path, vehicles: int) -> bool:

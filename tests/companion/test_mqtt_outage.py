@@ -61,7 +61,7 @@ def test_events_survive_a_30_s_broker_outage_complete_and_in_order(tmp_path: Pat
         return [r for r in read_records(out / f"mission-{i}.jsonl") if r["event"] != "tick"]
 
     fleet = threading.Thread(target=run_fleet, args=(FleetOptions(
-        profile=str(profile), out=out, speedup=10.0, duration=5000.0, base_port=35580, seed=5,
+        profile=str(profile), out=out, speedup=10.0, duration=5000.0, seed=5,
         wall_limit=150, mqtt_args=("--mqtt", f"127.0.0.1:{broker.port}", "--mqtt-prefix", PREFIX)),
     ))  # fmt: skip
     try:

@@ -68,7 +68,7 @@ def test_only_the_operator_commands_and_vehicles_publish_only_their_own(tmp_path
         return str(states[-1]["phase"]) if states else None
 
     fleet = threading.Thread(target=run_fleet, args=(FleetOptions(
-        profile=str(profile), out=out, speedup=20.0, duration=5000.0, base_port=35600, seed=6,
+        profile=str(profile), out=out, speedup=20.0, duration=5000.0, seed=6,
         wall_limit=100, mqtt_args=(
             "--mqtt", f"127.0.0.1:{broker.port}", "--mqtt-prefix", PREFIX,
             "--mqtt-username", "uav{vehicle}",

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import asyncio
 import json
 from pathlib import Path
 
@@ -13,6 +14,7 @@ from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_argv, mqt
 from companion.telemetry.mqtt.commands import Command, CommandError, parse_command
 from companion.telemetry.mqtt.outbox import EventOutbox
 from companion.telemetry.mqtt.settings import settings_for
+from companion.telemetry.mqtt.vehicle_telemetry import cancel_and_wait
 from mdm_profiles.mqtt_spec import MqttSpec
 
 
@@ -129,3 +131,30 @@ def test_password_from_a_variable_or_a_file_per_vehicle(
         settings_for(MqttSpec(host="h", username="u", password_env="PW_UAV{vehicle}"), 4)
     with pytest.raises(ValueError, match=r"mqtt\.tls\.ca /nowhere/ca\.crt: no such file"):
         settings_for(MqttSpec.model_validate({"host": "h", "tls": {"ca": "/nowhere/ca.crt"}}), 0)
+
+
+def test_a_task_whose_wait_for_lost_the_cancellation_still_ends() -> None:
+    """The cause of a companion that never exited: a publishing loop whose wait completes in
+    the loop iteration it is cancelled in (Python 3.11's wait_for then drops the cancel)."""
+
+    async def main() -> None:
+        published = asyncio.Event()
+
+        async def publishing() -> None:
+            while True:
+                await asyncio.wait_for(published.wait(), 10)
+                published.clear()
+                await asyncio.sleep(0.05)
+
+        task = asyncio.create_task(publishing())
+        await asyncio.sleep(0.01)
+        published.set()  # the wait completes in the iteration of the cancel below
+        stopping = asyncio.create_task(cancel_and_wait(task))
+        await asyncio.wait({stopping}, timeout=5.0)  # never cancels on its own
+        ended = task.done()
+        stopping.cancel()
+        task.cancel()
+        assert ended, "the task ran on after its cancellation was lost"
+        assert task.cancelled()
+
+    asyncio.run(main())

@@ -32,6 +32,8 @@ NOT_PUBLISHED = frozenset({"tick"})
 """Mission log records that are not events on MQTT (the state message carries them)."""
 BATCH = 64
 """Events in flight at once (QoS 1); the broker keeps their order."""
+_RECANCEL_S = 0.5
+"""How long a cancelled MQTT task gets before it is cancelled again (see cancel_and_wait)."""
 
 
 def _json(data: dict[str, Any]) -> bytes:
@@ -87,9 +89,7 @@ class VehicleTelemetry:
             yield
         finally:
             await self._drain()
-            task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
+            await cancel_and_wait(task)
             self.outbox.close()
 
     # -- loops -----------------------------------------------------------------------------
@@ -177,3 +177,17 @@ class VehicleTelemetry:
 
     def _status(self, state: str, *, clean: bool = True) -> bytes:
         return _json({"vehicle": self.topics.vehicle, "state": state, "clean": clean})
+
+
+async def cancel_and_wait(task: asyncio.Task[None]) -> None:
+    """Cancel ``task`` and wait until it has ended, cancelling again every _RECANCEL_S.
+
+    On Python 3.11, asyncio.wait_for loses a cancellation that arrives in the loop iteration
+    its wait completes in (CPython issue 86296, fixed in 3.12), and aiomqtt waits for every
+    publish through it. A state loop that lost its cancellation ran on, its TaskGroup waited
+    for it, and the companion never exited (seen under load: `fleet did not end`)."""
+    while not task.done():
+        task.cancel()
+        await asyncio.wait({task}, timeout=_RECANCEL_S)
+    if not task.cancelled():
+        task.exception()  # _run logs its own errors; retrieved so asyncio does not warn
