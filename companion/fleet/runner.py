@@ -201,8 +201,7 @@ def _watch(
             return stopped
         flying = airborne(o.out)
         if not flying:
-            if land_by is not None:
-                _say("fleet: every vehicle has landed")
+            _say("fleet: every vehicle has landed")
             return stopped
         if land_by is None:
             wall = o.land_wait / o.speedup if o.speedup > 0 else o.land_wait / 50.0
