@@ -18,10 +18,10 @@ import pytest
 
 from companion.fleet.scoring import score
 from companion.telemetry import read_records
-from companion.telemetry.mqtt.testing import Subscriber, free_port, publish, wait_until
 from mdm_profiles import load_profile
 from tests.docker import engine
 from tests.docker.engine import ROOT, docker
+from tests.mqtt_harness import Subscriber, free_port, publish, wait_until
 
 COMPOSE = ROOT / "docker" / "compose.yaml"
 IMAGE = "mdm-search:latest"

@@ -133,7 +133,7 @@ def test_emulator_compose_runs_broker_emulator_and_three_distinct_signed_compani
     companions = {k: _parse(s["command"]) for k, s in services.items() if k.startswith("companion")}
     assert sorted(a.vehicle for a in companions.values()) == list(range(3))
     assert emulator.vehicles == len(companions)
-    for key, args in companions.items():
+    for args in companions.values():
         assert args.signing_key_file == emulator.signing_key_file
         assert args.connect is None  # default udpin:0.0.0.0:14540+i, where the emulator sends
         assert args.base_port == emulator.base_port
