@@ -30,6 +30,18 @@ from companion.link.messages import (
 from companion.link.streams import needs
 from companion.mission.clock import VehicleClock
 from companion.mission.config import MissionConfig
+from companion.mission.control import (
+    Action,
+    Control,
+    EndMission,
+    LinkRestored,
+    ModeReport,
+    OperatorPause,
+    OperatorResume,
+    Refused,
+    enter,
+    step,
+)
 from companion.mission.core_for import core_for
 from companion.mission.phase import Phase
 from companion.mission.swarm_core import SwarmExchange
@@ -38,7 +50,6 @@ from companion.sensors.mavlink_source import MavlinkSensorSource
 from companion.telemetry.mission_log import EventSink, Recovered
 
 log = logging.getLogger(__name__)
-_COMMANDING = (Phase.PREPARE, Phase.CLIMB, Phase.SEARCH)
 _SETPOINT_GAP_S = 0.5
 """A gap in our setpoints this long (vehicle s) can explain a HOLD: PX4's COM_OF_LOSS_T is 1 s."""
 _OPEN_BACKOFF_MAX_S = 8.0
@@ -83,7 +94,8 @@ class VehicleMission:
             altitude=config.altitude,
             acceptance_radius=profile.fleet.acceptance_radius,
         )
-        self.phase = Phase.CONNECT
+        self.control = Control()
+        """Phase and who is in control: the pure state machine of mission/control.py."""
         self.heartbeat: Heartbeat | None = None
         self.position: LocalPosition | None = None
         self.status: SystemStatus | None = None
@@ -95,19 +107,19 @@ class VehicleMission:
         self._period = 0.1
         self._last_tick = -np.inf
         self._changed = asyncio.Event()
-        self._own_mode_change = False
         self._setpoint_time = -np.inf
         """Vehicle time of the position our last setpoint answered."""
         self._received_time = -np.inf
         """Vehicle time of the newest position received (acted on or not)."""
-        self._guided_seen = False
         self._climbing_by_command = False
         self._main: asyncio.Task[object] | None = None
-        self._operator_paused = False
         self._end_action = config.end_action
         self._chores: set[asyncio.Task[None]] = set()
         self._signals = 0
-        self._speed_set = False
+        self._speed_report: str | None = None
+        """What setting the profile's speed on the vehicle gave (once per process)."""
+        self.max_search_speed = 0.0
+        """Fastest horizontal speed the vehicle reported while searching, m/s."""
 
     # -- public ----------------------------------------------------------------------------
 
@@ -166,23 +178,11 @@ class VehicleMission:
 
     def operator_pause(self) -> str | None:
         """Stop commanding and hold (autopilot HOLD) until ``operator_resume``."""
-        if self.phase is not Phase.SEARCH:
-            return f"pause: not searching (phase {self.phase.value})"
-        self._operator_paused = True
-        self._set_phase(Phase.PAUSED, by="operator")
-        task = asyncio.ensure_future(self._hold())
-        self._chores.add(task)
-        task.add_done_callback(self._chores.discard)
-        return None
+        return self._step(step(self.control, OperatorPause()), by="operator")
 
     def operator_resume(self) -> str | None:
         """Back to the guided mode and the search, as after a link loss."""
-        if not (self._operator_paused and self.phase is Phase.PAUSED):
-            return f"resume: not paused by the operator (phase {self.phase.value})"
-        self._operator_paused = False
-        self._guided_seen = False
-        self._set_phase(Phase.PREPARE)
-        return None
+        return self._step(step(self.control, OperatorResume()))
 
     def operator_end(self, action: FlightMode, reason: str) -> str | None:
         """End the mission now with ``action`` (RTL or LAND) instead of the configured one."""
@@ -306,24 +306,35 @@ class VehicleMission:
         guided = ap.is_guided(hb.custom_mode)
         if previous is None or previous.custom_mode != hb.custom_mode:
             self.emit("mode", mode=ap.mode_name(hb.custom_mode), guided=guided)
-        if guided:
-            self._guided_seen = True
-            if self.phase is Phase.PAUSED and not self._operator_paused:
-                log.info("vehicle %d back in the guided mode: resuming", self.config.vehicle)
-                self._set_phase(Phase.SEARCH if self.core.started else Phase.PREPARE)
-        elif self._guided_seen and self.phase in _COMMANDING and not self._own_mode_change:
-            if self._hold_mode(hb) and self._setpoints_stalled():
-                # HOLD after our setpoints stalled is the autopilot's own fall-back (PX4
-                # offboard loss): take the vehicle back, as after a link loss. A HOLD while
-                # they flowed is someone else's choice.
-                log.warning("vehicle %d: autopilot fell back to HOLD; re-entering the guided "
-                            "mode", self.config.vehicle)  # fmt: skip
-                self._guided_seen = False
-                self._set_phase(Phase.PREPARE)
-                return
-            log.warning("vehicle %d: mode changed to %s by someone else; not commanding",
-                        self.config.vehicle, ap.mode_name(hb.custom_mode))  # fmt: skip
-            self._set_phase(Phase.PAUSED)
+        report = ModeReport(guided, self._hold_mode(hb), self._setpoints_stalled(),
+                            self.core.started)  # fmt: skip
+        self._step(step(self.control, report), mode=ap.mode_name(hb.custom_mode))
+
+    def _step(self, result: tuple[Control, tuple[Action, ...]] | Refused, *, by: str | None = None,
+              mode: str = "") -> str | None:  # fmt: skip
+        """Apply a transition of the control state machine and perform its actions; returns
+        why an operator request was refused (None when applied)."""
+        if isinstance(result, Refused):
+            return result.reason
+        state, actions = result
+        self._apply(state, **({"by": by} if by is not None else {}))
+        v = self.config.vehicle
+        for action in actions:
+            if action is Action.HOLD:
+                task = asyncio.ensure_future(self._hold())
+                self._chores.add(task)
+                task.add_done_callback(self._chores.discard)
+            elif action is Action.SAY_RESUMING:
+                log.info("vehicle %d back in the guided mode: resuming", v)
+            elif action is Action.WARN_FALLBACK:
+                log.warning(
+                    "vehicle %d: autopilot fell back to HOLD; re-entering the guided mode", v
+                )
+            elif action is Action.WARN_TAKEN_OVER:
+                log.warning(
+                    "vehicle %d: mode changed to %s by someone else; not commanding", v, mode
+                )
+        return None
 
     def _on_position(self, pos: LocalPosition) -> None:
         self._received_time = max(self._received_time, pos.time)
@@ -352,6 +363,7 @@ class VehicleMission:
             self._send(guidance.pursuit(here, pos.down, here, self.guide, self.fence, 1.0), pos)
 
     def _search_step(self, t: float, pos: LocalPosition) -> None:
+        self.max_search_speed = max(self.max_search_speed, math.hypot(pos.vn, pos.ve))
         here = np.array([pos.north, pos.east])
         contacts = self.sensors.take()
         reached = guidance.reached(here, self.core.waypoint, self.guide.acceptance_radius)
@@ -411,11 +423,10 @@ class VehicleMission:
                 await self._sleep_vehicle(1.0)
                 continue
             await self.link.begin_setpoints()
-            if not self._speed_set:
-                self._speed_set = True
-                line = await self.link.set_speed(self.config.profile.fleet.speed)
-                log.info("vehicle %d speed: %s", self.config.vehicle, line)
-                self.emit("speed", report=line)
+            if self._speed_report is None:
+                self._speed_report = await self.link.set_speed(self.config.profile.fleet.speed)
+                log.info("vehicle %d speed: %s", self.config.vehicle, self._speed_report)
+                self.emit("speed", report=self._speed_report)
             self._start_search()
             await self._until(lambda: self.phase is not Phase.SEARCH)
         await self._finish()
@@ -461,7 +472,7 @@ class VehicleMission:
             if not problems:
                 return
             for line in problems:
-                log.error("vehicle %d: missing %s", self.config.vehicle, line)
+                log.warning("vehicle %d: missing %s", self.config.vehicle, line)
             self.emit("streams", missing=problems)
             await asyncio.sleep(5.0)
 
@@ -574,16 +585,17 @@ class VehicleMission:
         self.sensors.select(self.core.sensor(), t)
 
     async def _finish(self) -> None:
-        paused = self.phase is Phase.LINK_LOST or (
-            self.phase is Phase.PAUSED and not self._operator_paused
-        )
-        self._set_phase(Phase.RETURN)
+        armed = self.heartbeat is not None and self.heartbeat.armed
+        ended = step(self.control, EndMission(armed))
+        assert not isinstance(ended, Refused)
+        state, actions = ended
+        self._apply(state)
         self.emit("end", reason=self.end_reason, found=self.core.confirmed_count)
+        self._report_speed()
         self.sensors.select(-1, self.clock.now)
-        if paused or self.heartbeat is None or not self.heartbeat.armed:
+        if Action.END_ACTION not in actions:
             self._set_phase(Phase.DONE)
-            return  # never fight the pilot; nothing to bring back on the ground
-        self._own_mode_change = True
+            return
         result = await self.link.set_mode(self._end_action)
         if not result:
             log.error("vehicle %d refused %s: %s", self.config.vehicle, self._end_action.value,
@@ -591,10 +603,14 @@ class VehicleMission:
         if self.config.land_wait > 0:
             log.info("vehicle %d: %s; waiting up to %g vehicle s until it lands and disarms",
                      self.config.vehicle, self._end_action.value.upper(), self.config.land_wait)  # fmt: skip
-            await self._until(
+            if await self._until(
                 lambda: self.heartbeat is not None and not self.heartbeat.armed,
                 self.config.land_wait,
-            )
+            ):
+                log.info("vehicle %d: landed and disarmed", self.config.vehicle)
+            else:
+                log.error("vehicle %d: still armed %g vehicle s after %s", self.config.vehicle,
+                          self.config.land_wait, self._end_action.value.upper())  # fmt: skip
         self._set_phase(Phase.DONE)
 
     # -- link supervision ------------------------------------------------------------------
@@ -632,17 +648,12 @@ class VehicleMission:
 
     def _after_link_restored(self, before: Phase) -> None:
         hb, ap = self.heartbeat, self.link.autopilot
-        if before is Phase.PAUSED or hb is None or ap is None:
-            self._guided_seen = before is Phase.PAUSED
-            self._set_phase(Phase.PAUSED if before is Phase.PAUSED else Phase.PREPARE)
-            return
-        if ap.is_guided(hb.custom_mode) or not hb.armed or self._hold_mode(hb):
-            # Still ours, a rebooted vehicle on the ground, or the autopilot's own link-loss
-            # HOLD: the lifecycle re-enters the guided mode (taking off again if needed).
-            self._guided_seen = False
-            self._set_phase(Phase.PREPARE)
+        if hb is None or ap is None:
+            event = LinkRestored(before, known=False, guided=False, armed=False, hold=False)
         else:
-            self._set_phase(Phase.PAUSED)  # a pilot has it
+            event = LinkRestored(before, True, ap.is_guided(hb.custom_mode), hb.armed,
+                                 self._hold_mode(hb))  # fmt: skip
+        self._step(step(self.control, event))
 
     def _setpoints_stalled(self) -> bool:
         """The vehicle's clock ran _SETPOINT_GAP_S or more past our last setpoint's position."""
@@ -657,10 +668,19 @@ class VehicleMission:
     def _in(self, phase: Phase) -> bool:
         return self.phase is phase
 
+    @property
+    def phase(self) -> Phase:
+        return self.control.phase
+
     def _set_phase(self, phase: Phase, **fields: object) -> None:
-        if phase is not self.phase:
-            self.phase = phase
-            self.emit("phase", phase=phase.value, **fields)
+        self._apply(enter(self.control, phase), **fields)
+
+    def _apply(self, state: Control, **fields: object) -> None:
+        """Take the new control state; a phase change is a ``phase`` event."""
+        changed = state.phase is not self.control.phase
+        self.control = state
+        if changed:
+            self.emit("phase", phase=state.phase.value, **fields)
             self._changed.set()
 
     async def _until(self, predicate: Callable[[], bool], timeout: float | None = None) -> bool:
@@ -678,6 +698,19 @@ class VehicleMission:
     async def _sleep_vehicle(self, seconds: float) -> None:
         start = self.clock.now
         await self._until(lambda: self.clock.now - start >= seconds)
+
+    def _report_speed(self) -> None:
+        """A vehicle that kept below the profile's speed says so: an autopilot limit the
+        companion could not raise, or the airframe (ArduCopter SITL: about 11 m/s at its default
+        30-degree lean limit, ANGLE_MAX, with WPNAV_SPEED at 20 m/s)."""
+        if not self.core.started:
+            return
+        asked = self.config.profile.fleet.speed
+        self.emit("speed", max_search=round(self.max_search_speed, 2), asked=asked)
+        if self.max_search_speed < 0.9 * asked:
+            log.warning("vehicle %d flew at most %.1f m/s while searching; the profile asks "
+                        "%g m/s: the vehicle caps it (%s)", self.config.vehicle,
+                        self.max_search_speed, asked, self._speed_report)  # fmt: skip
 
     def _emit_latency(self) -> None:
         if self.latencies:

@@ -23,6 +23,7 @@ from companion.link.messages import Heartbeat, LinkEvent, LocalPosition
 from companion.link.outcome import CommandResult, accepted
 from companion.link.pymavlink_link import PymavlinkLink, _Protocol
 from companion.mission import MissionConfig, VehicleMission
+from companion.mission.control import enter
 from companion.mission.phase import Phase
 from mdm_profiles import load_profile
 
@@ -92,7 +93,9 @@ def test_of_queued_positions_only_the_newest_is_steered_from(tmp_path: Path) -> 
         link = _Link()
         config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
         mission = VehicleMission(config, link, _Sink())
-        mission.phase = Phase.PREPARE  # a neutral setpoint for every position acted on
+        mission.control = enter(
+            mission.control, Phase.PREPARE
+        )  # a neutral setpoint for every position acted on
         for k in range(5):
             link.events.put_nowait(_position(0.1 * k, 1000.0 + k))
         link.events.put_nowait(Heartbeat(12, 0, False, 3))
@@ -112,7 +115,7 @@ def test_a_lone_position_is_acted_on(tmp_path: Path) -> None:
         link = _Link()
         config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
         mission = VehicleMission(config, link, _Sink())
-        mission.phase = Phase.PREPARE
+        mission.control = enter(mission.control, Phase.PREPARE)
         mission._handle_queued(_position(0.0, 5.0), link.events)
         link.events.put_nowait(_position(0.1, 6.0))
         mission._handle_queued(Heartbeat(12, 0, False, 3), link.events)
@@ -185,7 +188,7 @@ def test_heartbeats_flow_while_the_loop_runs_and_stop_with_it(tmp_path: Path) ->
     async def main() -> tuple[int, int, int]:
         link = _BeatingLink()
         mission = _mission(tmp_path, link)
-        mission.phase = Phase.PREPARE
+        mission.control = enter(mission.control, Phase.PREPARE)
         task = asyncio.create_task(mission._decide())
         await asyncio.sleep(0)
         first = link.beats  # one at once
