@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import os
@@ -283,5 +284,6 @@ def _finish(
     result.complete = stopped.by is None and all(e.ok for e in result.ends)
     path = o.out / RESULTS
     path.write_text(json.dumps(result.as_json(), indent=2, default=str))
-    map_after_run(o.out, profile, list(range(plan.vehicles)), "map")
+    with contextlib.redirect_stdout(sys.stderr):  # stdout may carry --json
+        map_after_run(o.out, profile, list(range(plan.vehicles)), "map")
     return result

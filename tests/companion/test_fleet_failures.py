@@ -53,3 +53,15 @@ def test_an_emulator_that_exits_fails_the_run_with_its_error(tmp_path: Path) -> 
         assert end.how.startswith("no end in its mission log"), end
         assert not end.ok
     assert json.loads((out / "results.json").read_text())["complete"] is False
+
+
+@pytest.mark.timeout(120)
+def test_a_complete_run_exits_0_and_json_is_all_of_stdout(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    done = run_fleet_cli("--profile", small_profile(tmp_path), "--vehicles", "2",
+                         "--duration", "60", "--out", str(out), "--json")  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    printed = json.loads(done.stdout)
+    assert printed["complete"] is True
+    assert printed["end_reasons"] == {"0": "mission time", "1": "mission time"}
+    assert "fleet: UDP ports: companions" in done.stderr
