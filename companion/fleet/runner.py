@@ -92,6 +92,8 @@ class _Stopped:
     by: str | None = None
     emulator_early: bool = False
     at_once: bool = False
+    signalled: bool = False
+    """The companions got the fleet's first stop signal."""
 
 
 def run_fleet(o: FleetOptions) -> FleetResult:
@@ -125,7 +127,7 @@ def run_fleet(o: FleetOptions) -> FleetResult:
             stopped = _watch(o, profile, plan, companions, emulator, requests)
         finally:
             if stopped.at_once or any(p.poll() is None for p in companions.values()):
-                _stop_at_once(companions)
+                _stop_at_once(companions, signalled=stopped.signalled)
             processes.stop(emulator, 10.0)
     return _finish(o, profile, plan, companions, emulator, stopped)
 
@@ -171,7 +173,7 @@ def _watch(
         if emulator.poll() is not None:
             log.error("the emulator exited (code %s); see %s", emulator.returncode,
                       o.out / "emulator.log")  # fmt: skip
-            stopped.by = stopped.by or "the emulator exited"
+            stopped.by = stopped.by or "the emulator's exit"
             stopped.emulator_early = True
             return stopped
         if stop_at is None and (requests.count or now - started > o.wall_limit):
@@ -181,6 +183,7 @@ def _watch(
                  "companions and the landing (Ctrl-C again to stop at once)")  # fmt: skip
             for p in companions.values():
                 processes.signal_one(p, signal.SIGINT)
+            stopped.signalled = True
         alive = {i: p for i, p in companions.items() if p.poll() is None}
         if alive:
             if stop_at is not None and now - stop_at > _EXIT_GRACE_S:
@@ -254,11 +257,14 @@ def _virtual_seed(o: FleetOptions, profile: MissionProfile) -> int | None:
     return o.seed if virtual else None
 
 
-def _stop_at_once(companions: dict[int, subprocess.Popen[bytes]]) -> None:
-    """A second signal to each companion (it stops commanding and exits), then SIGKILL."""
+def _stop_at_once(companions: dict[int, subprocess.Popen[bytes]], *, signalled: bool) -> None:
+    """Each companion's second signal (it stops commanding and exits; ``signalled``: the first
+    was sent already), then SIGKILL after _HARD_STOP_S."""
     live = [p for p in companions.values() if p.poll() is None]
-    for p in live:
-        processes.signal_one(p, signal.SIGINT)
+    for _ in range(1 if signalled else 2):
+        for p in live:
+            processes.signal_one(p, signal.SIGINT)
+        time.sleep(_POLL_S)  # two signals at once may arrive as one
     processes.wait_all(live, _HARD_STOP_S)
     for p in live:
         processes.kill_group(p)

@@ -44,13 +44,13 @@ def _table(ends: list[ProcessEnd]) -> list[str]:
 def summary_lines(r: FleetResult, out: Path, wall: float) -> list[str]:
     """What the run found and how every process ended, as printed after the run."""
     searched = (
-        f"searched {r.search_time:.1f} sim s of {r.duration:g} asked"
+        f"searched {r.search_time:.1f} of {r.duration:g} sim s asked"
         if r.search_time > 0
         else f"no vehicle started its search ({r.duration:g} sim s asked)"
     )
     lines = [
-        f"{r.profile}: {r.vehicles} vehicles, {searched} (mission clock {r.sim_time:.1f} s, "
-        f"take-off included), {wall:.1f} s wall",
+        f"{r.profile}: {r.vehicles} vehicles; {searched}; mission clock {r.sim_time:.1f} s "
+        f"(take-off included); {wall:.1f} s wall",
         f"  targets confirmed within {r.duration:g} s (T_nc): {r.tnc} of {r.real_targets} real",
         f"  time to all targets (T_S): {_ts_words(r)}",
         f"  false confirmations: {r.false_confirmations}",
@@ -63,7 +63,11 @@ def summary_lines(r: FleetResult, out: Path, wall: float) -> list[str]:
         lines.append(f"  complete: every vehicle ended normally ({', '.join(reasons)})")
     else:
         bad = [e for e in r.ends if not e.ok]
-        why = f"stopped by {r.stopped_by}" if r.stopped_by else f"{len(bad)} process(es) failed"
+        why = (
+            f"stopped by {r.stopped_by}"
+            if r.stopped_by
+            else f"{len(bad)} process(es) did not end normally"
+        )
         lines.append(f"  NOT COMPLETE ({why}); the figures above cover what was flown:")
         lines.extend(_table(r.ends))
     for e in r.ends:

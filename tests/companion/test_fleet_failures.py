@@ -21,7 +21,7 @@ def test_vehicles_that_never_climb_fail_the_run(tmp_path: Path) -> None:
     done = run_fleet_cli("--profile", small_profile(tmp_path, tau=1e9), "--duration", "300",
                          "--out", str(out))  # fmt: skip
     assert done.returncode == 1, done.stdout + done.stderr
-    assert "NOT COMPLETE (3 process(es) failed)" in done.stdout
+    assert "NOT COMPLETE (3 process(es) did not end normally)" in done.stdout
     for i in range(3):
         row = re.compile(rf"vehicle {i} +climb timeout +- +{re.escape(str(out))}/companion-{i}.log")
         assert row.search(done.stdout), done.stdout
@@ -42,7 +42,7 @@ def test_an_emulator_that_exits_fails_the_run_with_its_error(tmp_path: Path) -> 
                                     duration=300.0))  # fmt: skip
     assert exit_status(result) == 1
     assert not result.complete
-    assert result.stopped_by == "the emulator exited"
+    assert result.stopped_by == "the emulator's exit"
     emulator = result.ends[-1]
     assert emulator.name == "emulator"
     assert emulator.how.startswith("exited on its own before the companions ended, exit code")
