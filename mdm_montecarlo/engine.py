@@ -104,7 +104,11 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
 
         target_pos, target_vel = tracks.motion(runs, t)
         confirms = policy.uses_confirmation_sensor(state)[idx]
-        eligible = ~remembered.known(state, idx, t, target_pos)
+        eligible = np.ones((idx.size, m), dtype=bool)
+        exact = np.flatnonzero(policy.checks_exactly(state, idx))
+        eligible[exact] = ~remembered.known(state, idx[exact], t[exact], target_pos[exact])
+        # The same test the policy's step makes, so no contact is reported that it would drop.
+        eligible[policy.ignores_detections(state, idx, x, t)] = False
         eligible &= ~(confirms[:, None] & targets.false_mask[None, :])
         entry = _entry_along_path(
             tracks,

@@ -1,22 +1,29 @@
-"""The `reproduce` report folder: report.md, results.csv and box plots like the paper's figures."""
+"""The `reproduce` report folder: report.md (a summary first, then every row beside the paper's,
+section III-B and the claims about Figs. 4-9), results.csv and the figures."""
 
 from __future__ import annotations
 
 import csv
+import os
+from collections import Counter
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-from matplotlib.axes import Axes
-
+from mdm_montecarlo.figure_claims import Claim, check_claims
+from mdm_montecarlo.known_causes import cause_of, slug
+from mdm_montecarlo.plots import plot_scaling, plot_section3b, plot_table
 from mdm_montecarlo.runner import MissionResults
-from mdm_montecarlo.study import SCALING_FLEETS, TNC_TOLERANCE, TS_TOLERANCE, Case, Row
+from mdm_montecarlo.section3b import SearchGeometry, confirmed_share, p_cm, p_cs
+from mdm_montecarlo.study import SECTION3B_METHODS, TNC_TOLERANCE, TS_TOLERANCE, Case, Row
 from mdm_montecarlo.tables import MeasuredRow, format_table
+
+Plot = tuple[Callable[..., None], tuple[Any, ...]]
+_MODEL = Path(__file__).resolve().parents[1] / "docs" / "model.md"
+SECTION3B_TIMES = (1000.0, 5000.0, 10000.0, 20000.0, 40000.0)
 
 
 def write_csv(path: Path, rows: list[MeasuredRow]) -> None:
@@ -28,60 +35,144 @@ def write_csv(path: Path, rows: list[MeasuredRow]) -> None:
             writer.writerow(r.as_dict())
 
 
-def _boxes(ax: Axes, data: list[list[float]], labels: list[str], ylabel: str, title: str) -> None:
-    ax.boxplot(data, tick_labels=labels)
-    ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=9)
-    ax.grid(axis="y", alpha=0.3)
+def _model_link(folder: Path) -> str:
+    """docs/model.md relative to the report folder (so the links work in a checkout)."""
+    if _MODEL.exists():
+        return Path(os.path.relpath(_MODEL, folder.resolve())).as_posix()
+    return "docs/model.md"
 
 
-def plot_table(
-    path: Path, title: str, cases: list[Case], results: dict[Case, MissionResults]
-) -> None:
-    """Box plots of T_nc and T_S for the methods of one table and scenario."""
-    fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.6))
-    labels = [c.method.replace("MDM:", "MDM ") for c in cases]
-    _boxes(
-        a,
-        [list(results[c].tnc) for c in cases],
-        labels,
-        "targets confirmed T_nc",
-        f"{title}: efficiency",
+def _outside(measured: list[MeasuredRow]) -> list[tuple[MeasuredRow, str, float, float]]:
+    """(row, metric, ours, paper) for every mean outside the tolerance."""
+    out = []
+    for m in measured:
+        if m.tnc_within is False and m.paper_tnc_mean is not None:
+            out.append((m, "T_nc", m.tnc_mean, m.paper_tnc_mean))
+        if m.ts_within is False and m.paper_ts_mean_s is not None and m.ts_mean_s is not None:
+            out.append((m, "T_S", float(m.ts_mean_s), m.paper_ts_mean_s))
+    return out
+
+
+def _row_name(m: MeasuredRow) -> str:
+    levels = f" {m.level1}+{m.level2}" if m.method == "MDM" else ""
+    variant = f" ({m.variant})" if m.variant else ""
+    delta = f", δ1 {m.delta1_pct_L:g} %" if m.table == "simtable3" else ""
+    return f"{m.table} {m.scenario} {m.method}{levels}{variant}{delta}"
+
+
+def summary(measured: list[MeasuredRow], docs: str, claims: list[Claim]) -> list[str]:
+    """The report's first screen: how many rows are inside, and why the others are not."""
+    tnc = [m.tnc_within for m in measured if m.tnc_within is not None]
+    ts = [m.ts_within for m in measured if m.ts_within is not None]
+    lines = [
+        "## Summary",
+        "",
+        f"- **T_nc inside tolerance: {sum(tnc)} of {len(tnc)} rows; T_S: {sum(ts)} of "
+        f"{len(ts)} rows** (tolerances: mean T_nc within "
+        + ", ".join(f"{int(v * 100)} % {k}" for k, v in TNC_TOLERANCE.items())
+        + f"; mean T_S within {int(TS_TOLERANCE * 100)} %).",
+    ]
+    by_scenario: dict[str, list[bool]] = {}
+    for m in measured:
+        if m.tnc_within is not None:
+            by_scenario.setdefault(m.scenario, []).append(m.tnc_within)
+    lines.append(
+        "- T_nc inside by scenario: "
+        + ", ".join(f"{k} {sum(v)}/{len(v)}" for k, v in by_scenario.items())
+        + "."
     )
-    timed = [(c, label) for c, label in zip(cases, labels, strict=True) if results[c].has_ts]
-    _boxes(
-        b,
-        [list(results[c].ts()[0]) for c, _ in timed],
-        [label for _, label in timed],
-        "time to confirm all T_S (s)",
-        f"{title}: completeness",
+    outside = _outside(measured)
+    if outside:
+        counts = Counter(cause_of(m, metric).heading for m, metric, _, _ in outside)
+        lines.append("- Known causes of the means outside tolerance (rows per cause):")
+        for heading, n in counts.most_common():
+            lines.append(f"  - [{heading}]({docs}#{slug(heading)}): {n}")
+    if claims:
+        held = sum(c.holds for c in claims)
+        lines.append(
+            f"- Claims about Figs. 4-9: {held} of {len(claims)} hold "
+            "([checked below](#claims-about-figs-4-9))."
+        )
+    lines += ["", "Details: [means outside tolerance](#means-outside-tolerance), then every "
+              "table.", ""]  # fmt: skip
+    return lines
+
+
+def outside_table(measured: list[MeasuredRow], docs: str) -> list[str]:
+    """Every mean outside tolerance, with its docs/model.md entry and closest variant."""
+    rows = _outside(measured)
+    lines = ["## Means outside tolerance", ""]
+    if not rows:
+        return [*lines, "None.", ""]
+    lines += [
+        "| row | metric | ours | paper | difference | why (docs/model.md) | closest variant |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for m, metric, ours, paper in rows:
+        cause = cause_of(m, metric)
+        fmt = ".3f" if metric == "T_nc" else ".0f"
+        lines.append(
+            f"| {_row_name(m)} | {metric} | {ours:{fmt}} | {paper:{fmt}} | "
+            f"{(ours - paper) / paper * 100:+.1f} % | [{cause.heading}]({docs}#{cause.anchor}) | "
+            f"{cause.closest(m, metric)} |"
+        )
+    return [*lines, ""]
+
+
+def section3b(folder: Path, results: dict[Case, MissionResults], plots: list[Plot]) -> list[str]:
+    """P_CS and P_CM beside the simulated share of confirmed targets, with eq. (22)'s claim."""
+    cases = [Case("fixed", m, 20.0, 1, 0) for m in SECTION3B_METHODS]
+    if not all(c in results for c in cases):
+        return []
+    single, mdm = (results[c] for c in cases)
+    profile = single.profile
+    geometry = SearchGeometry(
+        area=profile.area.north * profile.area.east,
+        speed=profile.fleet.speed,
+        confirm_radius=profile.sensors[-1].radius,
+        detect_radius=profile.sensors[0].radius,
     )
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    png = "section3b-pcs-pcm.png"
+    plots.append((plot_section3b, (str(folder / png), geometry, single, mdm)))
+    t = np.array(SECTION3B_TIMES)
+    sim_s, sim_m = confirmed_share(single.team_times, t), confirmed_share(mdm.team_times, t)
+    theory_s, theory_m = p_cs(t, geometry), p_cm(t, geometry)
+    lines = [
+        "## Section III-B: P_CS and P_CM against simulation",
+        "",
+        "One UAV searches paper-fixed's ten targets (single-sensor US, and MDM LS+BS); the "
+        "simulated value is the share of (run, target) pairs confirmed by t. P_CM averages "
+        "eq. (19) over a detection time t_d drawn from eq. (18)'s law with r_1 (the paper "
+        "leaves t_d open; mdm_montecarlo/section3b.py).",
+        "",
+        "| t (s) | P_CS eq. (18) | simulated US | P_CM eqs. (19)-(20) | simulated MDM |"
+        " eq. (22) P_CM >= P_CS, simulated |",
+        "|---|---|---|---|---|---|",
+    ]
+    for i, ti in enumerate(t):
+        holds = "yes" if sim_m[i] >= sim_s[i] else "**no**"
+        lines.append(
+            f"| {ti:.0f} | {theory_s[i]:.3f} | {sim_s[i]:.3f} | {theory_m[i]:.3f} | "
+            f"{sim_m[i]:.3f} | {holds} |"
+        )
+    lines += ["", f"![P_CS and P_CM]({png})", ""]
+    return lines
 
 
-def plot_scaling(
-    path: Path, scenario: str, rows: list[Row], results: dict[Case, MissionResults]
-) -> None:
-    """The 6/12/24-UAV figures: boxes per method, grouped by fleet size."""
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
-    for ax, metric in zip(axes, ("tnc", "ts"), strict=True):
-        data, labels = [], []
-        for n in SCALING_FLEETS:
-            for row in rows:
-                c = row.case
-                if row.table == "scaling" and c.scenario == scenario and c.n_uav == n:
-                    res = results[c]
-                    data.append(list(res.tnc) if metric == "tnc" else list(res.ts()[0]))
-                    labels.append(f"{c.method.replace('MDM:', 'MDM ')}\n{n}")
-        name = "T_nc" if metric == "tnc" else "T_S (s)"
-        kind = "efficiency" if metric == "tnc" else "completeness"
-        _boxes(ax, data, labels, name, f"{scenario} targets: {kind} vs number of UAVs")
-        ax.tick_params(axis="x", labelsize=6)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+def claims_section(claims: list[Claim]) -> list[str]:
+    if not claims:
+        return []
+    lines = [
+        "## Claims about Figs. 4-9",
+        "",
+        "Measured on the 'scaling' rows (box plots below).",
+        "",
+        "| figure | claim (paper) | measured | holds |",
+        "|---|---|---|---|",
+    ]
+    for c in claims:
+        lines.append(f"| {c.figure} | {c.text} | {c.measured} | {'yes' if c.holds else '**no**'} |")
+    return [*lines, ""]
 
 
 def write_report(
@@ -97,20 +188,27 @@ def write_report(
     ``workers`` > 1 draws the plots in that many processes.
     """
     folder.mkdir(parents=True, exist_ok=True)
-    plots: list[tuple[Callable[..., None], tuple[Any, ...]]] = []
+    plots: list[Plot] = []
     write_csv(folder / "results.csv", measured)
+    docs = _model_link(folder)
+    tables = list(dict.fromkeys(r.table for r in rows))
+    claims = check_claims(results) if "scaling" in tables else []
     lines = [
         "# Section IV reproduced",
         "",
         header,
         "",
-        f"Tolerances: mean T_nc within {', '.join(f'{int(v * 100)} % ({k})' for k, v in TNC_TOLERANCE.items())}; "
-        f"mean T_S within {int(TS_TOLERANCE * 100)} %. Single-sensor AISE/AISC are against the MDM row "
-        "of the same table and scenario.",
+        *summary(measured, docs, claims),
+        *outside_table(measured, docs),
+        "Single-sensor AISE/AISC are against the MDM row of the same table and scenario; "
+        "'follows peer %' is the share of a swarm's particle-iterations that followed a best "
+        "heard from another vehicle.",
         "",
     ]
-    tables = list(dict.fromkeys(r.table for r in rows))
     for table in tables:
+        if table == "section3b":
+            lines += section3b(folder, results, plots)
+            continue
         mine = [m for m in measured if m.table == table]
         lines += [f"## {table}", "", format_table(mine), ""]
         inside = [m.tnc_within for m in mine if m.tnc_within is not None]
@@ -120,18 +218,18 @@ def write_report(
             if ts_in:
                 lines.append(f"T_S inside tolerance: {sum(ts_in)} of {len(ts_in)} rows.")
             lines.append("")
+        if table == "scaling":
+            lines += claims_section(claims)
         for scenario in dict.fromkeys(r.case.scenario for r in rows if r.table == table):
             png = f"{table}-{scenario}.png"
+            mine_rows = [r for r in rows if r.table == table and r.case.scenario == scenario]
+            cases = list(dict.fromkeys(r.case for r in mine_rows))
+            of_plot = {c: results[c] for c in cases}
             if table == "scaling":
-                plots.append((plot_scaling, (folder / png, scenario, rows, results)))
+                methods = list(dict.fromkeys(c.method for c in cases))
+                plots.append((plot_scaling, (str(folder / png), scenario, methods, of_plot)))
             else:
-                cases = list(
-                    dict.fromkeys(
-                        r.case for r in rows if r.table == table and r.case.scenario == scenario
-                    )
-                )
-                of_plot = {c: results[c] for c in cases}
-                plots.append((plot_table, (folder / png, f"{table} {scenario}", cases, of_plot)))
+                plots.append((plot_table, (str(folder / png), table, scenario, cases, of_plot)))
             lines += [f"![{table} {scenario}]({png})", ""]
     _draw(plots, workers)
     path = folder / "report.md"
@@ -139,7 +237,7 @@ def write_report(
     return path
 
 
-def _draw(plots: list[tuple[Callable[..., None], tuple[Any, ...]]], workers: int) -> None:
+def _draw(plots: list[Plot], workers: int) -> None:
     if workers <= 1 or len(plots) <= 1:
         for plot, args in plots:
             plot(*args)

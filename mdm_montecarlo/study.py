@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from mdm_montecarlo.paper import PaperRow, paper_rows
 from mdm_montecarlo.variants import SWARM_METHODS, with_fleet_size, with_method
 from mdm_profiles import MissionProfile, builtin_profile
+from mdm_profiles.overrides import apply_overrides
 
 TABLES = (
     "simtable1",
@@ -17,14 +18,29 @@ TABLES = (
     "simtablef1",
     "simtablepso1",
     "scaling",
+    "section3b",
 )
-"""Tables `reproduce` knows. 'scaling' is the 6/12/24-UAV figures (box plots, no printed numbers)."""
+"""Tables `reproduce` knows. 'scaling' is the 6/12/24-UAV figures of Figs. 4-9 (box plots, no
+printed numbers); 'section3b' is one UAV searching the fixed targets with US and with MDM,
+set beside P_CS and P_CM of eqs. (18)-(22)."""
 
 TNC_TOLERANCE = {"fixed": 0.05, "popup": 0.10, "dynamic": 0.10}
 """Relative tolerance on mean T_nc by scenario."""
 TS_TOLERANCE = 0.15
 """Relative tolerance on mean T_S."""
 SCALING_FLEETS = (6, 12, 24)
+SECTION3B_METHODS = ("US", "MDM:LS+BS")
+"""Single-sensor and MDM search of one UAV, for P_CS and P_CM."""
+VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
+    "eq10": (
+        "eq. (10) literal",
+        ("policy.waypoint_origin=position",),
+    ),
+}
+"""Rows that fly a documented deviation of the defaults back to the paper's text, beside the
+default row and the same paper figures: name -> (label, profile overrides). 'eq10': level-2
+waypoints step from the previous waypoint, P_{q+1} = P_q + delta_2 D (the default steps from the
+point of detection; docs/model.md, "Level-2 waypoints: the default is not eq. (10)")."""
 
 
 @dataclass(frozen=True)
@@ -37,6 +53,8 @@ class Case:
     delta1_pct: float
     n_uav: int
     n_false: int
+    variant: str = ""
+    """A key of VARIANTS, or '' for the defaults."""
 
     def profile(self) -> MissionProfile:
         base = builtin_profile(f"paper-{self.scenario}" + ("-false" if self.n_false else ""))
@@ -46,6 +64,8 @@ class Case:
             # The paper prints no T_S for the swarm baselines: simulate up to the duration only.
             mission = profile.mission.model_copy(update={"ts_cap": profile.mission.duration})
             profile = profile.model_copy(update={"mission": mission})
+        if self.variant:
+            profile = apply_overrides(profile, list(VARIANTS[self.variant][1]))
         return profile
 
 
@@ -68,11 +88,20 @@ def study_rows(tables: tuple[str, ...] = TABLES) -> list[Row]:
     unknown = set(tables) - set(TABLES)
     if unknown:
         raise ValueError(f"unknown table(s) {sorted(unknown)}; allowed: {', '.join(TABLES)}")
-    rows = [Row(r.table, _case_of(r), r) for r in paper_rows() if r.table in tables]
+    rows: list[Row] = []
+    for r in paper_rows():
+        if r.table not in tables:
+            continue
+        rows.append(Row(r.table, _case_of(r), r))
+        if r.table == "simtable1" and r.method == "MDM":
+            rows.append(Row(r.table, replace(_case_of(r), variant="eq10"), r))
     if "scaling" in tables:
         best = {"fixed": "MDM:LS+BS", "popup": "MDM:US+US", "dynamic": "MDM:LS+BS"}
         for scenario, mdm in best.items():
             for n in SCALING_FLEETS:
                 for method in ("US", "BS", "LS", mdm):
                     rows.append(Row("scaling", Case(scenario, method, 20.0, n, 0), None))
+    if "section3b" in tables:
+        for method in SECTION3B_METHODS:
+            rows.append(Row("section3b", Case("fixed", method, 20.0, 1, 0), None))
     return rows

@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass
 
 from mdm_core import metrics
 from mdm_montecarlo.runner import MissionResults
-from mdm_montecarlo.study import TNC_TOLERANCE, TS_TOLERANCE, Case, Row
+from mdm_montecarlo.study import TNC_TOLERANCE, TS_TOLERANCE, VARIANTS, Case, Row
 
 
 @dataclass(frozen=True)
@@ -39,6 +39,8 @@ class MeasuredRow:
     ts_within: bool | None
     peer_follow_pct: float | None = None
     """Swarm rows: per cent of particle-iterations that followed a best heard from a peer."""
+    variant: str = ""
+    """Label of a documented variant of the defaults (study.VARIANTS), '' for the defaults."""
 
     def as_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -66,7 +68,7 @@ def measured_rows(rows: list[Row], results: dict[Case, MissionResults]) -> list[
         )
     mdm_of: dict[tuple[str, str, int], Case] = {}
     for row in rows:
-        if row.case.method.startswith("MDM"):
+        if row.case.method.startswith("MDM") and not row.case.variant:
             mdm_of.setdefault((row.table, row.case.scenario, row.case.n_uav), row.case)
     out = []
     for row in rows:
@@ -111,6 +113,7 @@ def measured_rows(rows: list[Row], results: dict[Case, MissionResults]) -> list[
                     ts.mean, paper.ts_mean_s if paper and has_ts else None, TS_TOLERANCE
                 ),
                 peer_follow_pct=_pct(results[case].follow_share),
+                variant=VARIANTS[case.variant][0] if case.variant else "",
             )
         )
     return out
@@ -134,7 +137,7 @@ def format_table(rows: list[MeasuredRow]) -> str:
 
         ts = "" if r.ts_mean_s is None else f"{r.ts_mean_s:.0f} ± {r.ts_std_s:.0f}"
         lines.append(
-            f"| {r.table} | {r.scenario} | {r.method} | {r.level1} | {r.level2} | {r.delta1_pct_L:g} | "
+            f"| {r.table} | {r.scenario} | {r.method}{f' ({r.variant})' if r.variant else ''} | {r.level1} | {r.level2} | {r.delta1_pct_L:g} | "
             f"{r.n_uav} | {r.n_false} | {r.tnc_mean:.3f} ± {r.tnc_std:.3f} | {num(r.paper_tnc_mean, '.3f')} | "
             f"{mark(r.tnc_within)} | {ts} | {num(r.paper_ts_mean_s, '.0f')} | "
             f"{mark(r.ts_within)} | {num(r.aise_pct, '.1f')} | {num(r.aisc_pct, '.1f')} | {r.runs} | {num(r.capped, 'd')} |"

@@ -95,6 +95,11 @@ class DecayIndexSpec(_Strict):
     index_max: float = 0.95
     index_min: float = 0.2
     kappa: float = Field(default=150.0, gt=0)
+    start: Literal["printed", "max"] = Field(
+        default="printed",
+        description="printed: C_I = gamma + (max - min) e^(-t/kappa) (starts at gamma + max - "
+        "min); max: gamma + (max - gamma) e^(-t/kappa), starting at C_Imax as the text says.",
+    )
 
     @model_validator(mode="after")
     def _order(self) -> DecayIndexSpec:
@@ -134,6 +139,19 @@ class PolicySpec(_Strict):
     waypoint_origin: Literal["position", "anchor"] = "position"
     confine_to_detection: bool = True
     memory_radius: float = Field(default=400.0, ge=0)
+    detection_memory: Literal["disc", "exact", "none"] = Field(
+        default="disc",
+        description="Detections near targets this vehicle confirmed: disc = ignored while one "
+        "lies within the detection radius of the vehicle; none = never ignored; exact = the "
+        "contacted target's true position within memory_radius of one (docs/model.md).",
+    )
+    fallback_blind_time: float = Field(
+        default=0.0,
+        ge=0,
+        le=3600,
+        description="After the decaying index ends a level, level 1 ignores detections this "
+        "long, s (0 to 3600; 0 = re-detect at once).",
+    )
     swarm: SwarmSpec = Field(
         default=SwarmSpec(), description="PSO/SPSO/ARPSO parameters; levels[0] explores."
     )

@@ -28,6 +28,7 @@ def _level(spec: LevelSpec, radius: float, params: DistributionParams) -> Level:
             index_max=spec.index.index_max,
             index_min=spec.index.index_min,
             kappa=spec.index.kappa,
+            start=spec.index.start,
         )
     return Level(
         sampler=sampler(spec.distribution, params),
@@ -59,6 +60,8 @@ def policy_config(profile: MissionProfile) -> PolicyConfig:
         waypoint_origin=spec.waypoint_origin,
         confine_to_detection=spec.confine_to_detection,
         memory_radius=spec.memory_radius,
+        detection_memory=spec.detection_memory,
+        fallback_blind_time=spec.fallback_blind_time,
     )
 
 

@@ -12,6 +12,8 @@ from mdm_core.search.distributions import Sampler
 StepLaw = Literal["fixed", "levy"]
 OutOfArea = Literal["reflect", "clip", "redraw"]
 WaypointOrigin = Literal["position", "anchor"]
+DetectionMemory = Literal["disc", "exact", "none"]
+IndexStart = Literal["printed", "max"]
 
 
 @dataclass(frozen=True)
@@ -30,6 +32,11 @@ class DecayIndex:
     """C_Imin, the lower bound that ends the level."""
     kappa: float = 150.0
     """kappa > 0, seconds."""
+    start: IndexStart = "printed"
+    """printed: C_I = gamma + (index_max - index_min) e^(-t/kappa), the formula as printed,
+    which starts at gamma + index_max - index_min (0.85 with the defaults), not at index_max.
+    max: C_I = gamma + (index_max - gamma) e^(-t/kappa), which starts at index_max as the text
+    says ("set to a value closer to one denoted by C_Imax")."""
 
     def __post_init__(self) -> None:
         if not 0 < self.gamma < self.index_min < self.index_max:
@@ -45,14 +52,20 @@ class DecayIndex:
                 " the level would end the moment it starts"
             )
 
+    @property
+    def _range(self) -> float:
+        """Coefficient of the exponential: C_I(0) - gamma."""
+        top = self.index_min if self.start == "printed" else self.gamma
+        return self.index_max - top
+
     def value(self, time_in_level: np.ndarray) -> np.ndarray:
         """C_I after ``time_in_level`` seconds on the level."""
-        return self.gamma + (self.index_max - self.index_min) * np.exp(-time_in_level / self.kappa)
+        return self.gamma + self._range * np.exp(-time_in_level / self.kappa)
 
     @property
     def lifetime(self) -> float:
         """Seconds on the level after which C_I < index_min (closed form of eq. 13)."""
-        ratio = (self.index_max - self.index_min) / (self.index_min - self.gamma)
+        ratio = self._range / (self.index_min - self.gamma)
         return float(self.kappa * np.log(ratio))
 
 
@@ -98,6 +111,17 @@ class PolicyConfig:
     """Levels >= 2: keep waypoints within the previous sensor's radius of the point of detection."""
     memory_radius: float = 400.0
     """A contact within this distance of a target I confirmed is that target again (metres)."""
+    detection_memory: DetectionMemory = "disc"
+    """How a detection-level contact is checked against the targets this vehicle confirmed.
+    The detection sensor gives no position (section II: "only the spatial distribution"):
+    disc: the detection is ignored while a remembered target lies within the sensor's radius
+    of the vehicle (it may be that target); none: never ignored; exact: ignored when the
+    contacted target's true position is within memory_radius of a remembered one (uses what
+    the sensor cannot give). Confirmation contacts carry a position: always checked exactly."""
+    fallback_blind_time: float = 0.0
+    """Seconds after the decaying index ends a level during which level 1 ignores detections
+    (0: none; the vehicle usually still lies within r_1 of the same target and re-detects it at
+    once)."""
     name: str = field(default="")
     """Label for tables: 'MDM (LS+BS)', 'US', ..."""
 
@@ -111,6 +135,8 @@ class PolicyConfig:
                 raise ValueError(f"level {k} needs a decaying index (C_I or D_I)")
         if not self.memory_radius >= 0:
             raise ValueError(f"memory_radius must be >= 0 m, got {self.memory_radius}")
+        if not self.fallback_blind_time >= 0:
+            raise ValueError(f"fallback_blind_time must be >= 0 s, got {self.fallback_blind_time}")
 
     @property
     def label(self) -> str:

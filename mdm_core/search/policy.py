@@ -48,6 +48,8 @@ class PolicyState:
     """Positions of targets this vehicle confirmed itself (n, K, 2); rows past memory_count unused."""
     memory_count: IntArray
     """How many memory rows are in use (n,)."""
+    blind_until: FloatArray
+    """Level 1 ignores detections before this time (n,); -inf: not blind (fallback_blind_time)."""
 
     @property
     def size(self) -> int:
@@ -108,8 +110,32 @@ class SearchPolicy:
         return np.asarray(state.level == self.n_levels - 1)
 
     def deadline(self, state: PolicyState) -> FloatArray:
-        """Time at which each vehicle's decaying index falls below its bound (inf on level 1)."""
-        return np.asarray(state.entered + self._lifetimes[state.level])
+        """Time at which each vehicle's decaying index falls below its bound; on level 1 the end
+        of a blind period after a fall-back, else inf. A step at that time clears it."""
+        out = state.entered + self._lifetimes[state.level]
+        blind = np.isfinite(state.blind_until) & (state.level == 0)
+        return np.asarray(np.where(blind, state.blind_until, out))
+
+    def ignores_detections(
+        self, state: PolicyState, lanes: IntArray, position: FloatArray, time: FloatArray
+    ) -> BoolArray:
+        """(len(lanes),) lanes on a detection level whose detections are ignored whatever
+        target caused them: blind after a fall-back, or (detection_memory 'disc') a remembered
+        target within the active sensor's radius of the vehicle at ``position`` (k, 2)."""
+        level = state.level[lanes]
+        detecting = level < self.n_levels - 1
+        out = detecting & (time < state.blind_until[lanes])
+        if self.config.detection_memory == "disc":
+            near = self.memory_distance2(state, lanes, position[:, None, :])[:, 0]
+            out |= detecting & (near < self._radii[level] ** 2)
+        return np.asarray(out)
+
+    def checks_exactly(self, state: PolicyState, lanes: IntArray) -> BoolArray:
+        """(len(lanes),) lanes whose contacts are matched to memory by the target's position:
+        the confirmation level always, detection levels with detection_memory 'exact'."""
+        if self.config.detection_memory == "exact":
+            return np.ones(len(lanes), dtype=bool)
+        return np.asarray(state.level[lanes] == self.n_levels - 1)
 
     def index_value(self, state: PolicyState, time: FloatArray) -> FloatArray:
         """C_I (or D^k_I) of each vehicle at the given time; NaN on level 1."""
@@ -133,6 +159,7 @@ class SearchPolicy:
             entered=np.array(time, dtype=float),
             memory=np.zeros((n, 4, 2)),
             memory_count=np.zeros(n, dtype=np.intp),
+            blind_until=np.full(n, -np.inf),
         )
         everyone = np.arange(n)
         state.waypoint[:] = self._next_waypoints(state, everyone, state.waypoint, rng)
@@ -195,7 +222,12 @@ class SearchPolicy:
         new = obs.contacts.copy()
         seen = np.flatnonzero(new.any(axis=1))
         if seen.size:
-            new[seen] &= ~self.known(state, lanes[seen], obs.contact_positions[seen])
+            exact = seen[self.checks_exactly(state, lanes[seen])]
+            new[exact] &= ~self.known(state, lanes[exact], obs.contact_positions[exact])
+            ignored = self.ignores_detections(
+                state, lanes[seen], obs.position[seen], obs.time[seen]
+            )
+            new[seen[ignored]] = False
         has = new.any(axis=1)
 
         detected = has & (level < last)
@@ -214,6 +246,11 @@ class SearchPolicy:
         next_level = np.where(expired, 0, next_level)
 
         changed = next_level != level
+        blind = state.blind_until[lanes]
+        blind[obs.time >= blind] = -np.inf
+        if self.config.fallback_blind_time > 0:
+            blind[expired] = obs.time[expired] + self.config.fallback_blind_time
+        state.blind_until[lanes] = blind
         state.level[lanes] = next_level
         state.entered[lanes] = np.where(changed, obs.time, state.entered[lanes])
         anchor = state.anchor[lanes]

@@ -83,8 +83,8 @@ def test_the_three_baselines_differ_and_each_follows_shared_bests() -> None:
             assert not np.array_equal(times[i], times[j])
     for method, res in results.items():
         share = res.follow_share
-        print(f"{method}: T_nc {res.tnc.mean():.3f}, follows a peer's best {share:.1%}")
         assert share is not None
+        print(f"{method}: T_nc {res.tnc.mean():.3f}, follows a peer's best {share:.1%}")
         assert 0.2 < share < 1.0, (method, share)
         alone = run_missions(_profile(method, "policy.swarm.message_drop=1"), runs=20, seed=2024)
         assert alone.follow_share == 0.0

@@ -7,7 +7,14 @@ import pytest
 from numpy.typing import ArrayLike
 
 from mdm_core.search.distributions import Brownian, Levy, Uniform
-from mdm_core.search.levels import DecayIndex, Level, OutOfArea, PolicyConfig, StepLaw
+from mdm_core.search.levels import (
+    DecayIndex,
+    DetectionMemory,
+    Level,
+    OutOfArea,
+    PolicyConfig,
+    StepLaw,
+)
 from mdm_core.search.policy import Observation, PolicyState, SearchPolicy
 
 AREA = 20_000.0
@@ -24,6 +31,8 @@ def mdm(
     step2: float = DELTA2,
     law2: StepLaw = "fixed",
     memory_radius: float = 400.0,
+    detection_memory: DetectionMemory = "disc",
+    blind: float = 0.0,
 ) -> SearchPolicy:
     levels = (
         Level(sampler=Levy(), step=DELTA1, sensor_radius=R1),
@@ -37,6 +46,8 @@ def mdm(
             waypoint_origin="anchor" if origin == "anchor" else "position",
             confine_to_detection=confine,
             memory_radius=memory_radius,
+            detection_memory=detection_memory,
+            fallback_blind_time=blind,
         )
     )
 
@@ -142,8 +153,8 @@ def test_two_targets_confirmed_at_once_are_both_remembered() -> None:
     np.testing.assert_array_equal(state.memory[0, :2], targets[0])
 
 
-def test_contact_within_memory_radius_of_a_confirmed_target_is_ignored() -> None:
-    policy = mdm(memory_radius=400.0)
+def test_exact_memory_ignores_a_contact_within_memory_radius_of_a_confirmed_target() -> None:
+    policy = mdm(memory_radius=400.0, detection_memory="exact")
     state, rng = start_one(policy)
     detect(policy, state, rng, 10.0, CENTRE)
     target = np.array([10_000.0, 10_000.0])
@@ -406,3 +417,64 @@ def test_batched_step_switches_levels_like_one_by_one_steps() -> None:
         count = int(single.memory_count[0])
         assert batched.memory_count[i] == count
         np.testing.assert_array_equal(batched.memory[i, :count], single.memory[0, :count])
+
+
+def _confirmed_at(
+    policy: SearchPolicy, target: np.ndarray
+) -> tuple[PolicyState, np.random.Generator]:
+    """A vehicle at CENTRE that detected and confirmed ``target`` (back on level 1)."""
+    state, rng = start_one(policy)
+    detect(policy, state, rng, 10.0, CENTRE)
+    policy.step(state, ONE, obs(20.0, CENTRE, np.array([[True]]), target), rng)
+    assert state.level.tolist() == [0]
+    return state, rng
+
+
+def test_disc_memory_ignores_detections_only_while_a_confirmed_target_is_within_r1() -> None:
+    # The detection sensor gives no position: the contact's position is not looked at (here it
+    # is far from the confirmed target), only where the vehicle is.
+    policy = mdm(detection_memory="disc")
+    target = CENTRE + np.array([300.0, 0.0])
+    state, rng = _confirmed_at(policy, target)
+    elsewhere = np.array([5_000.0, 5_000.0])
+    inside = target + np.array([R1 - 1.0, 0.0])
+    out = policy.step(state, ONE, obs(30.0, inside, np.array([[True]]), elsewhere), rng)
+    assert out.detected.tolist() == [False]
+    outside = target + np.array([R1 + 1.0, 0.0])
+    out = policy.step(state, ONE, obs(40.0, outside, np.array([[True]]), target), rng)
+    assert out.detected.tolist() == [True]
+
+
+def test_no_detection_memory_redetects_the_confirmed_target() -> None:
+    policy = mdm(detection_memory="none")
+    target = CENTRE + np.array([300.0, 0.0])
+    state, rng = _confirmed_at(policy, target)
+    out = policy.step(state, ONE, obs(30.0, CENTRE, np.array([[True]]), target), rng)
+    assert out.detected.tolist() == [True]
+    # The confirmation sensor gives the position: the same target is not confirmed twice.
+    out = policy.step(state, ONE, obs(31.0, CENTRE, np.array([[True]]), target), rng)
+    assert out.confirmed.tolist() == [False]
+
+
+def test_blind_time_after_a_fall_back_ignores_detections_then_ends() -> None:
+    policy = mdm(blind=100.0)
+    state, rng = start_one(policy)
+    detect(policy, state, rng, 0.0, CENTRE)
+    life = DecayIndex().lifetime
+    out = policy.step(state, ONE, obs(life, CENTRE), rng)
+    assert out.fell_back.tolist() == [True]
+    assert policy.deadline(state)[0] == pytest.approx(life + 100.0)
+    out = policy.step(state, ONE, obs(life + 50.0, CENTRE, np.array([[True]]), CENTRE), rng)
+    assert out.detected.tolist() == [False]
+    out = policy.step(state, ONE, obs(life + 100.0, CENTRE), rng)
+    assert policy.deadline(state)[0] == np.inf
+    out = policy.step(state, ONE, obs(life + 101.0, CENTRE, np.array([[True]]), CENTRE), rng)
+    assert out.detected.tolist() == [True]
+
+
+def test_index_that_starts_at_its_maximum() -> None:
+    printed, top = DecayIndex(kappa=180.0), DecayIndex(kappa=180.0, start="max")
+    assert printed.value(np.array(0.0)) == pytest.approx(0.85)
+    assert top.value(np.array(0.0)) == pytest.approx(0.95)
+    assert top.value(np.array(top.lifetime)) == pytest.approx(0.2)
+    assert top.lifetime == pytest.approx(180.0 * np.log(0.85 / 0.1))

@@ -1,0 +1,86 @@
+"""The reproduce report: summary first, causes linked to docs/model.md, section III-B, the
+claims about Figs. 4-9, and the eq. (10) row."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mdm_montecarlo.known_causes import CAUSES, slug
+from mdm_montecarlo.report import write_report
+from mdm_montecarlo.runner import run_many
+from mdm_montecarlo.section3b import SearchGeometry, confirmed_share, p_cm, p_cm_given, p_cs
+from mdm_montecarlo.study import Case, study_rows
+from mdm_montecarlo.tables import measured_rows
+
+MODEL = Path(__file__).resolve().parents[2] / "docs" / "model.md"
+PAPER = SearchGeometry(area=4e8, speed=20.0, confirm_radius=400.0, detect_radius=2000.0)
+
+
+def test_every_cause_names_a_heading_of_docs_model_md() -> None:
+    anchors = {slug(h) for h in re.findall(r"^#{2,3} (.+)$", MODEL.read_text(), re.MULTILINE)}
+    for cause in CAUSES:
+        assert cause.anchor in anchors, cause.heading
+
+
+def test_p_cs_and_p_cm_follow_eqs_18_to_20() -> None:
+    t = np.array([0.0, 1000.0, 10_000.0])
+    rate = 2 * 400.0 * 20.0 / 4e8
+    np.testing.assert_allclose(p_cs(t, PAPER), 1 - np.exp(-rate * t))
+    # Before t_d both are the same (eq. 20); after it MDM searches the r_1 disc (eq. 19).
+    given = p_cm_given(t, np.array(1000.0), PAPER)
+    assert given[1] == pytest.approx(p_cs(t, PAPER)[1])
+    disc_rate = 2 * 400.0 * 20.0 / (np.pi * 2000.0**2)
+    expected = 1 - (1 - p_cs(np.array(1000.0), PAPER)) * np.exp(-disc_rate * 9000.0)
+    assert given[2] == pytest.approx(expected)
+    # Eq. (22) holds for the averaged curve too.
+    grid = np.linspace(0.0, 40_000.0, 41)
+    assert (p_cm(grid, PAPER) >= p_cs(grid, PAPER) - 1e-12).all()
+
+
+def test_one_uav_single_sensor_search_follows_eq_18() -> None:
+    """The engine's US search by one UAV confirms a given target at about the rate of the
+    random-search law (fixed seed; a wrong sensor radius or speed would double or halve it)."""
+    (res,) = run_many([Case("fixed", "US", 20.0, 1, 0).profile()], runs=300, seed=4)
+    t = np.array([5000.0, 10_000.0, 20_000.0])
+    share = confirmed_share(res.team_times, t)
+    print("simulated", share, "eq. (18)", p_cs(t, PAPER))
+    np.testing.assert_allclose(share, p_cs(t, PAPER), atol=0.06)
+
+
+@pytest.fixture(scope="module")
+def small_report(tmp_path_factory: pytest.TempPathFactory) -> str:
+    rows = study_rows(("simtable1", "section3b"))
+    cases = list(dict.fromkeys(r.case for r in rows))
+    results = dict(zip(cases, run_many([c.profile() for c in cases], runs=40, seed=1), strict=True))
+    folder = tmp_path_factory.mktemp("report")
+    path = write_report(folder, rows, measured_rows(rows, results), results, "header line")
+    for png in ("simtable1-fixed.png", "section3b-pcs-pcm.png"):
+        assert (folder / png).stat().st_size > 10_000
+    return path.read_text()
+
+
+def test_summary_comes_first_and_outside_rows_link_their_cause(small_report: str) -> None:
+    assert small_report.index("## Summary") < small_report.index("## simtable1")
+    assert re.search(r"T_nc inside tolerance: \d+ of 15 rows", small_report)
+    outside = small_report.split("## Means outside tolerance")[1].split("\n## ", maxsplit=1)[0]
+    rows = [line for line in outside.splitlines() if line.startswith("| simtable1")]
+    assert rows
+    for line in rows:
+        assert re.search(r"\]\([^)]*model\.md#[a-z0-9-]+\)", line), line
+        assert line.rstrip("| ").split("|")[-1].strip(), line  # a closest variant is named
+
+
+def test_eq10_row_sits_beside_the_default(small_report: str) -> None:
+    table = small_report.split("## simtable1")[1]
+    lines = [ln for ln in table.splitlines() if ln.startswith("| simtable1 | fixed | MDM")]
+    assert [("eq. (10) literal" in ln) for ln in lines] == [False, True]
+
+
+def test_section_3b_is_in_the_report(small_report: str) -> None:
+    part = small_report.split("## Section III-B")[1]
+    assert "![P_CS and P_CM](section3b-pcs-pcm.png)" in part
+    assert len(re.findall(r"^\| \d+ \| 0\.\d{3} \|", part, re.MULTILINE)) == 5
