@@ -7,7 +7,6 @@ import csv
 import os
 from collections import Counter
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -15,6 +14,7 @@ import numpy as np
 
 from mdm_montecarlo.figure_claims import Claim, check_claims
 from mdm_montecarlo.known_causes import cause_of, slug
+from mdm_montecarlo.local_pool import imap_unordered
 from mdm_montecarlo.plots import plot_scaling, plot_section3b, plot_table
 from mdm_montecarlo.runner import MissionResults
 from mdm_montecarlo.section3b import SearchGeometry, confirmed_share, p_cm, p_cs
@@ -242,6 +242,9 @@ def _draw(plots: list[Plot], workers: int) -> None:
         for plot, args in plots:
             plot(*args)
         return
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        for done in [pool.submit(plot, *args) for plot, args in plots]:
-            done.result()
+    for _ in imap_unordered(_plot, list(plots), workers):
+        pass
+
+
+def _plot(plot: Callable[..., None], args: tuple[Any, ...]) -> None:
+    plot(*args)

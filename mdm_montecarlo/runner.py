@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import signal
 from collections.abc import Callable, Iterator
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 
 import numpy as np
@@ -12,6 +10,7 @@ from numpy.typing import NDArray
 
 from mdm_core import metrics
 from mdm_montecarlo.engine import BLOCK_RUNS, BlockResult, run_block
+from mdm_montecarlo.local_pool import imap_unordered
 from mdm_montecarlo.social_engine import SWARM_KINDS, run_swarm_block
 from mdm_profiles import MissionProfile
 
@@ -76,27 +75,18 @@ class RunInterruptedError(Exception):
         self.partial = partial
 
 
-def _ignore_sigint() -> None:
-    """Worker initializer: Ctrl-C reaches the whole process group; only the parent handles it
-    (a worker that raised KeyboardInterrupt would print a traceback per process)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-def _stop_pool(pool: ProcessPoolExecutor, pending: dict[Future[BlockResult], int]) -> None:
-    """Cancel queued blocks and kill the running ones: a block can take seconds, and Ctrl-C
-    must stop the command within 2 s."""
-    for fut in pending:
-        fut.cancel()
-    for process in list(pool._processes.values()):
-        process.kill()
-    pool.shutdown(wait=True, cancel_futures=True)
-
-
 def simulate_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
     """One block of runs: the event-driven engine, or the time-stepped one for PSO/SPSO/ARPSO."""
     if profile.policy.kind in SWARM_KINDS:
         return run_swarm_block(profile, seed, block, n_runs)
     return run_block(profile, seed, block, n_runs)
+
+
+def _indexed_block(
+    index: int, profile: MissionProfile, seed: int, block: int, n_runs: int
+) -> tuple[int, BlockResult]:
+    """simulate_block tagged with the profile's index (local workers return in any order)."""
+    return index, simulate_block(profile, seed, block, n_runs)
 
 
 def _relative_cost(profile: MissionProfile) -> float:
@@ -200,16 +190,10 @@ def _run_jobs(
                 blocks[futures[fut]].append(fut.result())
                 done(blocks[futures[fut]][-1].per_vehicle.shape[0])
     elif workers > 1:
-        pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
-        pending = {pool.submit(simulate_block, profiles[i], seed, b, n): i for i, b, n in jobs}
-        try:
-            for f in as_completed(pending):
-                blocks[pending[f]].append(f.result())
-                done(blocks[pending[f]][-1].per_vehicle.shape[0])
-        except BaseException:
-            _stop_pool(pool, pending)
-            raise
-        pool.shutdown()
+        work = [(i, profiles[i], seed, b, n) for i, b, n in jobs]
+        for i, result in imap_unordered(_indexed_block, work, workers):
+            blocks[i].append(result)
+            done(result.per_vehicle.shape[0])
     else:
         for i, b, n in jobs:
             blocks[i].append(simulate_block(profiles[i], seed, b, n))

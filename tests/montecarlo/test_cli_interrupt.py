@@ -61,12 +61,12 @@ def test_ctrl_c_on_reproduce_keeps_the_finished_rows_in_a_marked_partial_report(
     assert status == 130
     (line,) = _messages(stderr)
     assert line.startswith("mdm-montecarlo: interrupted; ")
-    assert "of 12 configurations finished, partial report:" in line
+    assert "of 15 configurations finished, partial report:" in line
     assert took < 10  # a loose bound: a computing pool would run on for a minute
     report = (out / "report.md").read_text()
     assert "PARTIAL REPORT: interrupted" in report
-    finished = int(re.search(r"interrupted; (\d+) of 12", line).group(1))  # type: ignore[union-attr]
-    assert 2 <= finished < 12
+    finished = int(re.search(r"interrupted; (\d+) of 15", line).group(1))  # type: ignore[union-attr]
+    assert 2 <= finished < 15
     rows = (out / "results.csv").read_text().splitlines()[1:]
     assert len(rows) == finished
 
