@@ -133,12 +133,18 @@ def run_command(args: argparse.Namespace) -> int:
     if args.backend == "mavsdk":
         reason = _run_mavsdk(fly)
         print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
-        map_after_run(config.log_dir, profile, [args.vehicle], f"map-{args.vehicle}")
+        _map(config, reason)
         os._exit(_exit_status(reason))  # see _run_mavsdk: never join MAVSDK's blocked threads
     reason = asyncio.run(fly)
     print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
-    map_after_run(config.log_dir, profile, [args.vehicle], f"map-{args.vehicle}")
+    _map(config, reason)
     return _exit_status(reason)
+
+
+def _map(config: MissionConfig, reason: str) -> None:
+    """The run's map, unless a second signal asked to exit at once."""
+    if reason != STOPPED_BY_SECOND_SIGNAL:
+        map_after_run(config.log_dir, config.profile, [config.vehicle], f"map-{config.vehicle}")
 
 
 def _exit_status(reason: str) -> int:

@@ -16,6 +16,7 @@ import pymap3d
 import pyogrio
 import pytest
 
+from companion.cli import main
 from companion.run_map.png import scale_bar_length
 from companion.telemetry import read_records
 from mdm_core.world import Scenario
@@ -147,6 +148,18 @@ def test_fleet_writes_a_geojson_that_matches_the_mission_logs_and_a_png(tmp_path
         )
     for name in ("map.png", "map-0.png", "map-1.png"):
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+    # `companion map` redraws the same map from the same logs
+    fleet_map = (out / "map.geojson").read_text()
+    (out / "map.geojson").unlink()
+    assert main(["map", "--profile", str(path), "--log-dir", str(out)]) == 0
+    assert (out / "map.geojson").read_text() == fleet_map
+
+
+def test_companion_map_without_mission_logs_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["map", "--profile", "paper-fixed", "--log-dir", str(tmp_path)]) == 2
+    assert f"--log-dir {tmp_path}: no mission-I.jsonl in it" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(("span", "bar"), [(2200.0, 200.0), (1000.0, 200.0), (12000.0, 2000.0),
