@@ -91,7 +91,8 @@ def test_fleet_writes_a_geojson_that_matches_the_mission_logs_and_a_png(tmp_path
         env=dict(os.environ, PYTHONUNBUFFERED="1"),
     )  # fmt: skip
     assert done.returncode == 0, done.stderr[-2000:]
-    assert f"map: {out / 'map.geojson'} {out / 'map.png'}" in done.stdout
+    # on stderr: the fleet's stdout may be --json
+    assert f"map: {out / 'map.geojson'} {out / 'map.png'}" in done.stderr
     doc = json.loads((out / "map.geojson").read_text())
     assert doc["type"] == "FeatureCollection"
     # GDAL's GeoJSON driver (what QGIS opens it with) reads every feature, in WGS84, lon/lat
