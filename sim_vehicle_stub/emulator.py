@@ -21,7 +21,7 @@ from sim_vehicle_stub.clock import SimClock
 from sim_vehicle_stub.commands import CommandHandler
 from sim_vehicle_stub.config import EmulatorConfig
 from sim_vehicle_stub.encoder import Encoder
-from sim_vehicle_stub.endpoints import GcsEndpoint, TcpServer, TokenBucket, UdpEndpoint
+from sim_vehicle_stub.endpoints import GcsEndpoint, TcpServer, UdpEndpoint
 from sim_vehicle_stub.events import EventLog
 from sim_vehicle_stub.failsafes import check_failsafes, inside_fences
 from sim_vehicle_stub.fast_streams import (
@@ -140,9 +140,8 @@ class Emulator:
         for i, node in enumerate(self.nodes):
             bind = cfg.bind_port_base + i if cfg.bind_port_base else 0
             remote = (cfg.host, cfg.base_port + i)
-            bucket = TokenBucket(cfg.flood_rate, cfg.flood_rate / 4)
             sock = _udp_socket(cfg.bind_host, bind)
-            ep = UdpEndpoint(node, self._deliver, remote, bucket, sock)
+            ep = UdpEndpoint(node, self._deliver, remote, cfg.flood_rate, sock)
             await loop.create_datagram_endpoint(functools.partial(_same, ep), sock=sock)
             self.udp.append(ep)
             node.outputs.append(ep.send)
@@ -214,8 +213,9 @@ class Emulator:
     def _flush_state(self, node: VehicleNode) -> None:
         v = node.vehicle
         out: list[Any] = []
-        if v.state_changed:
+        if node.early_heartbeat_due(self.clock.now):
             v.state_changed = False
+            node.last_heartbeat = self.clock.now
             out.append(self.telemetry.heartbeat(v))
         for severity, text in v.status:
             out.append(d.MAVLink_statustext_message(severity, text.encode()))
@@ -291,7 +291,7 @@ class Emulator:
 
     def _tick(self, dt: float) -> None:
         t = self.clock.now
-        self.fleet.update_yaw()
+        self.fleet.update_yaw(dt)
         vehicles = self.vehicles
         margins = np.array([v.limits.fence_margin for v in vehicles])
         inside = inside_fences(self.scenario.area, self.fleet.pos, margins).tolist()
@@ -308,9 +308,11 @@ class Emulator:
             v = node.vehicle
             enc = node.encoder
             due = node.schedule.due(t)
-            if v.state_changed and d.MAVLINK_MSG_ID_HEARTBEAT not in due:
+            if d.MAVLINK_MSG_ID_HEARTBEAT not in due and node.early_heartbeat_due(t):
                 due.insert(0, d.MAVLINK_MSG_ID_HEARTBEAT)
-            v.state_changed = False
+            if d.MAVLINK_MSG_ID_HEARTBEAT in due:
+                v.state_changed = False
+                node.last_heartbeat = t
             frames = []
             for m in due:
                 rows = batch.get(m)

@@ -1,7 +1,9 @@
 """Network endpoints: per-vehicle UDP (PX4 SITL style) and TCP server, and the shared GCS output.
 
 Every endpoint reads in asyncio callbacks as datagrams arrive, so a slow or hostile peer on one
-vehicle's port never delays another vehicle. A token bucket per endpoint drops floods unread.
+vehicle's port never delays another vehicle. Floods are dropped unread by token buckets: one per
+known peer and one shared by every other sender, so garbage from strangers cannot starve a
+client the vehicle already talks to.
 """
 
 from __future__ import annotations
@@ -44,23 +46,42 @@ class TokenBucket:
         return False
 
 
-class _PeerSet:
-    """The configured remote plus recent senders that spoke valid MAVLink (bounded)."""
+class PeerSet:
+    """The configured remote plus up to ``_MAX_PEERS`` other senders of valid MAVLink.
 
-    def __init__(self, remote: Address | None) -> None:
+    A slot is held while its sender keeps talking (within ``_PEER_TTL`` s): a newcomer gets a
+    free or expired slot and never evicts an active client (real PX4 answers only the first
+    sender on a link; the emulator serves a few). Each peer has its own flood bucket; senders
+    without a slot share one.
+    """
+
+    def __init__(self, remote: Address | None, rate: float, burst: float) -> None:
         self.remote = remote
+        self.rate, self.burst = rate, burst
         self.seen: dict[Address, float] = {}
+        self.buckets: dict[Address, TokenBucket] = {}
+        if remote is not None:
+            self.buckets[remote] = TokenBucket(rate, burst)
+        self.strangers = TokenBucket(rate, burst)
         self.targets: tuple[Address, ...] = (remote,) if remote else ()
+
+    def allow(self, addr: Address) -> bool:
+        """Whether a datagram from ``addr`` fits its bucket."""
+        return self.buckets.get(addr, self.strangers).allow()
 
     def saw(self, addr: Address) -> None:
         now = time.monotonic()
-        fresh = addr not in self.seen
-        self.seen[addr] = now
-        if fresh or len(self.seen) > _MAX_PEERS:
-            live = sorted(self.seen.items(), key=lambda kv: -kv[1])[:_MAX_PEERS]
-            self.seen = {a: s for a, s in live if now - s < _PEER_TTL}
-            extra = [a for a in self.seen if a != self.remote]
-            self.targets = ((self.remote,) if self.remote else ()) + tuple(extra)
+        if addr == self.remote:
+            return
+        if addr in self.seen:
+            self.seen[addr] = now
+            return
+        self.seen = {a: t for a, t in self.seen.items() if now - t < _PEER_TTL}
+        self.buckets = {a: b for a, b in self.buckets.items() if a == self.remote or a in self.seen}
+        if len(self.seen) < _MAX_PEERS:
+            self.seen[addr] = now
+            self.buckets[addr] = TokenBucket(self.rate, self.burst)
+        self.targets = ((self.remote,) if self.remote else ()) + tuple(self.seen)
 
 
 class UdpEndpoint(asyncio.DatagramProtocol):
@@ -71,13 +92,12 @@ class UdpEndpoint(asyncio.DatagramProtocol):
         node: VehicleNode,
         deliver: Deliver,
         remote: Address,
-        flood: TokenBucket,
+        flood_rate: float,
         sock: socket.socket,
     ) -> None:
         self.node = node
         self.deliver = deliver
-        self.peers = _PeerSet(remote)
-        self.flood = flood
+        self.peers = PeerSet(remote, flood_rate, flood_rate / 4)
         self.decoder = FrameDecoder(node.stats)
         self.transport: asyncio.DatagramTransport | None = None
         self.sock: socket.socket | None = sock
@@ -90,7 +110,7 @@ class UdpEndpoint(asyncio.DatagramProtocol):
         self.sock = None
 
     def datagram_received(self, data: bytes, addr: Address) -> None:
-        if not self.flood.allow():
+        if not self.peers.allow(addr):
             self.node.stats.flood_dropped += 1
             return
         msgs = self.node.authentic(self.decoder.feed(data))
@@ -159,17 +179,16 @@ class GcsEndpoint(asyncio.DatagramProtocol):
     def __init__(self, nodes: list[VehicleNode], deliver: Deliver, remote: Address) -> None:
         self.nodes = nodes
         self.deliver = deliver
-        self.peers = _PeerSet(remote)
+        self.peers = PeerSet(remote, 20000.0, 5000.0)
         self.stats = LinkStats()
         self.decoder = FrameDecoder(self.stats)
-        self.flood = TokenBucket(20000.0, 5000.0)
         self.transport: asyncio.DatagramTransport | None = None
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         self.transport = cast(asyncio.DatagramTransport, transport)
 
     def datagram_received(self, data: bytes, addr: Address) -> None:
-        if not self.flood.allow():
+        if not self.peers.allow(addr):
             self.stats.flood_dropped += 1
             return
         msgs = self.decoder.feed(data)

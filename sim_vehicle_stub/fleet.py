@@ -43,6 +43,11 @@ class Fleet:
         self.climb = np.full(n, 3.0)
         self.descent = np.full(n, 1.5)
         self.yaw_cmd = np.full(n, np.nan)
+        self.yaw_rate = np.full(n, np.nan)
+        """Commanded yaw rate, rad/s (NaN: none)."""
+        self.h_acc = np.zeros((n, 2))
+        self.v_acc = np.zeros(n)
+        """Acceleration-only targets, integrated into the commanded velocities."""
 
     def __len__(self) -> int:
         return len(self.pos)
@@ -55,10 +60,13 @@ class Fleet:
         """Stop and hold the current position and altitude."""
         self.h_use_vel[i] = False
         self.h_target[i] = self.pos[i]
+        self.h_acc[i] = 0.0
+        self.v_acc[i] = 0.0
         self.v_use_vel[i] = False
         self.v_target[i] = self.alt[i]
 
     def go_to(self, i: int, north: float, east: float) -> None:
+        self.h_acc[i] = 0.0
         self.h_use_vel[i] = False
         self.h_target[i] = (north, east)
 
@@ -67,6 +75,7 @@ class Fleet:
         self.h_vel[i] = (vn, ve)
 
     def climb_to(self, i: int, alt: float) -> None:
+        self.v_acc[i] = 0.0
         self.v_use_vel[i] = False
         self.v_target[i] = alt
 
@@ -79,13 +88,17 @@ class Fleet:
         """Advance every vehicle by dt sim seconds."""
         model = self.model
         k = 1.0 / (4.0 * model.tau)
+        self.h_vel += self.h_acc * dt
+        self.v_vel += self.v_acc * dt
         offset = self.h_target - self.pos
         dist = np.hypot(offset[:, 0], offset[:, 1])
         pursuit = pursuit_reference(self.pos, self.h_target, np.minimum(self.speed, k * dist))
         vel_cmd = self.h_vel
         norm = np.hypot(vel_cmd[:, 0], vel_cmd[:, 1])
         scale = np.where(norm > self.speed, self.speed / np.maximum(norm, 1e-9), 1.0)
-        href = np.where(self.h_use_vel[:, None], vel_cmd * scale[:, None], pursuit)
+        vel_cmd *= scale[:, None]  # in place: an integrated acceleration stops at the cap
+        href = np.where(self.h_use_vel[:, None], vel_cmd, pursuit)
+        np.clip(self.v_vel, -self.descent, self.climb, out=self.v_vel)
 
         vref = np.where(self.v_use_vel, self.v_vel, k * (self.v_target - self.alt))
         vref = np.clip(vref, -self.descent, self.climb)
@@ -102,12 +115,16 @@ class Fleet:
         np.maximum(self.alt, 0.0, out=self.alt)
         self.vz = np.where(self.alt <= 0.0, np.maximum(self.vz, 0.0), self.vz)
 
-    def update_yaw(self) -> None:
-        """Heading: the commanded yaw, else the direction of travel (kept when hovering)."""
+    def update_yaw(self, dt: float) -> None:
+        """Heading after ``dt`` s: the commanded yaw, else turning at the commanded yaw rate,
+        else the direction of travel (kept when hovering)."""
         moving = np.hypot(self.vel[:, 0], self.vel[:, 1]) > 0.5
         heading = np.arctan2(self.vel[:, 1], self.vel[:, 0])
+        course = np.where(moving, heading, self.yaw)
+        turned = np.remainder(self.yaw + self.yaw_rate * dt, 2 * np.pi)
+        turning = np.where(np.isnan(self.yaw_rate), course, turned)
         commanded = ~np.isnan(self.yaw_cmd)
-        self.yaw = np.where(commanded, self.yaw_cmd, np.where(moving, heading, self.yaw))
+        self.yaw = np.where(commanded, self.yaw_cmd, turning)
 
     def attitude(self, g: float = 9.81) -> tuple[FloatArray, FloatArray]:
         """Roll and pitch (rad) that produce the current lag-loop acceleration."""

@@ -35,6 +35,8 @@ class MessageHandler:
             "SET_POSITION_TARGET_LOCAL_NED": self._local_target,
             "SET_POSITION_TARGET_GLOBAL_INT": self._global_target,
             "MISSION_REQUEST_LIST": self._mission_list,
+            "MISSION_COUNT": self._mission_count,
+            "MISSION_CLEAR_ALL": self._mission_clear,
             "FILE_TRANSFER_PROTOCOL": self._ftp,
             "TIMESYNC": self._timesync,
         }
@@ -59,7 +61,7 @@ class MessageHandler:
 
     def _command_int(self, node: VehicleNode, msg: Any) -> None:
         p = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x), float(msg.y), msg.z)
-        self.commands.handle(node, msg, p)
+        self.commands.handle(node, msg, p, int(msg.frame))
 
     def _set_mode(self, node: VehicleNode, msg: Any) -> None:
         v = node.vehicle
@@ -120,6 +122,22 @@ class MessageHandler:
     def _mission_list(self, node: VehicleNode, msg: Any) -> None:
         node.send([d.MAVLink_mission_count_message(msg.get_srcSystem(), msg.get_srcComponent(),
                                                    0, getattr(msg, "mission_type", 0))])  # fmt: skip
+
+    def _mission_ack(self, node: VehicleNode, msg: Any, result: int) -> None:
+        node.send([d.MAVLink_mission_ack_message(msg.get_srcSystem(), msg.get_srcComponent(),
+                                                 result, getattr(msg, "mission_type", 0))])  # fmt: skip
+
+    def _mission_count(self, node: VehicleNode, msg: Any) -> None:
+        # No mission storage: an empty upload is done at once (MISSION_ACK ACCEPTED, as PX4 and
+        # ArduPilot answer a count of 0), a longer one is refused at once with NO_SPACE instead
+        # of leaving the client to its time-out.
+        ok = msg.count == 0
+        if not ok:
+            node.stats.nacks += 1
+        self._mission_ack(node, msg, d.MAV_MISSION_ACCEPTED if ok else d.MAV_MISSION_NO_SPACE)
+
+    def _mission_clear(self, node: VehicleNode, msg: Any) -> None:
+        self._mission_ack(node, msg, d.MAV_MISSION_ACCEPTED)
 
     def _ftp(self, node: VehicleNode, msg: Any) -> None:
         req = bytes(msg.payload)

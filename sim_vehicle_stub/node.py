@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -9,10 +10,12 @@ from typing import Any
 from mavlink_signing import Verdict
 from sim_vehicle_stub.encoder import Encoder
 from sim_vehicle_stub.framing import LinkStats
+from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.telemetry import StreamSchedule
 from sim_vehicle_stub.vehicle import Vehicle
 
 _MAX_DATAGRAM = 1400
+HEARTBEAT_ID = d.MAVLINK_MSG_ID_HEARTBEAT
 
 
 @dataclass
@@ -25,6 +28,18 @@ class VehicleNode:
     stats: LinkStats = field(default_factory=LinkStats)
     outputs: list[Callable[[bytes], None]] = field(default_factory=list)
     """Senders of every endpoint that carries this vehicle (UDP, TCP clients, GCS)."""
+    last_heartbeat: float = -math.inf
+    """Sim time of the last HEARTBEAT sent."""
+
+    def early_heartbeat_due(self, now: float) -> bool:
+        """Whether a mode/arm change may go out in a HEARTBEAT now rather than at the next
+        scheduled one: at most one early beat per half interval, so a client spamming mode
+        changes cannot push the rate above twice the scheduled one (real autopilots keep
+        theirs fixed; the early beat lets clients see a change without waiting up to 1 s)."""
+        if not self.vehicle.state_changed:
+            return False
+        interval = self.schedule.interval.get(HEARTBEAT_ID, 1.0)
+        return now - self.last_heartbeat >= 0.5 * interval
 
     def authentic(self, messages: list[Any]) -> list[Any]:
         """The messages this vehicle may act on: all of them with signing off; with signing on

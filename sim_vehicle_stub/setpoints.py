@@ -1,7 +1,10 @@
 """SET_POSITION_TARGET_LOCAL_NED / _GLOBAL_INT to a :class:`Setpoint` in the local frame.
 
-type_mask bits set mean "ignore": 1 x, 2 y, 4 z, 8 vx, 16 vy, 32 vz, 1024 yaw. A message that
-uses neither a horizontal position nor a horizontal velocity nor a vertical target is rejected.
+type_mask bits set mean "ignore": 1 x, 2 y, 4 z, 8 vx, 16 vy, 32 vz, 64/128/256 acceleration,
+512 force, 1024 yaw, 2048 yaw rate. As ArduCopter (GCS_MAVLink_Copter.cpp,
+handle_message_set_position_target_local_ned): an acceleration alone is followed (as a velocity
+that integrates it), an acceleration next to a position or velocity is feed-forward the lag
+model has no use for, force is refused. A message with no target at all is rejected.
 """
 
 from __future__ import annotations
@@ -22,6 +25,17 @@ def _fields(mask: int) -> tuple[bool, bool, bool, bool, bool]:
     return (mask & 3) == 0, not mask & 4, (mask & 24) == 0, not mask & 32, not mask & 1024
 
 
+def _accel(msg: Any, mask: int) -> tuple[float, float, float] | None:
+    """The acceleration (north, east, up) of an acceleration-only target, else None."""
+    if mask & 448 or (mask & 63) != 63:
+        return None
+    return float(msg.afx), float(msg.afy), -float(msg.afz)
+
+
+def _yaw_rate(msg: Any, mask: int) -> float | None:
+    return float(msg.yaw_rate) if not mask & 2048 and _ok(msg.yaw_rate) else None
+
+
 _LIMIT = 1e7
 """Metres or m/s beyond which a setpoint value is rejected as nonsense (no area is that big)."""
 
@@ -35,8 +49,12 @@ def local_setpoint(msg: Any, v: Vehicle, t: float) -> Setpoint | None:
     frame = int(msg.coordinate_frame)
     if frame not in (LOCAL_NED, LOCAL_OFFSET_NED, BODY_NED, BODY_OFFSET_NED):
         return None
-    use_pos, use_z, use_vel, use_vz, use_yaw = _fields(int(msg.type_mask))
-    if not (use_pos or use_z or use_vel or use_vz):
+    mask = int(msg.type_mask)
+    use_pos, use_z, use_vel, use_vz, use_yaw = _fields(mask)
+    accel = _accel(msg, mask)
+    if accel is not None and (mask & 512 or not _ok(*accel)):
+        return None
+    if not (use_pos or use_z or use_vel or use_vz or accel):
         return None
     i, f = v.index, v.fleet
     body = frame in (BODY_NED, BODY_OFFSET_NED)
@@ -68,7 +86,9 @@ def local_setpoint(msg: Any, v: Vehicle, t: float) -> Setpoint | None:
     yaw_cmd = float(msg.yaw) if use_yaw and _ok(msg.yaw) else None
     if yaw_cmd is not None and body:
         yaw_cmd += yaw
-    return Setpoint(t, position, velocity, alt, climb, yaw_cmd)
+    if accel is not None and body:
+        accel = (*rotate(accel[0], accel[1]), accel[2])
+    return Setpoint(t, position, velocity, alt, climb, yaw_cmd, _yaw_rate(msg, mask), accel)
 
 
 def global_setpoint(msg: Any, geo: GeoFrame, t: float) -> Setpoint | None:
@@ -76,8 +96,12 @@ def global_setpoint(msg: Any, geo: GeoFrame, t: float) -> Setpoint | None:
     frame = int(msg.coordinate_frame)
     if frame not in _GLOBAL_AMSL + _GLOBAL_RELATIVE:
         return None
-    use_pos, use_z, use_vel, use_vz, use_yaw = _fields(int(msg.type_mask))
-    if not (use_pos or use_z or use_vel or use_vz):
+    mask = int(msg.type_mask)
+    use_pos, use_z, use_vel, use_vz, use_yaw = _fields(mask)
+    accel = _accel(msg, mask)
+    if accel is not None and (mask & 512 or not _ok(*accel)):
+        return None
+    if not (use_pos or use_z or use_vel or use_vz or accel):
         return None
     position = velocity = None
     alt = climb = None
@@ -100,4 +124,4 @@ def global_setpoint(msg: Any, geo: GeoFrame, t: float) -> Setpoint | None:
             return None
         climb = -float(msg.vz)
     yaw_cmd = float(msg.yaw) if use_yaw and _ok(msg.yaw) else None
-    return Setpoint(t, position, velocity, alt, climb, yaw_cmd)
+    return Setpoint(t, position, velocity, alt, climb, yaw_cmd, _yaw_rate(msg, mask), accel)

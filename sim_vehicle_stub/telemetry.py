@@ -68,8 +68,8 @@ class Telemetry:
         self.epoch_usec = epoch_usec
         self._geo = GeoCache()
         home = fleet.pos.copy()
-        hl = geo.to_geodetic(home[:, 0], home[:, 1], np.zeros(len(home)))
-        self._home_geo = tuple(np.atleast_1d(a) for a in hl)
+        lat, lon, _ = geo.to_geodetic(home[:, 0], home[:, 1], np.zeros(len(home)))
+        self._home_geo = (np.atleast_1d(lat), np.atleast_1d(lon))
         self.builders: dict[int, Callable[[Vehicle], Any]] = {
             d.MAVLINK_MSG_ID_HEARTBEAT: self.heartbeat,
             d.MAVLINK_MSG_ID_SYS_STATUS: self.sys_status,
@@ -88,8 +88,12 @@ class Telemetry:
         c = self._geo
         if c.t != self.clock.now:
             f = self.fleet
-            c.lat, c.lon, c.amsl = self.geo.to_geodetic(f.pos[:, 0], f.pos[:, 1], f.alt)
-            c.lat, c.lon, c.amsl = (np.atleast_1d(a) for a in (c.lat, c.lon, c.amsl))
+            c.lat, c.lon, _ = self.geo.to_geodetic(f.pos[:, 0], f.pos[:, 1], f.alt)
+            c.lat, c.lon = np.atleast_1d(c.lat), np.atleast_1d(c.lon)
+            # Altitude AMSL is home's plus the height above it, as a real autopilot reports it
+            # over flat SITL terrain; the tangent plane's curvature drop (d^2 / 2R, 9 m at
+            # 11 km) would make far vehicles' AMSL disagree with what they are commanded.
+            c.amsl = self.geo.alt + f.alt
             c.roll, c.pitch = f.attitude()
             c.t = self.clock.now
         return c
@@ -158,10 +162,10 @@ class Telemetry:
         )  # fmt: skip
 
     def home_position(self, v: Vehicle) -> Any:
-        lat, lon, alt = (a[v.index] for a in self._home_geo)
+        lat, lon = (a[v.index] for a in self._home_geo)
         hn, he = v.home
         return d.MAVLink_home_position_message(
-            int(lat * 1e7), int(lon * 1e7), int(alt * 1000), hn, he, 0.0, [1.0, 0.0, 0.0, 0.0],
+            int(lat * 1e7), int(lon * 1e7), round(self.geo.alt * 1000), hn, he, 0.0, [1.0, 0.0, 0.0, 0.0],
             0.0, 0.0, 0.0, self.clock.usec,
         )  # fmt: skip
 

@@ -51,6 +51,9 @@ class Setpoint:
     alt: float | None
     climb: float | None
     yaw: float | None
+    yaw_rate: float | None = None
+    accel: tuple[float, float, float] | None = None
+    """Acceleration-only target (north, east, up), m/s^2: integrated into a velocity."""
 
 
 class Vehicle:
@@ -78,6 +81,8 @@ class Vehicle:
         self.setpoint: Setpoint | None = None
         self.setpoint_lost = False
         self.takeoff_alt: float | None = None
+        self.pending_takeoff: float | None = None
+        """Altitude of a takeoff accepted while disarmed (PX4), flown once armed."""
         self.rtl_phase = 0
         self.last_gcs_heartbeat: float | None = None
         self.link_lost = False
@@ -139,7 +144,7 @@ class Vehicle:
                 return DENIED
         if mode.behaviour in (Behaviour.RTL, Behaviour.LAND) and not self.armed:
             return DENIED
-        if mode.behaviour is Behaviour.TAKEOFF and not self.armed:
+        if mode.behaviour is Behaviour.TAKEOFF and not (self.armed or p.takeoff_while_disarmed):
             return DENIED
         if mode == self.mode:
             return ACCEPTED
@@ -154,6 +159,11 @@ class Vehicle:
         b = mode.behaviour
         self.takeoff_alt = None
         f.yaw_cmd[i] = np.nan
+        f.yaw_rate[i] = np.nan
+        if not self.armed:
+            # Motors off: a mode change moves nothing (PX4 accepts OFFBOARD or TAKEOFF while
+            # disarmed and acts on them once armed, see arm()).
+            return
         if b is Behaviour.EXTERNAL:
             f.hold(i)
             self.setpoint_lost = False
@@ -161,9 +171,8 @@ class Vehicle:
                 self._apply(self.setpoint)
         elif b is Behaviour.TAKEOFF:
             f.hold(i)
-            self.takeoff_alt = (
-                self.params.get("MIS_TAKEOFF_ALT") if "MIS_TAKEOFF_ALT" in self.params else 2.5
-            )
+            self.takeoff_alt = self.pending_takeoff or self.persona.default_takeoff_alt(self.params)
+            self.pending_takeoff = None
             f.climb_to(i, self.takeoff_alt)
         elif b is Behaviour.LAND:
             f.hold(i)
@@ -187,22 +196,73 @@ class Vehicle:
         self.state_changed = True
         self.battery_fired = False
         self.events.write(self.now, "armed" if arm else "disarmed", vehicle=self.index)
-        if not arm:
-            self.fleet.hold(self.index)
+        if arm:
+            self._enter(self.mode)  # an OFFBOARD setpoint or a TAKEOFF waiting for the motors
+        else:
+            self._fall()
         return ACCEPTED
+
+    def _fall(self) -> None:
+        """Motors stopped: no horizontal control, down to the ground (a real copter drops;
+        here it sinks at the persona's maximum descent rate, so it lands and can re-arm)."""
+        i, f = self.index, self.fleet
+        self.takeoff_alt = None
+        f.hold(i)
+        f.fly_velocity(i, 0.0, 0.0)
+        f.climb_rate(i, -float(f.descent[i]))
 
     def takeoff(self, p7: float, home_alt_amsl: float) -> int:
         req = self.persona.takeoff(p7, self.params, self.facts(home_alt_amsl))
         if not isinstance(req, TakeoffRequest):
             self.say(4, f"takeoff refused: {req}")
-            return DENIED
+            return self.persona.takeoff_refusal
+        if req.note:
+            self.say(4, req.note)
+        if not self.armed:
+            self.pending_takeoff = req.altitude
         if req.mode is not None:
             result = self.set_mode(req.mode, "takeoff")
             if result != ACCEPTED:
                 return result
-        self.takeoff_alt = req.altitude
-        self.fleet.hold(self.index)
-        self.fleet.climb_to(self.index, req.altitude)
+        if self.armed:
+            self.takeoff_alt = req.altitude
+            self.fleet.hold(self.index)
+            self.fleet.climb_to(self.index, req.altitude)
+        return ACCEPTED
+
+    def change_speed(self, kind: float, speed: float) -> int:
+        """MAV_CMD_DO_CHANGE_SPEED: ground speed (kind 0/1), climb (2) or descent (3) rate,
+        capped at what the persona's vehicle can fly."""
+        # ArduCopter GCS_MAVLink_Copter.cpp handle_MAV_CMD_DO_CHANGE_SPEED: a speed that is
+        # not positive, or an unknown speed type, is DENIED.
+        if not (math.isfinite(speed) and speed > 0) or kind not in (0, 1, 2, 3):
+            return DENIED
+        i, f = self.index, self.fleet
+        top, climb, descent, _ = self.persona.speed_limits(self.params)
+        if kind in (0, 1):
+            f.speed[i] = min(speed, top)
+        elif kind == 2:
+            f.climb[i] = min(speed, climb)
+        else:
+            f.descent[i] = min(speed, descent)
+        return ACCEPTED
+
+    def reposition(self, north: float, east: float, alt: float | None, change_mode: bool) -> int:
+        """MAV_CMD_DO_REPOSITION to a point of the local frame (alt above home, None: keep)."""
+        p = self.persona
+        target = p.mode(p.reposition_mode)
+        if self.mode != target and not change_mode:
+            return p.reposition_elsewhere
+        result = self.set_mode(target, "reposition")
+        if result != ACCEPTED or not self.armed or self.landed:
+            return result  # PX4 switches mode but moves nothing on the ground
+        if target.behaviour is Behaviour.EXTERNAL:
+            self.setpoint = Setpoint(self.now, (north, east), None, alt, None, None)
+            self._apply(self.setpoint)
+        else:
+            self.fleet.go_to(self.index, north, east)
+            if alt is not None:
+                self.fleet.climb_to(self.index, alt)
         return ACCEPTED
 
     def failsafe(self, action: Action, why: str) -> None:
@@ -231,17 +291,29 @@ class Vehicle:
 
     def _apply(self, sp: Setpoint) -> None:
         i, f = self.index, self.fleet
+        f.h_acc[i] = 0.0
+        f.v_acc[i] = 0.0
         if sp.position is not None:
             f.go_to(i, *sp.position)
         elif sp.velocity is not None:
             f.fly_velocity(i, *sp.velocity)
+        elif sp.accel is not None:
+            # ArduCopter ModeGuided::set_accel: the vehicle follows an acceleration alone;
+            # integrated here from the current velocity into the lag loop's reference.
+            f.fly_velocity(i, *f.vel[i])
+            f.h_acc[i] = sp.accel[:2]
         if sp.alt is not None:
             f.climb_to(i, sp.alt)
         elif sp.climb is not None:
             f.climb_rate(i, sp.climb)
+        elif sp.accel is not None:
+            f.climb_rate(i, float(f.vz[i]))
+            f.v_acc[i] = sp.accel[2]
         if sp.yaw is not None:
-            f.yaw_cmd[i] = sp.yaw
-        if sp.alt is not None or sp.climb is not None:
+            f.yaw_cmd[i], f.yaw_rate[i] = sp.yaw, np.nan
+        elif sp.yaw_rate is not None:
+            f.yaw_cmd[i], f.yaw_rate[i] = np.nan, sp.yaw_rate
+        if sp.alt is not None or sp.climb is not None or sp.accel is not None:
             self.takeoff_alt = None
 
     # ----- per tick

@@ -15,6 +15,9 @@ from sim_vehicle_stub.personas.base import (
     VehicleFacts,
 )
 
+LOCATION_ALT_MAX_M = 83000.0
+"""The highest altitude ArduPilot's Location can hold (libraries/AP_Common/Location.h)."""
+
 
 class ArduCopterPersona(Persona):
     """ArduCopter: GUIDED, LOITER, RTL, LAND, BRAKE (STABILIZE on the ground at boot)."""
@@ -37,6 +40,10 @@ class ArduCopterPersona(Persona):
     land_mode = "LAND"
     offboard_needs_setpoints = False
     position_targets_time_out = False
+    takeoff_while_disarmed = False
+    takeoff_refusal = 4  # MAV_RESULT_FAILED: handle_MAV_CMD_NAV_TAKEOFF when do_user_takeoff fails
+    reposition_mode = "GUIDED"
+    reposition_elsewhere = 2  # DENIED: handle_command_int_do_reposition outside GUIDED
 
     def param_specs(self, facts: ProfileFacts) -> list[ParamSpec]:
         s = facts.timeout_scale
@@ -74,6 +81,8 @@ class ArduCopterPersona(Persona):
             return "already flying"
         if not (math.isfinite(p7) and p7 > 0):
             return f"takeoff altitude {p7} m is not above home"
+        if p7 >= LOCATION_ALT_MAX_M:
+            return f"takeoff altitude {p7:.0f} m beyond {LOCATION_ALT_MAX_M} m"
         return TakeoffRequest(p7, None)
 
     def after_takeoff(self) -> ModeSpec | None:
@@ -112,6 +121,11 @@ class ArduCopterPersona(Persona):
             params.get("WPNAV_SPEED_DN") / 100.0,
             params.get("LAND_SPEED") / 100.0,
         )
+
+    def speed_limits(self, params: ParamTable) -> tuple[float, float, float, float]:
+        # The upper ends of the WPNAV_SPEED / _UP / _DN and LAND_SPEED ranges (ArduCopter
+        # AC_WPNav/AC_WPNav.cpp parameter docs): what the stock airframe is tuned to fly.
+        return 20.0, 10.0, 5.0, 2.0
 
     def rtl_altitude(self, params: ParamTable) -> float:
         return params.get("RTL_ALT") / 100.0

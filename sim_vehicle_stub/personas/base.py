@@ -53,6 +53,8 @@ class TakeoffRequest:
     altitude: float
     mode: ModeSpec | None
     """Mode to switch to for the climb, or None to climb in the current mode."""
+    note: str = ""
+    """STATUSTEXT to send with the acceptance (PX4: the minimum altitude was used)."""
 
 
 @dataclass(frozen=True)
@@ -126,6 +128,14 @@ class Persona(ABC):
     """PX4 refuses OFFBOARD unless setpoints are streaming."""
     position_targets_time_out: ClassVar[bool]
     """PX4 times out every setpoint; ArduPilot only velocity targets."""
+    takeoff_while_disarmed: ClassVar[bool]
+    """PX4 accepts NAV_TAKEOFF (and TAKEOFF mode) disarmed and climbs once armed."""
+    takeoff_refusal: ClassVar[int]
+    """MAV_RESULT of a refused takeoff."""
+    reposition_mode: ClassVar[str]
+    """Mode MAV_CMD_DO_REPOSITION flies in."""
+    reposition_elsewhere: ClassVar[int]
+    """MAV_RESULT of a DO_REPOSITION outside that mode without the mode-change flag."""
 
     def mode(self, name: str) -> ModeSpec:
         for m in self.modes:
@@ -191,6 +201,14 @@ class Persona(ABC):
     @abstractmethod
     def speeds(self, params: ParamTable) -> tuple[float, float, float, float]:
         """Horizontal speed, climb rate, descent rate and landing speed, m/s."""
+
+    @abstractmethod
+    def speed_limits(self, params: ParamTable) -> tuple[float, float, float, float]:
+        """The most MAV_CMD_DO_CHANGE_SPEED may set: horizontal, climb, descent, landing."""
+
+    def default_takeoff_alt(self, params: ParamTable) -> float:
+        """Height a TAKEOFF mode entered without a takeoff command climbs to, m."""
+        return params.get("MIS_TAKEOFF_ALT") if "MIS_TAKEOFF_ALT" in params else 2.5
 
     @abstractmethod
     def rtl_altitude(self, params: ParamTable) -> float:

@@ -46,6 +46,10 @@ class Px4Persona(Persona):
     land_mode = "LAND"
     offboard_needs_setpoints = True
     position_targets_time_out = True
+    takeoff_while_disarmed = True
+    takeoff_refusal = 2  # MAV_RESULT_DENIED
+    reposition_mode = "HOLD"
+    reposition_elsewhere = 0  # ACCEPTED: commander switches nothing without the flag
 
     def param_specs(self, facts: ProfileFacts) -> list[ParamSpec]:
         s = facts.timeout_scale
@@ -76,15 +80,17 @@ class Px4Persona(Persona):
         return self.mode_by_custom(px4_mode(main, sub))
 
     def takeoff(self, p7: float, params: ParamTable, vehicle: VehicleFacts) -> TakeoffRequest | str:
-        if not vehicle.armed:
-            return "not armed"
-        # PX4 reads param7 as AMSL; NaN means MIS_TAKEOFF_ALT above home.
-        if math.isfinite(p7):
-            altitude = p7 - vehicle.home_alt_amsl
-        else:
-            altitude = params.get("MIS_TAKEOFF_ALT")
-        if altitude <= 0:
-            return f"takeoff altitude {altitude:.1f} m is not above home"
+        # PX4 reads param7 as AMSL; below home + MIS_TAKEOFF_ALT (or NaN) it climbs to
+        # MIS_TAKEOFF_ALT (navigator/takeoff.cpp, set_takeoff_position: "Using minimum takeoff
+        # altitude"). Commander accepts the command disarmed too: it only selects TAKEOFF.
+        minimum = params.get("MIS_TAKEOFF_ALT")
+        altitude = p7 - vehicle.home_alt_amsl if math.isfinite(p7) else -math.inf
+        if not math.isfinite(altitude):
+            altitude = minimum  # an AMSL request so large it overflows is no altitude either
+        if altitude < minimum:
+            return TakeoffRequest(
+                minimum, self.mode("TAKEOFF"), f"Using minimum takeoff altitude: {minimum:.2f} m"
+            )
         return TakeoffRequest(altitude, self.mode("TAKEOFF"))
 
     def after_takeoff(self) -> ModeSpec | None:
@@ -116,6 +122,11 @@ class Px4Persona(Persona):
             params.get("MPC_Z_VEL_MAX_DN"),
             params.get("MPC_LAND_SPEED"),
         )
+
+    def speed_limits(self, params: ParamTable) -> tuple[float, float, float, float]:
+        # FlightTaskAuto caps the cruise speed at MPC_XY_VEL_MAX, and the position controller
+        # every velocity (mc_pos_control/PositionControl): a change of speed cannot exceed them.
+        return self.speeds(params)
 
     def rtl_altitude(self, params: ParamTable) -> float:
         return params.get("RTL_RETURN_ALT")

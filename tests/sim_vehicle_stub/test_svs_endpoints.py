@@ -64,7 +64,10 @@ def test_bad_commands_get_nacks_and_nothing_breaks() -> None:
         assert c.pump(5, lambda m: m.get_type() == "HEARTBEAT") is not None
         assert c.command(31999) == 3  # unknown: UNSUPPORTED
         assert c.command(176, 1, 99, 99) == 2  # no such mode: DENIED
-        assert c.command(22, *[math.nan] * 7) == 2  # takeoff while disarmed: DENIED
+        # Real PX4 takes a takeoff while disarmed: TAKEOFF mode, flown once armed.
+        assert c.command(22, *[math.nan] * 7) == 0
+        assert emu.vehicles[0].mode.name == "TAKEOFF"
+        assert emu.fleet.alt[0] == 0.0
         assert c.command(21) == 2  # land while disarmed
         assert c.command(511, math.inf, math.nan) == 2
         assert c.command(512, 9999) == 2
