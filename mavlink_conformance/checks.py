@@ -1,11 +1,15 @@
 """The checks, one function each, and :func:`run_checks` that runs them against an address.
 
-Every check is safe on a disarmed vehicle on the ground: commands that could move it are sent
-only in forms the autopilot must refuse or that change nothing (set the current mode, disarm).
+Every check is safe on a disarmed vehicle on the ground and leaves it as it found it: no NaN or
+out-of-range values (only with ``hostile``, which may crash an autopilot: ArduCopter SITL aborts
+on a NaN takeoff), every stream rate, mode and parameter it changes is set back, and a closed
+link stops the run at once. Rates are measured in bounded windows of the vehicle's own clock
+(TIMESYNC gives its speed-up against wall time).
 """
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import logging
 import struct
@@ -14,7 +18,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from mavlink_conformance.session import Session, mavutil
+from mavlink_conformance.session import LinkClosedError, Session, mavutil
 
 log = logging.getLogger(__name__)
 ml = mavutil.mavlink
@@ -23,6 +27,15 @@ PX4, ARDUPILOT = ml.MAV_AUTOPILOT_PX4, ml.MAV_AUTOPILOT_ARDUPILOTMEGA
 _GPS_BIT, _PREARM_BIT = 0x20, 0x10000000
 _STREAMS = ("GLOBAL_POSITION_INT", "LOCAL_POSITION_NED", "SYS_STATUS", "EXTENDED_SYS_STATE")
 _UNKNOWN_COMMAND = 31999
+_STREAM_HZ = 5.0
+_RATE_TOLERANCE = 0.3
+"""Relative error allowed between a measured stream rate and the rate asked for."""
+_WINDOW = 3.0
+"""Wall seconds of every rate measurement."""
+_HEARTBEAT_HZ = (0.8, 2.5)
+"""Heartbeat rates (vehicle clock) that pass: 1 Hz nominal, early beats on changes allowed."""
+_PX4_SAFE_MODES = (0x3040000, 0x30000, 0x20000, 0x10000)  # HOLD, POSCTL, ALTCTL, MANUAL
+_ARDUPILOT_SAFE_MODES = (2, 0)  # ALT_HOLD, STABILIZE: no position needed, fine disarmed
 _FTP_OPEN_RO, _FTP_ACK, _FTP_NAK = 4, 128, 129
 
 
@@ -41,16 +54,42 @@ class CheckResult:
 Check = Callable[[Session], CheckResult]
 
 
+def _measure_speed(s: Session) -> None:
+    """The vehicle clock's speed against wall time, from two TIMESYNC answers 1 s apart."""
+    samples = []
+    for k in range(2):
+        stamp = 1_000_000 + k
+        sent = time.monotonic()
+        s.mav.timesync_send(0, stamp)
+        m = s.recv({"TIMESYNC"}, 2.0, lambda m, st=stamp: m.ts1 == st and m.tc1 != 0)
+        if m is None:
+            return
+        samples.append(((sent + time.monotonic()) / 2, m.tc1 * 1e-9))
+        if k == 0:
+            s.collect(1.0)
+    (w0, v0), (w1, v1) = samples
+    if w1 > w0 and v1 > v0:
+        s.speed = (v1 - v0) / (w1 - w0)
+
+
+def _rate(stamps: list[float], s: Session) -> float:
+    """Messages per vehicle second from wall arrival times within one window."""
+    if len(stamps) < 2 or stamps[-1] <= stamps[0]:
+        return 0.0
+    return (len(stamps) - 1) / s.vehicle_seconds(stamps[-1] - stamps[0])
+
+
 def check_heartbeat(s: Session) -> CheckResult:
     hb = s.recv({"HEARTBEAT"}, s.timeout, lambda m: m.get_srcComponent() == 1)
     if hb is None:
         return CheckResult("heartbeat", False, f"no autopilot HEARTBEAT in {s.timeout:.0f} s")
-    start = time.monotonic()
-    count = 0
-    while time.monotonic() - start < 2.5:
-        if s.recv({"HEARTBEAT"}, 2.5, lambda m: m.get_srcComponent() == 1) is not None:
-            count += 1
-    rate = count / 2.5
+    _measure_speed(s)
+    stamps: list[float] = []
+    end = time.monotonic() + _WINDOW
+    while (left := end - time.monotonic()) > 0:
+        if s.recv({"HEARTBEAT"}, left, lambda m: m.get_srcComponent() == 1) is not None:
+            stamps.append(time.monotonic())
+    rate = _rate(stamps, s)
     problems = []
     if hb.type == ml.MAV_TYPE_GCS:
         problems.append("type is GCS")
@@ -58,10 +97,17 @@ def check_heartbeat(s: Session) -> CheckResult:
         problems.append(f"autopilot {hb.autopilot} is neither PX4 (12) nor ArduPilot (3)")
     if not hb.base_mode & ml.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
         problems.append("CUSTOM_MODE_ENABLED not set")
-    if rate < 0.8:
-        problems.append(f"rate {rate:.1f} Hz < 1 Hz")
-    detail = f"type {hb.type}, autopilot {hb.autopilot}, {rate:.1f} Hz"
+    low, high = _HEARTBEAT_HZ
+    if not low <= rate <= high:
+        problems.append(f"rate {rate:.2f} Hz outside {low}-{high} Hz ({len(stamps)} in window)")
+    detail = f"type {hb.type}, autopilot {hb.autopilot}, {rate:.2f} Hz, clock x{s.speed:.2f}"
     return CheckResult("heartbeat", not problems, "; ".join(problems) or detail)
+
+
+def check_mavlink2(s: Session) -> CheckResult:
+    ok = bool(s.mavlink2)
+    detail = "MAVLink 2 frames" if ok else "MAVLink 1 only: MAVSDK and signing need MAVLink 2"
+    return CheckResult("mavlink2", ok, detail)
 
 
 def check_ids(s: Session) -> CheckResult:
@@ -93,26 +139,41 @@ def check_mode_encoding(s: Session) -> CheckResult:
     return CheckResult("mode_encoding", name is not None, detail)
 
 
+def _set_interval(s: Session, msg_id: int, interval_us: float) -> int | None:
+    ack = s.command(ml.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, interval_us)
+    return None if ack is None else int(ack.result)
+
+
 def check_streams(s: Session) -> CheckResult:
+    """Ask for each stream at 5 Hz, measure it over a bounded window, then set it back (to the
+    default rate if it was streaming before, off if not)."""
+    before = {k for k in _STREAMS if s.seen.get(k)}
+    problems = []
     for kind in _STREAMS:
-        msg_id = getattr(ml, f"MAVLINK_MSG_ID_{kind}")
-        assert s.sysid is not None
-        # Fire and forget: an autopilot that streams by default needs no request.
-        s.mav.command_long_send(
-            s.sysid, s.compid, ml.MAV_CMD_SET_MESSAGE_INTERVAL, 0, msg_id, 200_000, 0, 0, 0, 0, 0
-        )
-    s.collect(3.0)
-    missing = [k for k in _STREAMS if not s.seen.get(k)]
-    problems = [f"missing {', '.join(missing)}"] if missing else []
+        result = _set_interval(s, getattr(ml, f"MAVLINK_MSG_ID_{kind}"), 1e6 / _STREAM_HZ)
+        if result != 0:
+            problems.append(f"SET_MESSAGE_INTERVAL {kind}: result {result}")
+    s.collect(0.5)  # let the new rates take over
+    start = time.monotonic()
+    s.collect(_WINDOW)
+    rates = {k: _rate([t for t, _ in s.seen.get(k, []) if t >= start], s) for k in _STREAMS}
+    for kind in _STREAMS:
+        restore = 0 if kind in before else -1
+        result = _set_interval(s, getattr(ml, f"MAVLINK_MSG_ID_{kind}"), restore)
+        if result != 0:
+            problems.append(f"restoring {kind}: result {result}")
+    for kind, rate in rates.items():
+        if abs(rate - _STREAM_HZ) > _RATE_TOLERANCE * _STREAM_HZ:
+            problems.append(f"{kind} at {rate:.2f} Hz, asked {_STREAM_HZ:.0f} Hz")
+    got = ", ".join(f"{k} {r:.2f} Hz" for k, r in rates.items())
     status = s.seen.get("SYS_STATUS")
     if status:
         m = status[-1][1]
         bits = m.onboard_control_sensors_present & m.onboard_control_sensors_enabled
         healthy = bits & m.onboard_control_sensors_health
-        for bit, label in ((_GPS_BIT, "GPS"), (_PREARM_BIT, "PREARM")):
-            if not healthy & bit:
-                problems.append(f"SYS_STATUS {label} bit not present/enabled/healthy")
-    got = ", ".join(f"{k} x{len(s.seen.get(k, []))}" for k in _STREAMS)
+        got += "; healthy: " + ", ".join(
+            label for bit, label in ((_GPS_BIT, "GPS"), (_PREARM_BIT, "PREARM")) if healthy & bit
+        )
     return CheckResult("streams", not problems, "; ".join(problems) or got)
 
 
@@ -140,28 +201,77 @@ def _ack_check(name: str, s: Session, command: int, *params: float, want: set[in
     return CheckResult(name, ok and target_ok, detail)
 
 
-_ANY = set(range(0, 10))
+def _mode_params(hb: Any, custom_mode: int) -> tuple[float, float, float]:
+    if hb.autopilot == PX4:
+        main, sub = (custom_mode >> 16) & 0xFF, (custom_mode >> 24) & 0xFF
+        return float(ml.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), float(main), float(sub)
+    return float(ml.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), float(custom_mode), 0.0
+
+
+def _switch(s: Session, custom_mode: int) -> tuple[int | None, bool]:
+    """DO_SET_MODE to ``custom_mode``: (ack result, whether a heartbeat then showed it)."""
+    hb = s.heartbeat
+    ack = s.command(ml.MAV_CMD_DO_SET_MODE, *_mode_params(hb, custom_mode))
+    if ack is None:
+        return None, False
+    seen = s.recv(
+        {"HEARTBEAT"},
+        s.timeout,
+        lambda m: m.get_srcComponent() == 1 and m.custom_mode == custom_mode,
+    )
+    return int(ack.result), seen is not None
+
+
+def check_mode_switch(s: Session) -> CheckResult:
+    """A real switch to another mode that is safe disarmed on the ground, and back."""
+    home = s.heartbeat.custom_mode
+    safe = _PX4_SAFE_MODES if s.heartbeat.autopilot == PX4 else _ARDUPILOT_SAFE_MODES
+    tried = []
+    for mode in (m for m in safe if m != home):
+        result, shown = _switch(s, mode)
+        tried.append(f"{mode:#x}: result {result}")
+        if result == 0 and shown:
+            back, shown_back = _switch(s, home)
+            ok = back == 0 and shown_back
+            detail = f"{home:#x} -> {mode:#x} -> {home:#x}" + (
+                "" if ok else f" (back: result {back}, shown {shown_back})"
+            )
+            return CheckResult("mode_switch", ok, detail)
+        if result == 0:
+            return CheckResult("mode_switch", False, f"{mode:#x} ACCEPTED but never in a HEARTBEAT")
+    return CheckResult("mode_switch", False, "no mode switch accepted: " + "; ".join(tried))
+
+
+def _takeoff_check(s: Session) -> CheckResult:
+    """A takeoff while disarmed: ArduPilot refuses it; PX4 accepts it and only selects TAKEOFF
+    (commander), which the check sets back. With ``hostile`` the parameters are NaN."""
+    hb = s.heartbeat
+    home = hb.custom_mode
+    params = [float("nan")] * 7 if s.hostile else [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 10.0]
+    ack = s.command(ml.MAV_CMD_NAV_TAKEOFF, *params)
+    if ack is None:
+        return CheckResult("cmd_takeoff", False, "no COMMAND_ACK for NAV_TAKEOFF")
+    if ack.result != 0:
+        return CheckResult("cmd_takeoff", True, f"refused while disarmed (result {ack.result})")
+    now = s.recv({"HEARTBEAT"}, s.timeout, lambda m: m.get_srcComponent() == 1)
+    armed = bool(now is not None and now.base_mode & ml.MAV_MODE_FLAG_SAFETY_ARMED)
+    restored = True
+    if now is not None and now.custom_mode != home:
+        restored = _switch(s, home) == (0, True)
+    ok = hb.autopilot == PX4 and not armed and restored
+    detail = f"accepted while disarmed, mode {now.custom_mode:#x}" if now else "accepted"
+    detail += ", set back" if restored else ", NOT set back"
+    if hb.autopilot != PX4:
+        detail += " (ArduPilot refuses a takeoff while disarmed)"
+    return CheckResult("cmd_takeoff", ok, detail)
 
 
 def check_commands(s: Session) -> list[CheckResult]:
-    hb = s.heartbeat
-    out = [
-        _ack_check("cmd_set_message_interval", s, ml.MAV_CMD_SET_MESSAGE_INTERVAL,
-                   ml.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 100_000, want={0}),
+    return [
         _ack_check("cmd_arm_disarm", s, ml.MAV_CMD_COMPONENT_ARM_DISARM, 0, want={0}),
-        _ack_check("cmd_takeoff", s, ml.MAV_CMD_NAV_TAKEOFF, *([float("nan")] * 6), 0.0,
-                   want=_ANY - {0}),
+        _takeoff_check(s),
         _ack_check("cmd_unknown", s, _UNKNOWN_COMMAND, want={ml.MAV_RESULT_UNSUPPORTED}),
-    ]  # fmt: skip
-    if hb is not None:
-        # Re-select the current mode: a DO_SET_MODE that changes nothing.
-        if hb.autopilot == PX4:
-            main, sub = (hb.custom_mode >> 16) & 0xFF, (hb.custom_mode >> 24) & 0xFF
-            p = (float(hb.base_mode | 1), float(main), float(sub))
-        else:
-            p = (float(hb.base_mode | 1), float(hb.custom_mode), 0.0)
-        out.append(_ack_check("cmd_do_set_mode", s, ml.MAV_CMD_DO_SET_MODE, *p, want={0}))
-    return out
+    ]
 
 
 def _request(s: Session, name: str, msg_id: int, kind: str) -> CheckResult:
@@ -252,11 +362,13 @@ def check_timesync(s: Session) -> CheckResult:
 
 CHECKS: tuple[Callable[[Session], CheckResult | list[CheckResult]], ...] = (
     check_heartbeat,
+    check_mavlink2,
     check_ids,
     check_mode_encoding,
     check_streams,
     check_timestamps,
     check_commands,
+    check_mode_switch,
     check_requests,
     check_params,
     check_mission_count,
@@ -272,25 +384,36 @@ def run_checks(
     sysid: int | None = None,
     timeout: float = 5.0,
     source_system: int = 250,
+    hostile: bool = False,
 ) -> list[CheckResult]:
     """Connect to ``address`` (a pymavlink connection string such as ``udpin:0.0.0.0:14540`` or
     ``tcp:127.0.0.1:5760``) and run every check against the vehicle ``sysid`` (the first
-    autopilot heard when None). Returns one result per check; nothing raises for a bad vehicle."""
+    autopilot heard when None). Returns one result per check; nothing raises for a bad vehicle.
+    A closed link ends the run with a failed ``link`` result. ``hostile`` sends NaN parameters
+    (a takeoff), which can crash an autopilot."""
     session = Session(address, sysid=sysid, source_system=source_system, timeout=timeout)
+    session.hostile = hostile
     results: list[CheckResult] = []
+    current = "connect"
     try:
         session.send_heartbeat()
         for check in CHECKS:
+            current = check.__name__[6:]
             if session.heartbeat is None and check is not check_heartbeat:
-                results.append(CheckResult(check.__name__[6:], False, "no heartbeat"))
+                results.append(CheckResult(current, False, "no heartbeat"))
                 continue
             session.send_heartbeat()
             try:
                 outcome = check(session)
+            except LinkClosedError:
+                raise
             except Exception as exc:  # a check must report, not crash the run
                 log.exception("check %s crashed", check.__name__)
-                outcome = CheckResult(check.__name__[6:], False, f"error: {exc!r}")
+                outcome = CheckResult(current, False, f"error: {exc!r}")
             results.extend(outcome if isinstance(outcome, list) else [outcome])
+    except LinkClosedError as exc:
+        results.append(CheckResult("link", False, f"during {current}: {exc}"))
     finally:
-        session.close()
+        with contextlib.suppress(OSError, LinkClosedError):
+            session.close()
     return results

@@ -18,10 +18,22 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--timeout", type=float, default=5.0, help="per-step wait, wall seconds")
     p.add_argument("--source-system", type=int, default=250)
     p.add_argument("--json", action="store_true", help="print results as JSON")
+    p.add_argument(
+        "--hostile",
+        action="store_true",
+        help="also send NaN parameters (a takeoff); may crash the autopilot checked",
+    )
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
+    if args.hostile:
+        print("warning: --hostile sends NaN parameters; they may crash the autopilot "
+              "(ArduCopter SITL aborts on a NaN takeoff)", file=sys.stderr)  # fmt: skip
     results = run_checks(
-        args.address, sysid=args.sysid, timeout=args.timeout, source_system=args.source_system
+        args.address,
+        sysid=args.sysid,
+        timeout=args.timeout,
+        source_system=args.source_system,
+        hostile=args.hostile,
     )
     if args.json:
         print(json.dumps([asdict(r) for r in results], indent=1))

@@ -11,7 +11,18 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink import mavutil
 
-__all__ = ["Session", "mavutil"]
+__all__ = ["LinkClosedError", "Session", "mavutil"]
+
+
+class LinkClosedError(ConnectionError):
+    """The vehicle closed the connection (TCP EOF or reset): nothing more can be checked."""
+
+
+def _closed(what: str) -> Any:
+    def handler() -> None:
+        raise LinkClosedError(f"{what} on the vehicle link: the autopilot closed it or died")
+
+    return handler
 
 
 class Session:
@@ -23,6 +34,17 @@ class Session:
         self.conn: Any = mavutil.mavlink_connection(
             address, source_system=source_system, source_component=190, autoreconnect=False
         )
+        # pymavlink reconnects (and prints "EOF on TCP socket") on every read after the peer
+        # closed; a check must stop at once instead of spinning on a dead link.
+        if hasattr(self.conn, "handle_eof"):
+            self.conn.handle_eof = _closed("EOF")
+            self.conn.handle_disconnect = _closed("connection reset")
+        self.speed = 1.0
+        """Vehicle seconds per wall second (SITL speed-up), measured with TIMESYNC."""
+        self.hostile = False
+        """Whether checks may send NaN / out-of-range values (can crash an autopilot)."""
+        self.mavlink2: bool | None = None
+        """Whether the vehicle's first heartbeat came in a MAVLink 2 frame."""
         self.sysid = sysid
         self.compid = 1
         self.timeout = timeout
@@ -65,6 +87,8 @@ class Session:
             self.seen[kind].append((time.monotonic(), msg))
             if kind == "HEARTBEAT" and msg.get_srcComponent() == self.compid:
                 self.heartbeat = msg
+                if self.mavlink2 is None:
+                    self.mavlink2 = msg.get_msgbuf()[0] == 0xFD
             if (types is None or kind in types) and (cond is None or cond(msg)):
                 return msg
         return None
@@ -77,6 +101,9 @@ class Session:
         self.mav.heartbeat_send(
             mavutil.mavlink.MAV_TYPE_GCS, mavutil.mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0
         )
+
+    def vehicle_seconds(self, wall: float) -> float:
+        return wall * self.speed
 
     def command(self, command: int, *params: float, tries: int = 3) -> Any:
         """Send COMMAND_LONG (retrying) and return its COMMAND_ACK, or None."""

@@ -20,13 +20,14 @@ LOCATION_ALT_MAX_M = 83000.0
 
 
 class ArduCopterPersona(Persona):
-    """ArduCopter: GUIDED, LOITER, RTL, LAND, BRAKE (STABILIZE on the ground at boot)."""
+    """ArduCopter: GUIDED, LOITER, RTL, LAND, BRAKE (STABILIZE on the ground at boot, ALT_HOLD)."""
 
     name = "ardupilot"
     autopilot = 3
     bytewise_ints = False
     modes = (
         ModeSpec("STABILIZE", 0, Behaviour.MANUAL),
+        ModeSpec("ALT_HOLD", 2, Behaviour.MANUAL),
         ModeSpec("GUIDED", 4, Behaviour.EXTERNAL),
         ModeSpec("LOITER", 5, Behaviour.HOLD),
         ModeSpec("RTL", 6, Behaviour.RTL, armable=False),

@@ -8,6 +8,7 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -19,8 +20,8 @@ from mavlink_conformance.cli import main as conformance_main
 from sim_vehicle_stub.mavlink import dialect
 
 EXPECTED = {
-    "heartbeat", "ids", "mode_encoding", "streams", "timestamps_monotonic",
-    "cmd_set_message_interval", "cmd_arm_disarm", "cmd_takeoff", "cmd_unknown", "cmd_do_set_mode",
+    "heartbeat", "mavlink2", "ids", "mode_encoding", "streams", "timestamps_monotonic",
+    "cmd_arm_disarm", "cmd_takeoff", "cmd_unknown", "mode_switch",
     "home_position", "autopilot_version", "params_list", "params_read", "params_set",
     "mission_count", "ftp_nak", "timesync",
 }  # fmt: skip
@@ -57,29 +58,79 @@ def test_emulator_ardupilot_over_tcp_passes_via_the_cli(capsys: pytest.CaptureFi
     assert "custom_mode 0x0 = STABILIZE" in out
 
 
-@pytest.mark.timeout(60)
-def test_a_vehicle_that_only_sends_heartbeats_fails_and_the_cli_exits_1(
-    capsys: pytest.CaptureFixture[str],
-) -> None:
+@contextmanager
+def heartbeat_only_vehicle(port: int, period: float, *, mavlink1: bool = False) -> Iterator[None]:
+    """A 'vehicle' that sends nothing but HEARTBEATs every ``period`` s."""
     stop = threading.Event()
 
     def heartbeats() -> None:
         mav = dialect.MAVLink(None, srcSystem=7, srcComponent=1)
+        if mavlink1:
+            mav.WIRE_PROTOCOL_VERSION = "1.0"
         msg = dialect.MAVLink_heartbeat_message(2, 12, 1, 0x3040000, 3, 3)
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
-            while not stop.wait(0.25):
-                sock.sendto(msg.pack(mav), ("127.0.0.1", 25480))
+            while True:
+                sock.sendto(msg.pack(mav, force_mavlink1=mavlink1), ("127.0.0.1", port))
+                if stop.wait(period):
+                    return
 
     thread = threading.Thread(target=heartbeats, daemon=True)
     thread.start()
     try:
-        code = conformance_main(["udpin:127.0.0.1:25480", "--timeout", "1"])
+        yield
     finally:
         stop.set()
         thread.join(5)
+
+
+@pytest.mark.timeout(90)
+def test_a_vehicle_that_only_sends_heartbeats_fails_and_the_cli_exits_1(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    with heartbeat_only_vehicle(25480, 1.0):
+        code = conformance_main(["udpin:127.0.0.1:25480", "--timeout", "1"])
     out = capsys.readouterr().out
     assert code == 1
     assert "PASS  heartbeat" in out
+    assert "PASS  mavlink2" in out
     assert "PASS  mode_encoding" in out
     assert "FAIL  streams" in out
+    assert "FAIL  mode_switch" in out
     assert "FAIL  params_list" in out
+
+
+@pytest.mark.timeout(90)
+def test_slow_heartbeats_and_mavlink1_only_are_named() -> None:
+    with heartbeat_only_vehicle(25490, 2.0, mavlink1=True):
+        results = {r.name: r for r in run_checks("udpin:127.0.0.1:25490", timeout=1.0)}
+    assert not results["heartbeat"].passed, results["heartbeat"].detail
+    assert "0.50 Hz" in results["heartbeat"].detail  # measured, not rounded up to pass
+    assert not results["mavlink2"].passed
+    assert "MAVLink 1 only" in results["mavlink2"].detail
+
+
+@pytest.mark.timeout(60)
+def test_a_closed_tcp_link_stops_the_run_at_once_with_a_clear_error() -> None:
+    server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    server.bind(("127.0.0.1", 0))
+    server.listen(1)
+    port = server.getsockname()[1]
+    mav = dialect.MAVLink(None, srcSystem=7, srcComponent=1)
+    beat = dialect.MAVLink_heartbeat_message(2, 3, 1, 0, 3, 3).pack(mav)
+
+    def serve() -> None:
+        conn, _ = server.accept()
+        conn.sendall(beat)
+        conn.close()  # the autopilot dies
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    started = time.monotonic()
+    results = run_checks(f"tcp:127.0.0.1:{port}", timeout=3.0)
+    elapsed = time.monotonic() - started
+    thread.join(5)
+    server.close()
+    assert results[-1].name == "link"
+    assert not results[-1].passed
+    assert "closed it or died" in results[-1].detail
+    assert elapsed < 15.0  # stopped, not every check timing out in turn

@@ -8,6 +8,7 @@ import itertools
 import math
 from typing import Any
 
+import numpy as np
 import pytest
 
 from tests.emulator_harness import Client, free_udp_base, make_config, running_emulator
@@ -128,12 +129,9 @@ def test_mission_count_and_clear_all_are_acknowledged_at_once() -> None:
     with running_emulator(make_config(1, base)), Client(base, 1) as c:
         assert c.pump(5.0, lambda m: m.get_type() == "HEARTBEAT") is not None  # learn its port
         acks = []
-        for send in (
-            lambda: c.conn.mav.mission_count_send(1, 1, 0, 0),
-            lambda: c.conn.mav.mission_count_send(1, 1, 3, 0),
-            lambda: c.conn.mav.mission_clear_all_send(1, 1, 0),
-        ):
-            send()
+        for name, args in (("mission_count", (0, 0)), ("mission_count", (3, 0)),
+                           ("mission_clear_all", (0,))):  # fmt: skip
+            getattr(c.conn.mav, f"{name}_send")(1, 1, *args)
             ack = c.pump(2.0, lambda m: m.get_type() == "MISSION_ACK")
             assert ack is not None
             acks.append((ack.type, ack.target_system))
@@ -152,10 +150,12 @@ def test_do_reposition_flies_to_the_point_as_mavproxy_guided_asks(persona: str, 
         alt = 12.0 if persona == "ardupilot" else ORIGIN_ALT + 12.0
         assert c.command(TAKEOFF, 0, 0, 0, 0, 0, 0, alt) == ACCEPTED
         assert _wait(c, _high(11.7), 20.0) is not None
-        lat, lon, _ = emu.geo.to_geodetic(1100.0, 1000.0, 0.0)  # 100 m north of home
+        lat, lon, _ = emu.geo.to_geodetic(
+            *(np.array([x]) for x in (1100.0, 1000.0, 0.0))
+        )  # 100 m north
         c.conn.mav.command_int_send(
             1, 1, 6, REPOSITION, 0, 0, -1, 1, 0, math.nan,
-            int(float(lat) * 1e7), int(float(lon) * 1e7), 15.0,
+            int(float(lat[0]) * 1e7), int(float(lon[0]) * 1e7), 15.0,
         )  # fmt: skip
         ack = c.pump(3.0, lambda m: m.get_type() == "COMMAND_ACK" and m.command == REPOSITION)
         assert ack is not None
@@ -189,10 +189,14 @@ def test_acceleration_targets_and_yaw_rate_are_followed_not_dropped() -> None:
         assert fast is not None
         assert abs(fast.vx) < 0.1
         # type_mask 1479: velocity zero, yaw ignored, yaw rate 0.5 rad/s used.
-        spin = lambda: c.conn.mav.set_position_target_local_ned_send(  # noqa: E731
-            0, 1, 1, 1, 1479, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.5
-        )
-        yaws = []
-        c.stream(lambda: (spin(), yaws.append(float(emu.fleet.yaw[0]))), 2.0)
+        yaws: list[float] = []
+
+        def spin_and_watch() -> None:
+            c.conn.mav.set_position_target_local_ned_send(
+                0, 1, 1, 1, 1479, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.5
+            )
+            yaws.append(float(emu.fleet.yaw[0]))
+
+        c.stream(spin_and_watch, 2.0)
         turned = sum(math.remainder(b - a, 2 * math.pi) for a, b in itertools.pairwise(yaws))
         assert turned > 0.3
