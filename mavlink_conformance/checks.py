@@ -83,12 +83,11 @@ def check_heartbeat(s: Session) -> CheckResult:
     hb = s.recv({"HEARTBEAT"}, s.timeout, lambda m: m.get_srcComponent() == 1)
     if hb is None:
         return CheckResult("heartbeat", False, f"no autopilot HEARTBEAT in {s.timeout:.0f} s")
+    first = s.seen["HEARTBEAT"][-1][0]
     _measure_speed(s)
-    stamps: list[float] = []
-    end = time.monotonic() + _WINDOW
-    while (left := end - time.monotonic()) > 0:
-        if s.recv({"HEARTBEAT"}, left, lambda m: m.get_srcComponent() == 1) is not None:
-            stamps.append(time.monotonic())
+    s.collect(max(0.0, first + _WINDOW - time.monotonic()))
+    # Every autopilot heartbeat from the first on, over a window of at least _WINDOW s.
+    stamps = [t for t, m in s.seen["HEARTBEAT"] if t >= first and m.get_srcComponent() == 1]
     rate = _rate(stamps, s)
     problems = []
     if hb.type == ml.MAV_TYPE_GCS:

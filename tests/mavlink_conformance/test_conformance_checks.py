@@ -16,7 +16,9 @@ from pathlib import Path
 import pytest
 
 from mavlink_conformance import run_checks
+from mavlink_conformance.checks import check_heartbeat, check_mavlink2
 from mavlink_conformance.cli import main as conformance_main
+from mavlink_conformance.session import Session
 from sim_vehicle_stub.mavlink import dialect
 
 EXPECTED = {
@@ -101,8 +103,12 @@ def test_a_vehicle_that_only_sends_heartbeats_fails_and_the_cli_exits_1(
 
 @pytest.mark.timeout(90)
 def test_slow_heartbeats_and_mavlink1_only_are_named() -> None:
-    with heartbeat_only_vehicle(25490, 2.0, mavlink1=True):
-        results = {r.name: r for r in run_checks("udpin:127.0.0.1:25490", timeout=1.0)}
+    session = Session("udpin:127.0.0.1:25490", sysid=None, source_system=250, timeout=3.0)
+    try:
+        with heartbeat_only_vehicle(25490, 2.0, mavlink1=True):
+            results = {r.name: r for r in (check_heartbeat(session), check_mavlink2(session))}
+    finally:
+        session.close()
     assert not results["heartbeat"].passed, results["heartbeat"].detail
     assert "0.50 Hz" in results["heartbeat"].detail  # measured, not rounded up to pass
     assert not results["mavlink2"].passed
