@@ -13,6 +13,8 @@ from sim_vehicle_stub.telemetry import Telemetry
 from sim_vehicle_stub.vehicle import ACCEPTED, DENIED, FAILED, UNSUPPORTED, Vehicle
 
 _FORCE_MAGIC = 21196
+_HEARTBEAT_US = (100_000, 1_000_000)
+"""HEARTBEAT intervals a client may set, us (10 Hz to the default 1 Hz); 0 restores 1 Hz."""
 _RELATIVE_FRAMES = (3, 6, 10, 11)
 """Global frames whose altitude is above home (terrain frames: flat terrain here)."""
 log = logging.getLogger(__name__)
@@ -73,9 +75,11 @@ class CommandHandler:
             msg_id = int(p[0])
             if msg_id not in self.telemetry.builders:
                 return DENIED
-            if msg_id == d.MAVLINK_MSG_ID_HEARTBEAT and p[1] < 0:
+            low, high = _HEARTBEAT_US
+            if msg_id == d.MAVLINK_MSG_ID_HEARTBEAT and p[1] != 0 and not low <= p[1] <= high:
                 # PX4 answers FAILED and keeps its heartbeat (measured on PX4 SITL); a vehicle
-                # without one is lost to every client, so neither persona stops it.
+                # without one, or beating slower than 1 Hz, is lost to every client (they drop
+                # a link after 3-5 s of silence), so neither persona allows it.
                 return FAILED
             return ACCEPTED if node.schedule.set_interval(msg_id, p[1]) else DENIED
         if cmd == d.MAV_CMD_REQUEST_MESSAGE:

@@ -126,10 +126,18 @@ class Client:
         params = [*p, *([0.0] * (7 - len(p)))]
         for attempt in range(3):
             self.conn.mav.command_long_send(self.sysid, 1, cmd, attempt, *params)
-            ack = self.pump(2.0, lambda m: m.get_type() == "COMMAND_ACK" and m.command == cmd)
+            ack = self.pump(2.0, lambda m: self._ack_for_us(m, cmd))
             if ack is not None:
                 return int(ack.result)
         return None
+
+    @staticmethod
+    def _ack_for_us(m: Any, cmd: int) -> bool:
+        """A COMMAND_ACK of ``cmd`` addressed to this client (system 245): another sender's
+        ack of the same command is not our answer."""
+        return bool(
+            m.get_type() == "COMMAND_ACK" and m.command == cmd and m.target_system in (0, 245)
+        )
 
     def set_param(self, name: str, value: float, *, int_bytewise: bool = False) -> float | None:
         wire = value

@@ -61,7 +61,14 @@ class ArduCopterPersona(Persona):
             ParamSpec("BATT_CAPACITY", 5200, i32, 0, 1e6, "mAh"),
             ParamSpec("BATT_LOW_MAH", 800, i32, 0, 1e6, "mAh left that trigger the failsafe"),
             ParamSpec("BATT_FS_LOW_ACT", 2, i8, 0, 5, "0 none, 1 land, 2 RTL"),
-            ParamSpec("WPNAV_SPEED", facts.speed * 100.0, low=10.0, high=1e5, doc="cm/s"),
+            # Range 20-2000 cm/s as ArduCopter's (AC_WPNav.cpp), widened for a faster profile.
+            ParamSpec(
+                "WPNAV_SPEED",
+                facts.speed * 100.0,
+                low=20.0,
+                high=max(2000.0, facts.speed * 100.0),
+                doc="cm/s",
+            ),
             ParamSpec("WPNAV_SPEED_UP", 250.0, low=10.0, high=1e4, doc="cm/s"),
             ParamSpec("WPNAV_SPEED_DN", 150.0, low=10.0, high=1e4, doc="cm/s"),
             ParamSpec("LAND_SPEED", 50.0, low=10.0, high=1e4, doc="cm/s"),
@@ -126,7 +133,7 @@ class ArduCopterPersona(Persona):
     def speed_limits(self, params: ParamTable) -> tuple[float, float, float, float]:
         # The upper ends of the WPNAV_SPEED / _UP / _DN and LAND_SPEED ranges (ArduCopter
         # AC_WPNav/AC_WPNav.cpp parameter docs): what the stock airframe is tuned to fly.
-        return 20.0, 10.0, 5.0, 2.0
+        return params.spec("WPNAV_SPEED").high / 100.0, 10.0, 5.0, 2.0
 
     def rtl_altitude(self, params: ParamTable) -> float:
         return params.get("RTL_ALT") / 100.0

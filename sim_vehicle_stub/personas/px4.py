@@ -64,7 +64,8 @@ class Px4Persona(Persona):
             ParamSpec("BAT_CRIT_THR", 0.07, low=0.0, high=1.0),
             ParamSpec("COM_LOW_BAT_ACT", 3, i32, 0, 3, "0 warn, 2 land, 3 RTL at critical"),
             ParamSpec("MIS_TAKEOFF_ALT", 2.5, low=0.0, high=1e4),
-            ParamSpec("MPC_XY_VEL_MAX", facts.speed, low=0.1, high=1e3),
+            # PX4's range is 0-20 m/s (mc_pos_control params), widened for a faster profile.
+            ParamSpec("MPC_XY_VEL_MAX", facts.speed, low=0.1, high=max(20.0, facts.speed)),
             ParamSpec("MPC_Z_VEL_MAX_UP", 3.0, low=0.1, high=100.0),
             ParamSpec("MPC_Z_VEL_MAX_DN", 1.5, low=0.1, high=100.0),
             ParamSpec("MPC_LAND_SPEED", 0.7, low=0.1, high=100.0),
