@@ -20,6 +20,7 @@ from mavlink_conformance.checks import check_heartbeat, check_mavlink2
 from mavlink_conformance.cli import main as conformance_main
 from mavlink_conformance.session import Session
 from sim_vehicle_stub.mavlink import dialect
+from tests.emulator_harness import free_udp_base
 
 EXPECTED = {
     "heartbeat", "mavlink2", "ids", "mode_encoding", "streams", "timestamps_monotonic",
@@ -43,17 +44,21 @@ def sim_vehicle(*args: str) -> Iterator[None]:
 
 @pytest.mark.timeout(60)
 def test_emulator_px4_over_udp_passes_every_check() -> None:
-    with sim_vehicle("-n", "2", "--base-port", "25400", "--bind-port-base", "0"):
-        results = run_checks("udpin:127.0.0.1:25401", sysid=2, timeout=5.0)
+    base = free_udp_base(2)
+    with sim_vehicle("-n", "2", "--base-port", str(base), "--bind-port-base", "0"):
+        results = run_checks(f"udpin:127.0.0.1:{base + 1}", sysid=2, timeout=5.0)
     assert {r.name for r in results} == EXPECTED
     assert [r.line() for r in results if not r.passed] == []
 
 
 @pytest.mark.timeout(60)
 def test_emulator_ardupilot_over_tcp_passes_via_the_cli(capsys: pytest.CaptureFixture[str]) -> None:
-    args = ["-n", "1", "--persona", "ardupilot", "--tcp", "--tcp-base", "25460"]
-    with sim_vehicle(*args, "--base-port", "25450", "--bind-port-base", "0"):
-        code = conformance_main(["tcp:127.0.0.1:25460", "--timeout", "5"])
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        tcp = probe.getsockname()[1]
+    args = ["-n", "1", "--persona", "ardupilot", "--tcp", "--tcp-base", str(tcp)]
+    with sim_vehicle(*args, "--base-port", str(free_udp_base(1)), "--bind-port-base", "0"):
+        code = conformance_main([f"tcp:127.0.0.1:{tcp}", "--timeout", "5"])
     out = capsys.readouterr().out
     assert code == 0, out
     assert "18/18 checks passed" in out
@@ -89,8 +94,9 @@ def heartbeat_only_vehicle(port: int, period: float, *, mavlink1: bool = False) 
 def test_a_vehicle_that_only_sends_heartbeats_fails_and_the_cli_exits_1(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    with heartbeat_only_vehicle(25480, 1.0):
-        code = conformance_main(["udpin:127.0.0.1:25480", "--timeout", "1"])
+    port = free_udp_base(1)
+    with heartbeat_only_vehicle(port, 1.0):
+        code = conformance_main([f"udpin:127.0.0.1:{port}", "--timeout", "1"])
     out = capsys.readouterr().out
     assert code == 1
     assert "PASS  heartbeat" in out
@@ -103,9 +109,10 @@ def test_a_vehicle_that_only_sends_heartbeats_fails_and_the_cli_exits_1(
 
 @pytest.mark.timeout(90)
 def test_slow_heartbeats_and_mavlink1_only_are_named() -> None:
-    session = Session("udpin:127.0.0.1:25490", sysid=None, source_system=250, timeout=3.0)
+    port = free_udp_base(1)
+    session = Session(f"udpin:127.0.0.1:{port}", sysid=None, source_system=250, timeout=3.0)
     try:
-        with heartbeat_only_vehicle(25490, 2.0, mavlink1=True):
+        with heartbeat_only_vehicle(port, 2.0, mavlink1=True):
             results = {r.name: r for r in (check_heartbeat(session), check_mavlink2(session))}
     finally:
         session.close()
