@@ -144,8 +144,8 @@ def start(
     """Start one instance of ``kind`` in ``workdir`` on the first free instance index.
 
     ``index`` is taken as given (a test that starts its client first picks it with
-    :func:`free_index`); ``home`` is ``LAT,LON,ALT[,HDG]``; ``speedup`` and ``defaults`` (an extra
-    .parm file) are ArduCopter only. Returns once the process runs; readiness (GPS, EKF) is the
+    :func:`free_index`); ``home`` is ``LAT,LON,ALT[,HDG]``; ``speedup`` is ArduCopter's ``--speedup`` or PX4's
+    ``PX4_SIM_SPEED_FACTOR``; ``defaults`` (an extra .parm file) is ArduCopter only. Returns once the process runs; readiness (GPS, EKF) is the
     caller's to await.
     """
     folder = sitl_dir(kind)
@@ -157,13 +157,18 @@ def start(
     cmd = [str(_script(kind, folder, workdir)), str(index), "--dir", str(workdir / "run")]
     if home is not None:
         cmd += ["--home", home]
-    if speedup is not None:
-        cmd += ["--speedup", str(speedup)]
     if defaults is not None:
         cmd += ["--defaults", str(defaults)]
+    env = dict(os.environ)
+    if kind == "px4" and speedup is not None:
+        env["PX4_SIM_SPEED_FACTOR"] = str(
+            speedup
+        )  # PX4's own SITL clock (SIH), not a script option
+    elif speedup is not None:
+        cmd += ["--speedup", str(speedup)]
     with (workdir / "sitl.log").open("wb") as out:
         process = subprocess.Popen(
-            cmd, stdout=out, stderr=subprocess.STDOUT, start_new_session=True
+            cmd, stdout=out, stderr=subprocess.STDOUT, start_new_session=True, env=env
         )
     instance = SitlInstance(kind, index, process, workdir)
     if kind == "arducopter":
@@ -206,3 +211,31 @@ def _await_tcp(instance: SitlInstance, port: int, timeout: float = 30.0) -> None
     raise RuntimeError(
         f"{instance.kind} SITL did not open TCP {port} in {timeout} s: {instance.log()}"
     )
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m tests.sitl arducopter|px4 [--speedup X]``: one instance in the foreground,
+    as the tests start it (PX4 aliases restored where needed), until SIGINT/SIGTERM."""
+    import argparse
+    import tempfile
+
+    parser = argparse.ArgumentParser(prog="python -m tests.sitl", description=main.__doc__)
+    parser.add_argument("kind", choices=("arducopter", "px4"))
+    parser.add_argument("--speedup", type=float)
+    args = parser.parse_args(argv)
+    kind: Kind = args.kind
+    instance = start(kind, Path(tempfile.mkdtemp(prefix=f"{kind}-")), speedup=args.speedup)
+    print(f"{kind} instance {instance.index}: companion {instance.companion_url}, "
+          f"observer {instance.observer_url}, sysid {instance.sysid}", flush=True)  # fmt: skip
+    signal.signal(signal.SIGTERM, lambda *_: instance.stop())
+    try:
+        instance.process.wait()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        instance.stop()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

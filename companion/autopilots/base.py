@@ -39,6 +39,8 @@ class Autopilot(ABC):
     """MAV_AUTOPILOT value its HEARTBEAT carries."""
     takeoff_by_command: ClassVar[bool]
     """True: takeoff needs MAV_CMD_NAV_TAKEOFF (22) in the guided mode; False: setpoints climb."""
+    guided_needs_stream: ClassVar[bool] = False
+    """The guided mode is refused unless setpoints already flow (PX4 OFFBOARD)."""
     speed_param: ClassVar[tuple[str, float] | None] = None
     """The parameter that caps horizontal speed and its units per m/s, where there is one."""
 

@@ -33,6 +33,7 @@ class PX4(Autopilot):
     name: ClassVar[str] = "px4"
     mav_autopilot: ClassVar[int] = 12
     takeoff_by_command: ClassVar[bool] = False
+    guided_needs_stream: ClassVar[bool] = True
     speed_param: ClassVar[tuple[str, float] | None] = ("MPC_XY_VEL_MAX", 1.0)
 
     def custom_mode(self, mode: FlightMode) -> int:

@@ -351,9 +351,16 @@ class VehicleMission:
                       alt=round(-pos.down, 1), found=self.core.confirmed_count)  # fmt: skip
         if self.phase is Phase.SEARCH:
             self._search_step(t, pos)
-        elif self.phase is Phase.PAUSED and self.search_start is not None:
-            if t - self.search_start >= self.config.search_duration:
+        elif self.phase is Phase.PAUSED:
+            if (
+                self.search_start is not None
+                and t - self.search_start >= self.config.search_duration
+            ):
                 self.request_end("mission time (paused)")  # ends without commanding
+            elif not self.control.operator_paused and self._guided_needs_stream():
+                # A pilot hands back by switching to OFFBOARD, which PX4 refuses without a
+                # setpoint stream: keep one flowing that holds here (ignored in other modes).
+                self._send(Setpoint(pos.north, pos.east, pos.down, 0.0, 0.0, 0.0), pos)
         elif self.phase is Phase.PREPARE:
             # Neutral stream before arming: stay where it is (a climb here would start the
             # moment the mode switches, before the vehicle is armed).
@@ -452,15 +459,21 @@ class VehicleMission:
 
     async def _await_vehicle(self) -> None:
         """Wait for the vehicle's HEARTBEAT, saying every few seconds what is heard instead."""
+        period = self.config.waiting_line_period
+        next_line = time.monotonic() + period
         while self.heartbeat is None and self.end_reason is None:
             self._changed.clear()
             with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._changed.wait(), self.config.waiting_line_period)
-            if self.heartbeat is None:
-                heard = sorted(self.link.heard)
-                log.warning("vehicle %d: waiting on %s for system %d; heard %s",
-                            self.config.vehicle, self.link.describe(), self.config.system_id,
-                            f"systems {heard}" if heard else "nothing")  # fmt: skip
+                await asyncio.wait_for(self._changed.wait(), max(next_line - time.monotonic(), 0.0))
+            if self.heartbeat is not None or time.monotonic() < next_line:
+                continue  # other messages of the vehicle woke us: not yet time for a line
+            next_line = time.monotonic() + period
+            heard = sorted(self.link.heard)
+            log.warning("vehicle %d: waiting on %s for system %d; heard %s%s",
+                        self.config.vehicle, self.link.describe(), self.config.system_id,
+                        f"systems {heard}" if heard else "nothing",
+                        " (no autopilot HEARTBEAT from it yet)"
+                        if self.config.system_id in heard else "")  # fmt: skip
 
     async def _ensure_streams(self) -> None:
         """Ask for every message the mission reads; while one is missing, say which and what
@@ -658,6 +671,10 @@ class VehicleMission:
     def _setpoints_stalled(self) -> bool:
         """The vehicle's clock ran _SETPOINT_GAP_S or more past our last setpoint's position."""
         return bool(self._received_time - self._setpoint_time >= _SETPOINT_GAP_S)
+
+    def _guided_needs_stream(self) -> bool:
+        ap = self.link.autopilot
+        return ap is not None and ap.guided_needs_stream
 
     def _hold_mode(self, hb: Heartbeat) -> bool:
         ap = self.link.autopilot

@@ -100,12 +100,13 @@ class Observer:
         elif kind == "STATUSTEXT":
             t.texts.append(msg.text)  # type: ignore[attr-defined]
 
-    def set_mode(self, custom_mode: int) -> None:
-        """A pilot's mode change (DO_SET_MODE with the autopilot's custom mode)."""
+    def set_mode(self, main: float, sub: float = 0.0) -> None:
+        """A pilot's mode change: DO_SET_MODE with the custom mode (ArduPilot) or PX4's main
+        and sub mode."""
         with self._send_lock:
             self._conn.mav.command_long_send(self.sysid, 1, mavlink2.MAV_CMD_DO_SET_MODE, 0,
                                              mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-                                             custom_mode, 0, 0, 0, 0, 0)  # fmt: skip
+                                             main, sub, 0, 0, 0, 0)  # fmt: skip
 
     def snapshot(self) -> Trace:
         with self._lock:

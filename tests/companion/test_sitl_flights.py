@@ -1,7 +1,8 @@
-"""`companion run` against stock ArduCopter SITL (ArduPilot's own flight code, nothing pre-set on
-the vehicle), with both backends. What the vehicle did is read from a second connection
-(SERIAL1, ``Observer``), never from the companion's log; the companion's log and console are
-read only for what only they can show (it paused, it says why it waits)."""
+"""`companion run` against stock autopilots in SITL (ArduCopter, PX4 SIH: their own flight code,
+nothing pre-set on the vehicle), with both backends; the autopilot is a test parameter. What the
+vehicle did is read from a second connection (ArduCopter SERIAL1, PX4's GCS link: ``Observer``),
+never from the companion's log; the companion's log and console are read only for what only they
+can show (it paused, it says why it waits)."""
 
 from __future__ import annotations
 
@@ -11,16 +12,38 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import pytest
 
 from companion.telemetry.mission_log import read_records
 from tests import sitl
 from tests.companion.sitl_observer import Observer, Trace
 
 SPEEDUP = 5  # stable on 2 shared cores; the companion's timers are wall time, the vehicle's not
-GUIDED, LOITER, RTL = 4, 5, 6  # ArduCopter custom modes
 ON_GROUND = 1  # MAV_LANDED_STATE_ON_GROUND
+
+
+@dataclass(frozen=True)
+class Autopilot:
+    """What differs between the autopilots for these tests: modes as DO_SET_MODE parameters
+    (p2, p3) and as HEARTBEAT custom modes."""
+
+    kind: sitl.Kind
+    pilot_mode: tuple[float, float]
+    pilot_custom: int
+    guided: tuple[float, float]
+    guided_custom: int
+    rtl_custom: int
+
+
+# ArduCopter: LOITER 5, GUIDED 4, RTL 6. PX4: custom = main << 16 | sub << 24; HOLD (4, 3),
+# OFFBOARD (6, 0), RTL (4, 5).
+ARDUCOPTER = Autopilot("arducopter", (5, 0), 5, (4, 0), 4, 6)
+PX4 = Autopilot("px4", (4, 3), 4 << 16 | 3 << 24, (6, 0), 6 << 16, 4 << 16 | 5 << 24)
+AUTOPILOTS = [pytest.param(ARDUCOPTER, id="arducopter"), pytest.param(PX4, id="px4")]
 
 
 def _profile(path: Path, vehicles: int) -> Path:
@@ -97,61 +120,80 @@ def _figures(name: str, trace: Trace, started: float) -> None:
           f"{time.monotonic() - started:.0f} s wall")  # fmt: skip
 
 
-def test_pymavlink_flies_stock_arducopter_through_takeover_kill_and_restart(
-    arducopter: Callable[..., sitl.SitlInstance], tmp_path: Path
+@pytest.mark.parametrize("ap", AUTOPILOTS)
+def test_pymavlink_flies_through_takeover_kill_and_restart(
+    ap: Autopilot, request: pytest.FixtureRequest, tmp_path: Path
 ) -> None:
-    """Started before the autopilot (retries), flies a search, a pilot's LOITER pauses it and
-    GUIDED resumes it, kill -9 and a restart resume it, one SIGINT brings it home and waits."""
+    """Started before the autopilot, flies a search; a pilot's mode pauses it and the guided
+    mode resumes it; killed (ArduCopter holds in GUIDED, PX4's offboard-loss failsafe takes
+    over) and restarted, it takes the vehicle back to the search; one SIGINT brings it home and
+    waits for the landing."""
+    start = request.getfixturevalue(ap.kind)
     started = time.monotonic()
-    index = sitl.free_index("arducopter")
+    index = sitl.free_index(ap.kind)
     profile = _profile(tmp_path / "sitl-small.yaml", vehicles=index + 1)
-    url = sitl.companion_url("arducopter", index)
+    url = sitl.companion_url(ap.kind, index)
     comp = Companion(tmp_path, profile, index, url, "pymavlink", duration=600.0)
     obs: Observer | None = None
     try:
-        _until("a retry line while the autopilot is not up", lambda: "retry 1 in" in comp.output(),
-               15.0, comp.output)  # fmt: skip
-        assert "Traceback" not in comp.output()
-        inst = arducopter(speedup=SPEEDUP, index=index)
+        # Before the autopilot is up: TCP is retried with a line per retry; UDP listens and
+        # says whom it heard.
+        line = "retry 1 in" if ap.kind == "arducopter" else "heard nothing"
+        _until(f"'{line}' before the autopilot starts", lambda: line in comp.output(), 15.0,
+               comp.output)  # fmt: skip
+        inst = start(speedup=SPEEDUP, index=index)
         obs = Observer(inst.observer_url, inst.sysid)
         ob = obs
 
         def context() -> str:
             return f"trace {ob.snapshot()}\ncompanion:\n{comp.output()[-3000:]}"
 
-        _until("armed, GUIDED, >= 20 m, 150 m flown", lambda: (
-            (t := ob.snapshot()).armed and t.mode == GUIDED and t.alt >= 20 and t.distance >= 150
+        _until("armed, guided, >= 20 m, 150 m flown", lambda: (
+            (t := ob.snapshot()).armed and t.mode == ap.guided_custom and t.alt >= 20
+            and t.distance >= 150
         ), 150.0, context)  # fmt: skip
-        asked = [line for line in comp.output().splitlines() if "asked system" in line]
-        assert any("LOCAL_POSITION_NED" in line for line in asked), comp.output()[-3000:]
+        if ap.kind == "arducopter":  # a stock ArduCopter streams no positions until asked
+            asked = [s for s in comp.output().splitlines() if "asked system" in s]
+            assert any("LOCAL_POSITION_NED" in s for s in asked), comp.output()[-3000:]
 
-        # A pilot takes over: the companion stops commanding and leaves LOITER alone.
-        ob.set_mode(LOITER)
-        _until("paused after LOITER", lambda: "paused" in _phases(comp.events()), 20.0, context)
+        # A pilot takes over: the companion stops commanding and leaves the mode alone.
+        ob.set_mode(*ap.pilot_mode)
+        _until("paused after the pilot's mode", lambda: "paused" in _phases(comp.events()), 20.0,
+               context)  # fmt: skip
         held = time.monotonic()
         while time.monotonic() - held < 10.0 / SPEEDUP:  # 10 vehicle s: nobody takes it back
-            assert ob.snapshot().mode == LOITER, context()
+            assert ob.snapshot().mode == ap.pilot_custom, context()
             time.sleep(0.1)
         before = ob.snapshot().distance
-        ob.set_mode(GUIDED)
-        _until("search resumed after GUIDED", lambda: (
+        ob.set_mode(*ap.guided)
+        _until("search resumed after the hand-back", lambda: (
             _phases(comp.events())[-1] == "search" and ob.snapshot().distance > before + 100
         ), 40.0, context)  # fmt: skip
 
-        # Killed and restarted: the new process takes the airborne vehicle back to the search.
+        # Killed: ArduCopter holds in GUIDED (no companion watch by default); PX4 leaves
+        # OFFBOARD on its own (COM_OF_LOSS_T). Restarted, the companion takes it back.
         comp.kill()
+        if ap.kind == "px4":
+            _until("PX4's offboard-loss failsafe", lambda: ob.snapshot().mode != ap.guided_custom,
+                   20.0, context)  # fmt: skip
+        else:
+            time.sleep(5.0 / SPEEDUP)  # past GUID_TIMEOUT (3 vehicle s): it stopped, still GUIDED
+            assert ob.snapshot().mode == ap.guided_custom, context()
+        failsafe_mode = ob.snapshot().mode
         before = ob.snapshot().distance
         comp = Companion(tmp_path, profile, index, url, "pymavlink", duration=600.0)
         _until("restarted companion searching", lambda: (
             sum(e["event"] == "start" for e in comp.events()) == 2
             and _phases(comp.events())[-1] == "search"
+            and ob.snapshot().mode == ap.guided_custom
             and ob.snapshot().distance > before + 100
         ), 60.0, context)  # fmt: skip
 
         # One SIGINT: RTL, and the companion waits for the landing, saying so.
         comp.process.send_signal(signal.SIGINT)
-        _until("landed and disarmed", lambda: (
-            (t := ob.snapshot()).landed_state == ON_GROUND and not t.armed and RTL in t.modes
+        _until("landed and disarmed after RTL", lambda: (
+            (t := ob.snapshot()).landed_state == ON_GROUND and not t.armed
+            and ap.rtl_custom in t.modes
         ), 150.0, context)  # fmt: skip
         assert comp.process.wait(timeout=30) == 0, context()
         out = comp.output()
@@ -162,23 +204,22 @@ def test_pymavlink_flies_stock_arducopter_through_takeover_kill_and_restart(
         assert trace.max_alt >= 20.0
         assert trace.distance >= 500.0, context()
         assert "Traceback" not in out
-        # The autopilot's own words reached the mission log (arming is announced by it).
-        texts = [e["text"] for e in comp.events() if e["event"] == "statustext"]
-        assert any("Arming motors" in t for t in texts) or "Arming motors" in out, texts
-        _figures("pymavlink", trace, started)
+        print(f"\n{ap.kind}: mode after the companion was killed: {failsafe_mode}")
+        _figures(f"{ap.kind} pymavlink", trace, started)
     finally:
         comp.kill()
         if obs is not None:
             obs.close()
 
 
-def test_mavsdk_flies_stock_arducopter_and_a_signal_during_rtl_waits_for_landing(
-    arducopter: Callable[..., sitl.SitlInstance], tmp_path: Path
+@pytest.mark.parametrize("ap", AUTOPILOTS)
+def test_mavsdk_flies_a_search_and_a_signal_during_rtl_waits_for_landing(
+    ap: Autopilot, request: pytest.FixtureRequest, tmp_path: Path
 ) -> None:
-    """MAVSDK on ArduPilot: takeoff before Offboard (it left the ground), a full search, RTL at
-    mission time; a SIGINT during the RTL does not cut it short."""
+    """MAVSDK: a full search (on ArduPilot the takeoff comes before Offboard, or the vehicle
+    never leaves the ground), RTL at mission time; a SIGINT during the RTL does not cut it short."""
     started = time.monotonic()
-    inst = arducopter(speedup=SPEEDUP)
+    inst = request.getfixturevalue(ap.kind)(speedup=SPEEDUP)
     profile = _profile(tmp_path / "sitl-small.yaml", vehicles=inst.index + 1)
     comp = Companion(tmp_path, profile, inst.index, inst.companion_url, "mavsdk", duration=45.0)
     obs = Observer(inst.observer_url, inst.sysid)
@@ -187,7 +228,7 @@ def test_mavsdk_flies_stock_arducopter_and_a_signal_during_rtl_waits_for_landing
         return f"trace {obs.snapshot()}\ncompanion:\n{comp.output()[-3000:]}"
 
     try:
-        _until("RTL at mission time", lambda: obs.snapshot().mode == RTL, 150.0, context)
+        _until("RTL at mission time", lambda: obs.snapshot().mode == ap.rtl_custom, 150.0, context)
         comp.process.send_signal(signal.SIGINT)
         _until("landed and disarmed", lambda: (
             (t := obs.snapshot()).landed_state == ON_GROUND and not t.armed
@@ -200,8 +241,8 @@ def test_mavsdk_flies_stock_arducopter_and_a_signal_during_rtl_waits_for_landing
         assert trace.armed_ever
         assert trace.max_alt >= 20.0
         assert trace.distance >= 500.0, context()
-        assert trace.modes[-1] == RTL
-        _figures("mavsdk", trace, started)
+        assert ap.rtl_custom in trace.modes
+        _figures(f"{ap.kind} mavsdk", trace, started)
     finally:
         comp.kill()
         obs.close()
