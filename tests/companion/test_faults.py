@@ -242,7 +242,10 @@ def test_five_seconds_of_silence_then_the_mission_resumes(
         relay.silent = False
         assert has(_log(tmp_path), "link", state="lost")
         wait_for(lambda: has(_log(tmp_path), "link", state="restored"), 20, "link restored")
-        n = len(records(_log(tmp_path))) - 2
+        # From the restored record on (the search may have resumed, and ticks followed, before
+        # this poll saw it).
+        n = max(k for k, r in enumerate(records(_log(tmp_path)))
+                if r.get("event") == "link" and r.get("state") == "restored")  # fmt: skip
         wait_for(lambda: _searching_after(tmp_path, n), 30, "search resumed")
     finally:
         relay.close()
