@@ -232,7 +232,9 @@ def _end_hung(
         since = done_at.setdefault(i, now)
         if now - since > _EXIT_GRACE_S:
             _say(f"fleet: vehicle {i}'s companion still running {_EXIT_GRACE_S:.0f} s after its "
-                 f"mission ended; killing it (see {o.out / f'companion-{i}.log'})")  # fmt: skip
+                 f"mission ended; killing it (its tasks: {o.out / f'companion-{i}.log'})")  # fmt: skip
+            processes.signal_one(p, signal.SIGUSR1)  # `companion run` logs its asyncio tasks
+            processes.wait_all([p], 1.0)
             processes.kill_group(p)
 
 

@@ -93,6 +93,8 @@ def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> No
         retained_topics(1883, f"{prefix}/#", remove=True)
     assert retained_topics(1883, f"{prefix}/#") == [], "retained messages left on the broker"
 
+    ends = json.loads((out / "results.json").read_text())["ends"]
+    assert all(e["ok"] for e in ends), ends  # no companion had to be killed, none failed
     v0 = read_records(out / "mission-0.jsonl")
     v1 = read_records(out / "mission-1.jsonl")
     assert [(r["command"], r["id"]) for r in v0 if r["event"] == "command"] == [
