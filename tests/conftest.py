@@ -9,6 +9,7 @@ from typing import Any
 import pytest
 
 from tests import sitl
+from tests.mqtt_harness import clear_retained_of_this_run
 
 
 def _sitl_factory(kind: sitl.Kind, tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:
@@ -37,3 +38,11 @@ def arducopter(tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:
 def px4(tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:
     """Start stock PX4 SITL (SIH) instances (``px4(home=...)``); as ``arducopter``."""
     yield from _sitl_factory("px4", tmp_path)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _leave_no_retained_messages() -> Iterator[None]:
+    """The fleets of MQTT tests publish a retained status per vehicle on the broker at
+    127.0.0.1:1883 (the user's); the session clears what it left there."""
+    yield
+    clear_retained_of_this_run()

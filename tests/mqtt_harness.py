@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import getpass
 import json
+import os
 import signal
 import socket
 import subprocess
@@ -161,3 +162,18 @@ def retained_topics(port: int, topic_filter: str, *, remove: bool = False) -> li
         capture_output=True, text=True, timeout=20, check=False,
     )  # fmt: skip
     return done.stdout.split()
+
+
+def clear_retained_of_this_run(port: int = 1883) -> list[str]:
+    """Clear the retained messages (vehicle status) that this test process's fleets left under
+    its own prefixes, ``mdm/test-<pid>-...`` and ``mdm/sitl-<pid>``, on the broker at ``port``;
+    returns the topics cleared. Nothing when no broker listens there."""
+    with socket.socket() as s:
+        if s.connect_ex(("127.0.0.1", port)) != 0:
+            return []
+    ours = (f"mdm/test-{os.getpid()}-", f"mdm/sitl-{os.getpid()}/")
+    topics = [t for t in retained_topics(port, "mdm/#") if t.startswith(ours)]
+    for topic in topics:  # an empty retained message deletes the retained one
+        subprocess.run(["mosquitto_pub", "-h", "127.0.0.1", "-p", str(port), "-q", "1", "-r",
+                        "-n", "-t", topic], capture_output=True, timeout=20, check=False)  # fmt: skip
+    return topics
