@@ -65,3 +65,21 @@ def test_a_complete_run_exits_0_and_json_is_all_of_stdout(tmp_path: Path) -> Non
     assert printed["complete"] is True
     assert printed["end_reasons"] == {"0": "mission time", "1": "mission time"}
     assert "fleet: UDP ports: companions" in done.stderr
+
+
+@pytest.mark.timeout(120)
+def test_companions_that_exit_with_an_error_show_it_in_the_table(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    missing = tmp_path / "no-such-password-file"
+    result = run_fleet(FleetOptions(
+        profile=small_profile(tmp_path), out=out, vehicles=2, duration=60.0,
+        mqtt_args=("--mqtt", "127.0.0.1:1883", "--mqtt-username", "u",
+                   "--mqtt-password-file", str(missing)),
+    ))  # fmt: skip
+    assert exit_status(result) == 1
+    assert not result.complete
+    for i, end in enumerate(result.ends[:-1]):
+        assert end.how == "no end in its mission log, exit code 2"
+        assert end.error == f"companion: mqtt.password_file {missing}: No such file or directory"
+        assert end.log == str(out / f"companion-{i}.log")
+    assert result.ends[-1].ok, "the emulator itself ran fine"
