@@ -79,8 +79,7 @@ def live(base: MissionProfile, drop: float, delay: float, seeds: list[int], spee
             cmd = [str(Path(sys.executable).parent / "companion"), "fleet", "--profile", str(knob), "--json",
                    "--quiet", "--mqtt", "127.0.0.1", "--mqtt-prefix",
                    f"mdm/bench-{os.getpid()}-{drop}-{delay}-{seed}", "--speedup", str(speedup),
-                   "--duration", "400", "--seed", str(seed), "--base-port", "35900",
-                   "--out", str(out)]  # fmt: skip
+                   "--duration", "400", "--seed", str(seed), "--out", str(out)]  # fmt: skip
             done = subprocess.run(cmd, capture_output=True, text=True, check=True)
             result = json.loads(done.stdout.strip().splitlines()[-1])
             tnc.append(int(result["tnc"]))
@@ -110,13 +109,21 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2, help="engine worker processes")
     ap.add_argument("--speedup", type=float, default=50.0, help="live sim s per wall s")
     ap.add_argument("--no-live", action="store_true", help="engine only")
+    ap.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="PATH=VALUE",
+        help="override a field of swarm-small, e.g. policy.swarm.signal_radius=null (the "
+        "detection sensor's radius, the default of other profiles)",
+    )
     args = ap.parse_args()
     seeds = list(range(1, args.seeds + 1))
-    profile = builtin_profile("swarm-small")
+    profile = apply_overrides(builtin_profile("swarm-small"), args.set)
     real = [t for t in profile.targets if not t.false_target]
     no_false = profile.model_copy(update={"targets": real})
     print(f"PSO, 3 UAVs, 2.5 km square, 400 s; live {len(seeds)} seeds at {args.speedup:g}x, "
-          f"engine {args.runs} runs seed {args.seed}")  # fmt: skip
+          f"engine {args.runs} runs seed {args.seed}; overrides: {args.set or 'none'}")  # fmt: skip
     head = f"{'T_nc':>6} {'conf/runs':<11} {'ts s ± sd':>12}"
     print(f"{'drop':>4} {'delay':>5} | live {head} {'followed':>9} | engine {head} "
           f"| engine, no false target {head}")  # fmt: skip

@@ -70,6 +70,17 @@ CAUSES: tuple[Cause, ...] = (
         ),
     ),
     Cause(
+        "Fall-backs, sensor memory and C_I(0)",
+        lambda r, m: (
+            m == "T_S"
+            and _is_mdm(r)
+            and r.scenario == "fixed"
+            and r.n_false == 0
+            and r.delta1_pct_L == 20.0
+        ),
+        lambda r, m: "detection_memory = exact: 4623 s (LS+BS, 1000 runs)",
+    ),
+    Cause(
         "Pop-up times",
         lambda r, m: r.scenario == "popup" and m == "T_nc",
         lambda r, m: "appear times t_i = 200 (i - 1): US 4.237, MDM US+US 4.937 (300 runs)",

@@ -70,7 +70,7 @@ def test_summary_comes_first_and_outside_rows_link_their_cause(small_report: str
     rows = [line for line in outside.splitlines() if line.startswith("| simtable1")]
     assert rows
     for line in rows:
-        assert re.search(r"\]\([^)]*model\.md#[a-z0-9-]+\)", line), line
+        assert re.search(r"\]\([^)]*model\.md#[a-z0-9_-]+\)", line), line
         assert line.rstrip("| ").split("|")[-1].strip(), line  # a closest variant is named
 
 
