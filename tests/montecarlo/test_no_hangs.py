@@ -80,3 +80,23 @@ def test_cli_refuses_a_bad_level_index_without_a_traceback(
     err = capsys.readouterr().err
     assert "policy.levels has 2 entries (0 to 1), no 5" in err
     assert "Traceback" not in err
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize(
+    "setting",
+    [
+        "policy.detection_memory=disc",
+        "policy.detection_memory=exact",
+        "policy.detection_memory=none",
+        "policy.fallback_blind_time=100",
+        "policy.levels.1.index.start=max",
+    ],
+)
+def test_every_memory_and_fall_back_option_runs_to_the_end(setting: str) -> None:
+    # The engine leaves out of a leg's contacts exactly what the policy would drop; a
+    # mismatch would report the same contact again at the same instant, forever.
+    profile = apply_overrides(load_profile("paper-dynamic"), [setting])
+    res = run_missions(profile, runs=20, seed=5)
+    assert res.sim_seconds >= 20 * profile.fleet.vehicles * profile.mission.duration * 0.99
+    assert res.tnc.mean() > 1.0
