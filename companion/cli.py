@@ -5,34 +5,29 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import logging
 import os
 import signal
 import sys
 from collections.abc import Coroutine
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
 from companion.autopilots import FlightMode
-from companion.fence_from_profile import fence_for
 from companion.fleet.cli_args import add_fleet_parser
+from companion.fly import STOPPED_BY_SECOND_SIGNAL, check_flight, fly
 from companion.link.factory import BACKENDS, Backend, make_link
-from companion.mission import MissionConfig, VehicleMission
-from companion.mission.core_for import core_for, is_swarm
-from companion.mission.swarm_core import SwarmCore
+from companion.mission import MissionConfig
 from companion.run_map.cli_args import add_map_parser, map_after_run, map_command
-from companion.sensors.factory import SENSOR_SOURCES, DetectorFeed, make_sensor_source
-from companion.telemetry import EventSink, MissionLog, read_log
+from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
-from companion.telemetry.tee_sink import TeeSink
 from mavlink_signing import ENV_VAR, load_signing_key
 from mdm_profiles import ProfileError, SensorSourceKind, load_profile
 from mdm_profiles.mqtt_spec import MqttSpec
 
 log = logging.getLogger("companion")
 DEFAULT_BASE_PORT = 14540
-STOPPED_BY_SECOND_SIGNAL = "stopped by a second signal"
 
 
 def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -119,14 +114,8 @@ def run_command(args: argparse.Namespace) -> int:
     if args.connect is None and site is not None and site.connect:
         url = site.connect.format(port=port)
     mqtt = mqtt_spec(args, profile.mqtt)
-    if mqtt is None and is_swarm(config):
-        core_for(config, lambda: 0.0, None)  # raises: the swarm kinds need a broker
     sensor_source: SensorSourceKind = args.sensor_source or profile.sensor_source.kind
-    if sensor_source == "mqtt" and mqtt is None:
-        raise ValueError(
-            "sensor source 'mqtt' reads detections from a broker; configure one "
-            "(--mqtt HOST[:PORT] or the profile's mqtt: section)"
-        )
+    check_flight(config, mqtt, sensor_source)  # before any socket or file
     signing_key = load_signing_key(args.signing_key_file)
     fly = _fly(config, url, args.backend, tlog=not args.no_tlog, mqtt=mqtt, signing_key=signing_key,
                sensor_source=sensor_source)  # fmt: skip
@@ -177,10 +166,6 @@ async def _fly(
     config: MissionConfig, url: str, backend: Backend, *, tlog: bool, mqtt: MqttSpec | None,
     signing_key: bytes | None, sensor_source: SensorSourceKind,
 ) -> str:  # fmt: skip
-    recovered = read_log(config.mission_log_path())
-    if recovered.confirmed:
-        log.info("resuming with %d confirmed target(s) from %s", len(recovered.confirmed),
-                 config.mission_log_path())  # fmt: skip
     link = make_link(
         backend,
         url=url,
@@ -188,59 +173,15 @@ async def _fly(
         tlog=config.tlog_path() if tlog else None,
         signing_key=signing_key,
     )
-    mission_log = MissionLog(config.mission_log_path())
-    sink: EventSink = mission_log
-    telemetry = None
-    if mqtt is not None:  # no broker configured: no MQTT code at all
-        from companion.telemetry.mqtt.vehicle_telemetry import VehicleTelemetry
-
-        telemetry = VehicleTelemetry.open(mqtt, profile_name=config.profile.name,
-                                          vehicle=config.vehicle, log_dir=config.log_dir)  # fmt: skip
-        sink = TeeSink(mission_log, telemetry)
-    peers = None
-    if telemetry is not None and is_swarm(config):
-        from companion.telemetry.mqtt.swarm_peers import SwarmPeers
-
-        swarm = config.profile.policy.swarm
-        peers = SwarmPeers(telemetry.channel, telemetry.topics.prefix, config.vehicle,
-                           config.profile.fleet.vehicles, delay=swarm.message_delay,
-                           drop=swarm.message_drop, seed=config.seed)  # fmt: skip
-    feed = None
-    if telemetry is not None:
-        feed = DetectorFeed(telemetry.channel, telemetry.topics.detections)
-    sensors = make_sensor_source(sensor_source, profile=config.profile, seed=config.seed,
-                                 link=link, feed=feed)  # fmt: skip
-    log.info("vehicle %d: sensor source %s", config.vehicle, sensor_source)
-    mission = VehicleMission(config, link, sink, recovered=recovered,
-                             fence=fence_for(config.profile), peers=peers,
-                             sensors=sensors)  # fmt: skip
-    if isinstance(mission.core, SwarmCore):
-        mission.core.emit = mission.emit  # swarm_follow events in the mission log
-    loop = asyncio.get_running_loop()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(sig, mission.operator_stop)
-    loop.add_signal_handler(signal.SIGUSR1, _dump_tasks)
-    try:
-        async with telemetry.running(mission) if telemetry else contextlib.nullcontext():
-            if peers is None:
-                return await mission.run()
-            sender = asyncio.create_task(peers.run(), name=f"v{config.vehicle}-swarm")
-            try:
-                return await mission.run()
-            finally:
-                sender.cancel()
-                with contextlib.suppress(TimeoutError):
-                    await asyncio.wait_for(peers.flush(), 2.0)
-                core = mission.core
-                assert isinstance(core, SwarmCore)
-                mission.emit("swarm", sent=peers.sent, received=peers.received,
-                             dropped=peers.dropped, rejected=peers.rejected,
-                             iterations=core.iterations,
-                             peer_bests_used=core.peer_bests_used)  # fmt: skip
-    except asyncio.CancelledError:
-        return STOPPED_BY_SECOND_SIGNAL
-    finally:
-        mission_log.close()
+    options = {f.name: getattr(config, f.name) for f in fields(config)}
+    del options["profile"], options["vehicle"]
+    async with fly(config.profile, config.vehicle, link, mqtt=mqtt, sensor_source=sensor_source,
+                   **options) as flight:  # fmt: skip
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, flight.stop)
+        loop.add_signal_handler(signal.SIGUSR1, _dump_tasks)
+        return await flight.ended()
 
 
 if __name__ == "__main__":

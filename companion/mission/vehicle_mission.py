@@ -44,7 +44,7 @@ from companion.mission.control import (
 )
 from companion.mission.core_for import core_for
 from companion.mission.phase import Phase
-from companion.mission.swarm_core import SwarmExchange
+from companion.mission.swarm_core import SwarmCore, SwarmExchange
 from companion.sensors.base import SensorSource
 from companion.sensors.mavlink_source import MavlinkSensorSource
 from companion.telemetry.mission_log import EventSink, Recovered
@@ -88,6 +88,8 @@ class VehicleMission:
         self.sensors = sensors or MavlinkSensorSource(link, len(profile.sensors))
         self.sensors.report = self.emit
         self.core = core_for(config, lambda: self.sensors.signal, peers)
+        if isinstance(self.core, SwarmCore):
+            self.core.emit = self.emit  # swarm_follow events in the mission log
         self.fence = fence or Geofence.rectangle(profile.area.north, profile.area.east)
         self.guide = GuidanceConfig(
             speed=profile.fleet.speed,

@@ -1,0 +1,161 @@
+"""Fly one vehicle from Python: what `companion run` wires (mission log, MQTT tee, swarm peers,
+sensor source), as an async context manager the CLI, the tests and a user's script share.
+
+    async with fly(load_profile("paper-fixed"), 0, PymavlinkLink(url=..., target_system=1),
+                   duration=120.0, log_dir=Path("runs")) as flight:
+        print(await flight.ended())
+
+Leaving the block before the mission ended ends it as one SIGINT does (end action, wait for the
+landing); an exception in the block stops commanding at once.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import AsyncIterator
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from companion.fence_from_profile import fence_for
+from companion.link.base import VehicleLink
+from companion.mission import MissionConfig, VehicleMission
+from companion.mission.core_for import is_swarm
+from companion.mission.swarm_core import SwarmCore
+from companion.sensors.factory import DetectorFeed, make_sensor_source
+from companion.telemetry import EventSink, MissionLog, read_log
+from companion.telemetry.tee_sink import TeeSink
+from mdm_profiles import MissionProfile, SensorSourceKind
+from mdm_profiles.mqtt_spec import MqttSpec
+
+if TYPE_CHECKING:
+    from companion.telemetry.mqtt.swarm_peers import SwarmPeers
+    from companion.telemetry.mqtt.vehicle_telemetry import VehicleTelemetry
+
+log = logging.getLogger(__name__)
+
+STOPPED_BY_SECOND_SIGNAL = "stopped by a second signal"
+"""What :meth:`Flight.ended` returns when a second stop cut the end action short."""
+
+
+@dataclass
+class Flight:
+    """A mission in flight."""
+
+    mission: VehicleMission
+    """Its state (``phase``, ``snapshot()``) and the operator's requests (``operator_pause`` ...)."""
+    task: asyncio.Task[str]
+
+    async def ended(self) -> str:
+        """Wait for the end; why it ended (``mission time``, ``operator``, ...)."""
+        return await asyncio.shield(self.task)
+
+    def stop(self) -> None:
+        """As a SIGINT: the first call ends the mission with its end action and waits for the
+        landing; a second stops commanding at once."""
+        self.mission.operator_stop()
+
+
+def check_flight(config: MissionConfig, mqtt: MqttSpec | None, source: SensorSourceKind) -> None:
+    """Refuse, naming what is missing, a flight that cannot run (raises ValueError)."""
+    vehicles = config.profile.fleet.vehicles
+    if not 0 <= config.vehicle < vehicles:
+        raise ValueError(f"vehicle {config.vehicle}: profile has {vehicles} vehicles")
+    if mqtt is None and is_swarm(config):
+        raise ValueError(
+            f"profile {config.profile.name!r}: policy.kind {config.profile.policy.kind!r} "
+            "shares the swarm's bests over MQTT; configure a broker (--mqtt HOST[:PORT] or "
+            "the profile's mqtt: section)"
+        )
+    if source == "mqtt" and mqtt is None:
+        raise ValueError(
+            "sensor source 'mqtt' reads detections from a broker; configure one "
+            "(--mqtt HOST[:PORT] or the profile's mqtt: section)"
+        )
+
+
+@contextlib.asynccontextmanager
+async def fly(
+    profile: MissionProfile,
+    vehicle: int,
+    link: VehicleLink,
+    *,
+    mqtt: MqttSpec | None = None,
+    sensor_source: SensorSourceKind | None = None,
+    **options: Any,
+) -> AsyncIterator[Flight]:
+    """Fly ``vehicle`` of ``profile`` over ``link`` (not yet opened); ``options`` are
+    :class:`MissionConfig` fields (``duration``, ``log_dir``, ``end_action``, ...); ``mqtt``
+    tees the events to a broker; ``sensor_source`` defaults to the profile's."""
+    config = MissionConfig(vehicle=vehicle, profile=profile, **options)
+    source: SensorSourceKind = sensor_source or profile.sensor_source.kind
+    check_flight(config, mqtt, source)
+    recovered = read_log(config.mission_log_path())
+    if recovered.confirmed:
+        log.info("resuming with %d confirmed target(s) from %s", len(recovered.confirmed),
+                 config.mission_log_path())  # fmt: skip
+    mission_log = MissionLog(config.mission_log_path())
+    try:
+        sink: EventSink = mission_log
+        telemetry: VehicleTelemetry | None = None
+        if mqtt is not None:  # no broker configured: no MQTT code at all
+            from companion.telemetry.mqtt.vehicle_telemetry import VehicleTelemetry
+
+            telemetry = VehicleTelemetry.open(mqtt, profile_name=profile.name, vehicle=vehicle,
+                                              log_dir=config.log_dir)  # fmt: skip
+            sink = TeeSink(mission_log, telemetry)
+        peers: SwarmPeers | None = None
+        if telemetry is not None and is_swarm(config):
+            from companion.telemetry.mqtt.swarm_peers import SwarmPeers
+
+            swarm = profile.policy.swarm
+            peers = SwarmPeers(telemetry.channel, telemetry.topics.prefix, vehicle,
+                               profile.fleet.vehicles, delay=swarm.message_delay,
+                               drop=swarm.message_drop, seed=config.seed)  # fmt: skip
+        feed = None
+        if telemetry is not None:
+            feed = DetectorFeed(telemetry.channel, telemetry.topics.detections)
+        sensors = make_sensor_source(source, profile=profile, seed=config.seed, link=link,
+                                     feed=feed)  # fmt: skip
+        log.info("vehicle %d: sensor source %s", vehicle, source)
+        mission = VehicleMission(config, link, sink, recovered=recovered, fence=fence_for(profile),
+                                 peers=peers, sensors=sensors)  # fmt: skip
+        task = asyncio.create_task(_run(mission, telemetry, peers), name=f"v{vehicle}-flight")
+        try:
+            yield Flight(mission, task)
+            if not task.done():
+                mission.operator_stop()
+            await task
+        finally:
+            if not task.done():
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
+    finally:
+        mission_log.close()
+
+
+async def _run(
+    mission: VehicleMission, telemetry: VehicleTelemetry | None, peers: SwarmPeers | None
+) -> str:
+    """The mission with its MQTT telemetry and swarm exchange around it."""
+    try:
+        async with telemetry.running(mission) if telemetry else contextlib.nullcontext():
+            if peers is None:
+                return await mission.run()
+            sender = asyncio.create_task(peers.run(), name=f"v{mission.config.vehicle}-swarm")
+            try:
+                return await mission.run()
+            finally:
+                sender.cancel()
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(peers.flush(), 2.0)
+                core = mission.core
+                assert isinstance(core, SwarmCore)
+                mission.emit("swarm", sent=peers.sent, received=peers.received,
+                             dropped=peers.dropped, rejected=peers.rejected,
+                             iterations=core.iterations,
+                             peer_bests_used=core.peer_bests_used)  # fmt: skip
+    except asyncio.CancelledError:  # a second stop: the mission's task was cancelled
+        return STOPPED_BY_SECOND_SIGNAL

@@ -1,0 +1,70 @@
+"""The public API: ``fly(profile, vehicle, link, ...)`` flies one vehicle of the emulator (running
+in this process, on its own thread) from a plain asyncio script, as `companion run` does."""
+
+from __future__ import annotations
+
+import asyncio
+from pathlib import Path
+
+import pytest
+
+from companion.fly import fly
+from companion.link.pymavlink_link import PymavlinkLink
+from companion.mission.phase import Phase
+from companion.telemetry.mission_log import read_records
+from tests.emulator_harness import PROFILE, free_udp_base, make_config, running_emulator
+
+
+def _phases(log: Path) -> list[str]:
+    return [str(r["phase"]) for r in read_records(log) if r["event"] == "phase"]
+
+
+def test_a_script_flies_a_mission_to_its_end(tmp_path: Path) -> None:
+    base = free_udp_base(1)
+
+    async def main() -> str:
+        link = PymavlinkLink(url=f"udpin:127.0.0.1:{base}", target_system=1)
+        async with fly(
+            PROFILE, 0, link, log_dir=tmp_path, duration=20.0, land_wait=120.0
+        ) as flight:
+            return await asyncio.wait_for(flight.ended(), 90.0)
+
+    with running_emulator(make_config(1, base, speedup=20.0)):
+        reason = asyncio.run(main())
+    assert reason == "mission time"
+    assert _phases(tmp_path / "mission-0.jsonl") == [
+        "prepare", "climb", "search", "return", "done",
+    ]  # fmt: skip
+
+
+def test_leaving_the_block_early_ends_with_the_end_action_and_waits(tmp_path: Path) -> None:
+    base = free_udp_base(1)
+
+    async def main() -> str:
+        link = PymavlinkLink(url=f"udpin:127.0.0.1:{base}", target_system=1)
+        async with fly(
+            PROFILE, 0, link, log_dir=tmp_path, duration=600.0, land_wait=120.0
+        ) as flight:
+            while flight.mission.phase is not Phase.SEARCH:
+                await asyncio.sleep(0.05)
+        return await flight.ended()
+
+    with running_emulator(make_config(1, base, speedup=20.0)):
+        reason = asyncio.run(asyncio.wait_for(main(), 90.0))
+    assert reason == "operator"
+    records = read_records(tmp_path / "mission-0.jsonl")
+    assert [r["reason"] for r in records if r["event"] == "end"] == ["operator"]
+    assert _phases(tmp_path / "mission-0.jsonl")[-2:] == ["return", "done"]
+    modes = [r["mode"] for r in records if r["event"] == "mode"]
+    assert modes[-1] == "RTL"
+
+
+def test_a_flight_that_cannot_run_is_refused_before_anything_starts(tmp_path: Path) -> None:
+    async def main() -> None:
+        link = PymavlinkLink(url="udpin:127.0.0.1:9", target_system=99)
+        async with fly(PROFILE, 98, link, log_dir=tmp_path):
+            pass
+
+    with pytest.raises(ValueError, match="vehicle 98: profile has 12 vehicles"):
+        asyncio.run(main())
+    assert not (tmp_path / "mission-98.jsonl").exists()
