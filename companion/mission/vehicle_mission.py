@@ -47,6 +47,7 @@ from companion.mission.phase import Phase
 from companion.mission.swarm_core import SwarmCore, SwarmExchange
 from companion.sensors.base import SensorSource
 from companion.sensors.mavlink_source import MavlinkSensorSource
+from companion.telemetry import events
 from companion.telemetry.mission_log import EventSink, Recovered
 
 log = logging.getLogger(__name__)
@@ -130,9 +131,8 @@ class VehicleMission:
         self._main = asyncio.current_task()
         if not await self._open_link():
             return self.end_reason or "stopped"
-        self.emit("start", vehicle=self.config.vehicle, profile=self.config.profile.name,
-                  seed=self.config.seed, resumed=len(self.recovered.confirmed),
-                  altitude=self.config.altitude)  # fmt: skip
+        self.record(events.Start(self.config.vehicle, self.config.profile.name, self.config.seed,
+                                 len(self.recovered.confirmed), self.config.altitude))  # fmt: skip
         try:
             async with asyncio.TaskGroup() as tg:
                 loops = [
@@ -174,7 +174,12 @@ class VehicleMission:
               flush=True)  # fmt: skip
 
     def emit(self, event: str, **fields: object) -> None:
+        """A record that is not a decision (ticks, texts, measurements)."""
         self.sink.emit(self.clock.now, event, **fields)
+
+    def record(self, event: events.DurableEvent) -> None:
+        """A durable event (telemetry/events.py: the same classes read it back)."""
+        self.sink.emit(self.clock.now, event.NAME, **events.to_fields(event))
 
     # -- operator (MQTT commands): each returns None when obeyed, else why not -------------
 
@@ -307,7 +312,7 @@ class VehicleMission:
             return
         guided = ap.is_guided(hb.custom_mode)
         if previous is None or previous.custom_mode != hb.custom_mode:
-            self.emit("mode", mode=ap.mode_name(hb.custom_mode), guided=guided)
+            self.record(events.ModeChange(ap.mode_name(hb.custom_mode), guided))
         report = ModeReport(guided, self._hold_mode(hb), self._setpoints_stalled(),
                             self.core.started)  # fmt: skip
         self._step(step(self.control, report), mode=ap.mode_name(hb.custom_mode))
@@ -319,7 +324,7 @@ class VehicleMission:
         if isinstance(result, Refused):
             return result.reason
         state, actions = result
-        self._apply(state, **({"by": by} if by is not None else {}))
+        self._apply(state, by=by)
         v = self.config.vehicle
         for action in actions:
             if action is Action.HOLD:
@@ -379,15 +384,14 @@ class VehicleMission:
         if self.core.needs_step(t, reached, contacts):
             d = self.core.step(t, here, reached, contacts)
             if d.detected:
-                self.emit("detection", north=round(pos.north, 1), east=round(pos.east, 1),
-                          level=d.level)  # fmt: skip
+                self.record(events.Detection(round(pos.north, 1), round(pos.east, 1), d.level))
             for north, east in d.confirmed:
-                self.emit("confirmation", north=north, east=east, level=d.previous_level,
-                          found=self.core.confirmed_count)  # fmt: skip
+                self.record(events.Confirmation(north, east, d.previous_level,
+                                                self.core.confirmed_count))  # fmt: skip
             if d.fell_back:
-                self.emit("fallback", level=d.level)
+                self.record(events.Fallback(d.level))
             if d.level != d.previous_level:
-                self.emit("level", level=d.level, sensor=self.core.sensor())
+                self.record(events.Level(d.level, self.core.sensor()))
                 self.sensors.select(self.core.sensor(), t)
         if self.search_start is not None and t - self.search_start >= self.config.search_duration:
             self.request_end("mission time")
@@ -596,7 +600,7 @@ class VehicleMission:
         if not self.core.started:
             self.core.start(here, t, self.recovered.confirmed)
         self._set_phase(Phase.SEARCH, search_start=self.search_start)
-        self.emit("level", level=self.core.level, sensor=self.core.sensor())
+        self.record(events.Level(self.core.level, self.core.sensor()))
         self.sensors.select(self.core.sensor(), t)
 
     async def _finish(self) -> None:
@@ -605,7 +609,7 @@ class VehicleMission:
         assert not isinstance(ended, Refused)
         state, actions = ended
         self._apply(state)
-        self.emit("end", reason=self.end_reason, found=self.core.confirmed_count)
+        self.record(events.End(str(self.end_reason), self.core.confirmed_count))
         self._report_speed()
         self.sensors.select(-1, self.clock.now)
         if Action.END_ACTION not in actions:
@@ -645,7 +649,7 @@ class VehicleMission:
                 log.warning("vehicle %d: no heartbeat for %.1f s; stop commanding",
                             self.config.vehicle, silent)  # fmt: skip
                 self._set_phase(Phase.LINK_LOST)
-                self.emit("link", state="lost", silent=round(silent, 1))
+                self.record(events.LinkState("lost", round(silent, 1)))
             await asyncio.sleep(backoff * (1 + random.random()))  # jittered backoff
             backoff = min(backoff * 2, 8.0)
             try:
@@ -657,7 +661,7 @@ class VehicleMission:
             while time.perf_counter() < deadline:
                 await asyncio.sleep(0.1)
                 if time.perf_counter() - self._last_heartbeat_wall < 1.0:
-                    self.emit("link", state="restored")
+                    self.record(events.LinkState("restored"))
                     self._after_link_restored(resume)
                     break
 
@@ -691,15 +695,17 @@ class VehicleMission:
     def phase(self) -> Phase:
         return self.control.phase
 
-    def _set_phase(self, phase: Phase, **fields: object) -> None:
-        self._apply(enter(self.control, phase), **fields)
+    def _set_phase(self, phase: Phase, *, search_start: float | None = None) -> None:
+        self._apply(enter(self.control, phase), search_start=search_start)
 
-    def _apply(self, state: Control, **fields: object) -> None:
+    def _apply(
+        self, state: Control, *, search_start: float | None = None, by: str | None = None
+    ) -> None:
         """Take the new control state; a phase change is a ``phase`` event."""
         changed = state.phase is not self.control.phase
         self.control = state
         if changed:
-            self.emit("phase", phase=state.phase.value, **fields)
+            self.record(events.PhaseChange(state.phase.value, search_start, by))
             self._changed.set()
 
     async def _until(self, predicate: Callable[[], bool], timeout: float | None = None) -> bool:

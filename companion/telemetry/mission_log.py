@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol, TextIO
 
+from companion.telemetry.events import DURABLE, Confirmation, End, PhaseChange, Start, from_record
+
 log = logging.getLogger(__name__)
 
-DURABLE_EVENTS = frozenset(
-    {"start", "phase", "level", "detection", "confirmation", "fallback", "mode", "link", "end"}
-)
+DURABLE_EVENTS = frozenset(DURABLE)
 
 
 class EventSink(Protocol):
@@ -76,15 +76,19 @@ def read_log(path: Path) -> Recovered:
             if not isinstance(record, dict):
                 continue
             out.last_time = max(out.last_time, float(record.get("t", 0.0)))
-            event = record.get("event")
-            if event == "confirmation":
-                out.confirmed.append((float(record["north"]), float(record["east"])))
-            elif event == "end":
+            event = from_record(record)
+            if isinstance(event, Confirmation):
+                out.confirmed.append((float(event.north), float(event.east)))
+            elif isinstance(event, End):
                 out.ended = True
-            elif event == "start":
+            elif isinstance(event, Start):
                 out.starts += 1
-            elif event == "phase" and "search_start" in record and out.search_start is None:
-                out.search_start = float(record["search_start"])
+            elif (
+                isinstance(event, PhaseChange)
+                and event.search_start is not None
+                and out.search_start is None
+            ):
+                out.search_start = float(event.search_start)
     return out
 
 
