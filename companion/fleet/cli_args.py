@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from companion.fleet.options import default
 from companion.link.factory import BACKENDS
 from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments
@@ -18,12 +19,14 @@ def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
     )
     p.add_argument("--profile", default="paper-fixed", help="profile file or built-in name")
     p.add_argument("--vehicles", type=int, help="number of vehicles (default: profile)")
-    p.add_argument("--speedup", type=float, default=100.0, help="sim seconds per wall second")
-    p.add_argument("--duration", type=float, default=300.0, help="search time, sim s")
-    p.add_argument("--backend", choices=BACKENDS, default="pymavlink")
-    p.add_argument("--persona", choices=("px4", "ardupilot"), default="px4")
-    p.add_argument("--setpoints", choices=("velocity", "position"), default="velocity")
-    p.add_argument("--seed", type=int, default=1)
+    p.add_argument(
+        "--speedup", type=float, default=default("speedup"), help="sim seconds per wall second"
+    )
+    p.add_argument("--duration", type=float, default=default("duration"), help="search time, sim s")
+    p.add_argument("--backend", choices=BACKENDS, default=default("backend"))
+    p.add_argument("--persona", choices=("px4", "ardupilot"), default=default("persona"))
+    p.add_argument("--setpoints", choices=("velocity", "position"), default=default("setpoints"))
+    p.add_argument("--seed", type=int, default=default("seed"))
     p.add_argument("--base-port", type=int,
                    help="first of 2N UDP ports: companions BASE+i, the emulator BASE+N+i; "
                    "refused when busy (default: a free block, printed at start)")  # fmt: skip
@@ -32,11 +35,11 @@ def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
     p.add_argument("--resume", action="store_true",
                    help="continue the run in --out: vehicles that had not ended fly on from "
                    "their mission logs (README: what a fleet run leaves on disk)")  # fmt: skip
-    p.add_argument("--land-wait", type=float, default=900.0,
+    p.add_argument("--land-wait", type=float, default=default("land_wait"),
                    help="after a stop (Ctrl-C), sim s the emulator runs on so the vehicles "
                    "can land (default 900)")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print the results as JSON")
-    p.add_argument("--lockstep", action=argparse.BooleanOptionalAction, default=True,
+    p.add_argument("--lockstep", action=argparse.BooleanOptionalAction, default=default("lockstep"),
                    help="sim time waits for every companion's setpoint each tick, so setpoints "
                    "stay at 10 Hz in vehicle time on a busy host (default); --no-lockstep runs "
                    "at the requested speed-up and companions skip stale positions")  # fmt: skip

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import MISSING, dataclass, fields
 from pathlib import Path
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -38,8 +39,16 @@ class FleetOptions:
     $MDM_MAVLINK_KEY)."""
     sensor_source: str | None = None
     """--sensor-source of every companion (None: the profile's sensor_source.kind)."""
-    lockstep: bool = False
+    lockstep: bool = True
     """The emulator holds sim time until every companion answered the last position
     (sim-vehicle --lockstep): a loaded host slows the run instead of the companions skipping
     stale positions, so setpoints stay at the telemetry rate (10 Hz) in vehicle time. Costs
     speed (docs/companion.md). Always on flat out (speedup 0)."""
+
+
+def default(name: str) -> Any:
+    """The default of option ``name``: the one source the command line takes its defaults from."""
+    (found,) = (f.default for f in fields(FleetOptions) if f.name == name)
+    if found is MISSING:
+        raise KeyError(f"FleetOptions.{name} has no default")
+    return found

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from companion.cli import build_parser
+from companion.fleet.options import default
 from companion.fleet.runner import FleetOptions, emulator_command
 
 
@@ -13,10 +14,17 @@ def _lockstep(**kw: object) -> bool:
     return "--lockstep" in emulator_command(options, 12, 20000)
 
 
-def test_lockstep_only_when_asked_or_flat_out() -> None:
-    assert not _lockstep(speedup=100.0)
-    assert _lockstep(speedup=100.0, lockstep=True)
-    assert _lockstep(speedup=0.0)
+def test_lockstep_by_default_off_only_when_asked_and_always_flat_out() -> None:
+    assert _lockstep(speedup=100.0)
+    assert not _lockstep(speedup=100.0, lockstep=False)
+    assert _lockstep(speedup=0.0, lockstep=False)
+
+
+def test_the_command_lines_defaults_are_the_options_defaults() -> None:
+    args = build_parser().parse_args(["fleet"])
+    for name in ("speedup", "duration", "backend", "persona", "setpoints", "seed", "land_wait",
+                 "lockstep"):  # fmt: skip
+        assert getattr(args, name) == default(name), name
 
 
 def test_the_fleet_command_runs_in_lockstep_unless_told_not_to() -> None:
