@@ -23,11 +23,11 @@ from companion.run_map.cli_args import add_map_parser, map_after_run, map_comman
 from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
 from mavlink_signing import ENV_VAR, load_signing_key
+from mdm_core.ports import VEHICLE_UDP_BASE
 from mdm_profiles import ProfileError, SensorSourceKind, load_profile
 from mdm_profiles.mqtt_spec import MqttSpec
 
 log = logging.getLogger("companion")
-DEFAULT_BASE_PORT = 14540
 
 
 def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -35,7 +35,7 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--profile", required=True, help="profile file or built-in name")
     p.add_argument("--vehicle", type=int, required=True, help="0-based vehicle index")
     p.add_argument("--connect", help="link URL (default udpin:0.0.0.0:BASE_PORT+I)")
-    p.add_argument("--base-port", type=int, default=DEFAULT_BASE_PORT)
+    p.add_argument("--base-port", type=int, default=VEHICLE_UDP_BASE)
     p.add_argument("--backend", choices=BACKENDS, default="pymavlink")
     p.add_argument("--setpoints", choices=("velocity", "position"), default="velocity")
     p.add_argument("--seed", type=int, default=0)

@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from mavlink_signing import ENV_VAR, load_signing_key
+from mdm_core.ports import GCS_UDP, TCP_BASE, VEHICLE_UDP_BASE
 from mdm_profiles import ProfileError, builtin_profile, builtin_profiles, load_profile
 from mdm_profiles.schema import MissionProfile
 from sim_vehicle_stub.config import EmulatorConfig
@@ -44,15 +45,17 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"persona per vehicle, comma-separated and cycled ({', '.join(persona_names())})",
     )
     p.add_argument("--host", default="127.0.0.1", help="address the vehicles send first to")
-    p.add_argument("--base-port", type=int, default=14540, help="vehicle i sends to base+i")
+    p.add_argument(
+        "--base-port", type=int, default=VEHICLE_UDP_BASE, help="vehicle i sends to base+i"
+    )
     p.add_argument("--bind-host", default="127.0.0.1")
     p.add_argument(
         "--bind-port-base", type=int, default=14580, help="vehicle i listens on base+i (0: any)"
     )
     p.add_argument("--tcp", action="store_true", help="TCP server per vehicle on tcp-base+10i")
-    p.add_argument("--tcp-base", type=int, default=5760)
+    p.add_argument("--tcp-base", type=int, default=TCP_BASE)
     p.add_argument("--gcs", action="store_true", help="all vehicles also to UDP gcs-port")
-    p.add_argument("--gcs-port", type=int, default=14550)
+    p.add_argument("--gcs-port", type=int, default=GCS_UDP)
     p.add_argument("--speedup", type=_speedup, default=1.0, help="sim/wall ratio; 0 or max")
     p.add_argument("--sim-step", type=float, default=0.05, help="physics step, sim s")
     p.add_argument("--telemetry-hz", type=float, default=10.0, help="streams, per sim s")

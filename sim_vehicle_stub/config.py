@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mdm_core.ports import GCS_UDP, TCP_BASE, VEHICLE_OWN_UDP_BASE, VEHICLE_UDP_BASE
 from mdm_profiles import MissionProfile
 
 MAX_VEHICLES = 254
@@ -21,16 +22,16 @@ class EmulatorConfig:
     """Persona per vehicle, cycled when shorter than the fleet."""
     host: str = "127.0.0.1"
     """Where the vehicles send first (the companions' address)."""
-    base_port: int = 14540
+    base_port: int = VEHICLE_UDP_BASE
     """Vehicle i sends first to host:base_port+i."""
     bind_host: str = "127.0.0.1"
-    bind_port_base: int = 14580
+    bind_port_base: int = VEHICLE_OWN_UDP_BASE
     """Vehicle i's own UDP port is bind_port_base+i; 0 picks free ports."""
     tcp: bool = False
-    tcp_base: int = 5760
+    tcp_base: int = TCP_BASE
     """TCP server of vehicle i on tcp_base + 10 i."""
     gcs: bool = False
-    gcs_port: int = 14550
+    gcs_port: int = GCS_UDP
     speedup: float | None = 1.0
     """Sim seconds per wall second; None runs as fast as possible."""
     sim_step: float = 0.05

@@ -16,6 +16,7 @@ import numpy as np
 
 from mavlink_signing import SigningState
 from mdm_core.dynamics import LagModel
+from mdm_core.ports import TCP_STRIDE
 from mdm_core.world import Scenario
 from sim_vehicle_stub.clock import SimClock
 from sim_vehicle_stub.commands import CommandHandler
@@ -149,7 +150,7 @@ class Emulator:
                 node.outputs.append(self.gcs.send)
             if cfg.tcp:
                 server = TcpServer(node, self._deliver)
-                await server.start(cfg.bind_host, cfg.tcp_base + 10 * i)
+                await server.start(cfg.bind_host, cfg.tcp_base + TCP_STRIDE * i)
                 self.tcp.append(server)
         self._task = asyncio.create_task(self._loop(), name="sim-loop")
         log.info("emulator up: %d vehicles, speedup %s, MAVLink signing %s", len(self.nodes),
