@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from mavlink_signing import ENV_VAR, load_signing_key
-from mdm_core.ports import GCS_UDP, TCP_BASE, VEHICLE_UDP_BASE
+from mdm_core.ports import GCS_UDP, TCP_BASE, VEHICLE_OWN_UDP_BASE, VEHICLE_UDP_BASE
 from mdm_profiles import ProfileError, builtin_profile, builtin_profiles, load_profile
 from mdm_profiles.schema import MissionProfile
 from sim_vehicle_stub.config import EmulatorConfig
@@ -50,7 +50,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--bind-host", default="127.0.0.1")
     p.add_argument(
-        "--bind-port-base", type=int, default=14580, help="vehicle i listens on base+i (0: any)"
+        "--bind-port-base",
+        type=int,
+        default=VEHICLE_OWN_UDP_BASE,
+        help="vehicle i listens on base+i (0: any)",
     )
     p.add_argument("--tcp", action="store_true", help="TCP server per vehicle on tcp-base+10i")
     p.add_argument("--tcp-base", type=int, default=TCP_BASE)
