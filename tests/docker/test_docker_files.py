@@ -16,6 +16,7 @@ import pytest
 import yaml
 
 from mdm_profiles import load_profile
+from tests import sitl
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCKER = ROOT / "docker"
@@ -185,3 +186,12 @@ def test_dockerfile_slim_base_installs_every_package_and_runs_as_non_root() -> N
     assert packages <= {Path(src).name for src in copies.values()}, "a package is not copied"
     for must in (".git", ".venv", "secrets"):
         assert _ignored(must, ROOT / ".dockerignore"), must
+
+
+def test_arducopter_env_file_names_serial0_of_instance_i_for_companion_i() -> None:
+    lines = (DOCKER / "sitl-arducopter.env").read_text().splitlines()
+    settings = dict(line.split("=", 1) for line in lines if line and not line.startswith("#"))
+    services = _ours(_compose("compose.sitl.yaml"))
+    assert len(settings) == len(services)
+    for i in range(len(services)):
+        assert settings[f"MDM_CONNECT_{i}"] == sitl.companion_url("arducopter", i)

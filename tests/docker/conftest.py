@@ -1,0 +1,45 @@
+"""The images every docker test runs, built once per session on the local Debian base; docker
+tests skip where no Docker engine (or no Compose v2) answers, saying so."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from tests.docker import engine
+from tests.docker.engine import ROOT, docker
+from tests.docker.stack import BROKER_IMAGE
+
+IMAGE = "mdm-search:latest"
+
+
+def _timed(what: str, *args: str) -> None:
+    start = time.monotonic()
+    docker(*args)
+    print(f"{what}: {time.monotonic() - start:.1f} s")
+
+
+@pytest.fixture(scope="session")
+def images(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """mdm-search and the Debian-packaged broker, built on the local Debian base."""
+    reason = engine.missing_engine()
+    if reason is not None:
+        pytest.skip(reason)
+    start = time.monotonic()
+    base = engine.ensure_base_image()
+    print(f"base image {base}: {time.monotonic() - start:.1f} s")
+    _timed("broker image", "build", "--network=host", "--build-arg", f"BASE={base}",
+           "-t", BROKER_IMAGE, str(ROOT / "docker" / "mosquitto"))  # fmt: skip
+    wheels = tmp_path_factory.mktemp("wheels")
+    start = time.monotonic()
+    engine.build_wheels(wheels)
+    print(f"wheels: {time.monotonic() - start:.1f} s")
+    with engine.serve_dir(wheels) as url:
+        _timed("mdm-search image", "build", "--network=host", "--build-arg", f"BASE={base}",
+               "--build-arg", "PIP_NO_INDEX=1", "--build-arg", f"PIP_FIND_LINKS={url}",
+               "-f", str(ROOT / "docker" / "Dockerfile"), "-t", IMAGE, str(ROOT))  # fmt: skip
+    # the image this build replaced (and the build stage it came from) would pile up run by run
+    docker("image", "prune", "-f", "--filter", "label=org.opencontainers.image.title=mdm-search")
+    size = int(docker("image", "inspect", "-f", "{{.Size}}", IMAGE).stdout)
+    print(f"mdm-search image: {size / 1e6:.0f} MB")
