@@ -12,6 +12,7 @@ from tests.docker.engine import ROOT, docker
 from tests.docker.stack import BROKER_IMAGE
 
 IMAGE = "mdm-search:latest"
+BUILD_STAGE = "mdm-search-build:latest"
 
 
 def _timed(what: str, *args: str) -> None:
@@ -21,7 +22,7 @@ def _timed(what: str, *args: str) -> None:
 
 
 @pytest.fixture(scope="session")
-def images(tmp_path_factory: pytest.TempPathFactory) -> None:
+def images() -> None:
     """mdm-search and the Debian-packaged broker, built on the local Debian base."""
     reason = engine.missing_engine()
     if reason is not None:
@@ -29,17 +30,20 @@ def images(tmp_path_factory: pytest.TempPathFactory) -> None:
     start = time.monotonic()
     base = engine.ensure_base_image()
     print(f"base image {base}: {time.monotonic() - start:.1f} s")
-    _timed("broker image", "build", "--network=host", "--build-arg", f"BASE={base}",
+    _timed("broker image", "build", "--force-rm", "--network=host", "--build-arg", f"BASE={base}",
            "-t", BROKER_IMAGE, str(ROOT / "docker" / "mosquitto"))  # fmt: skip
-    wheels = tmp_path_factory.mktemp("wheels")
     start = time.monotonic()
-    engine.build_wheels(wheels)
+    wheels = engine.wheelhouse()
     print(f"wheels: {time.monotonic() - start:.1f} s")
     with engine.serve_dir(wheels) as url:
-        _timed("mdm-search image", "build", "--network=host", "--build-arg", f"BASE={base}",
-               "--build-arg", "PIP_NO_INDEX=1", "--build-arg", f"PIP_FIND_LINKS={url}",
-               "-f", str(ROOT / "docker" / "Dockerfile"), "-t", IMAGE, str(ROOT))  # fmt: skip
-    # the image this build replaced (and the build stage it came from) would pile up run by run
+        build = ["build", "--force-rm", "--network=host", "--build-arg", f"BASE={base}",
+                 "--build-arg", "PIP_NO_INDEX=1", "--build-arg", f"PIP_FIND_LINKS={url}",
+                 "-f", str(ROOT / "docker" / "Dockerfile")]  # fmt: skip
+        # the build stage tagged too: untagged, the prune below would take the layers the next
+        # build's cache needs (the dependencies' install)
+        _timed("mdm-search build stage", *build, "--target=build", "-t", BUILD_STAGE, str(ROOT))
+        _timed("mdm-search image", *build, "-t", IMAGE, str(ROOT))
+    # the images these builds replaced would pile up run by run
     docker("image", "prune", "-f", "--filter", "label=org.opencontainers.image.title=mdm-search")
     size = int(docker("image", "inspect", "-f", "{{.Size}}", IMAGE).stdout)
     print(f"mdm-search image: {size / 1e6:.0f} MB")

@@ -5,6 +5,7 @@ that cannot reach the package index themselves."""
 from __future__ import annotations
 
 import functools
+import hashlib
 import http.server
 import re
 import shutil
@@ -94,9 +95,10 @@ def ensure_base_image() -> str:
     return BASE_IMAGE
 
 
-def build_wheels(wheel_dir: Path) -> None:
-    """Wheels of every dependency of the package and of its build backend, built here with the
-    host's pip (its index and certificates), for the image's Python."""
+def wheelhouse() -> Path:
+    """Wheels of every dependency of the package and of its build backend, built with the
+    host's pip (its index and certificates) for the image's Python; kept in the user's cache,
+    one folder per set of requirements, and reused."""
     if sys.version_info[:2] != IMAGE_PYTHON:
         raise AssertionError(
             f"the wheels are built by this Python ({sys.version_info[0]}.{sys.version_info[1]}) "
@@ -105,8 +107,14 @@ def build_wheels(wheel_dir: Path) -> None:
         )
     pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
     requirements = [*pyproject["project"]["dependencies"], *pyproject["build-system"]["requires"]]
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--wheel-dir", str(wheel_dir),
-                    *requirements], check=True, capture_output=True, timeout=600)  # fmt: skip
+    key = hashlib.sha256("\n".join(sorted(requirements)).encode()).hexdigest()[:16]
+    folder = Path.home() / ".cache" / "mdm-search" / "docker-wheels" / key
+    if not (folder / "complete").exists():
+        folder.mkdir(parents=True, exist_ok=True)
+        subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--wheel-dir", str(folder),
+                        *requirements], check=True, capture_output=True, timeout=600)  # fmt: skip
+        (folder / "complete").write_text("\n".join(requirements) + "\n")
+    return folder
 
 
 class _QuietHandler(http.server.SimpleHTTPRequestHandler):
@@ -114,11 +122,19 @@ class _QuietHandler(http.server.SimpleHTTPRequestHandler):
         pass
 
 
+WHEELS_PORT = 38765
+"""The wheel server's port where it is free: the URL is a build argument, and an unchanged one
+lets the build cache keep the image's dependency layer (any free port otherwise)."""
+
+
 @contextmanager
 def serve_dir(directory: Path) -> Iterator[str]:
-    """An HTTP server on 127.0.0.1 (a free port) listing ``directory``; yields its URL."""
+    """An HTTP server on 127.0.0.1 listing ``directory``; yields its URL."""
     handler = functools.partial(_QuietHandler, directory=str(directory))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    try:
+        server = http.server.ThreadingHTTPServer(("127.0.0.1", WHEELS_PORT), handler)
+    except OSError:
+        server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
     thread = threading.Thread(target=server.serve_forever, name="wheel-server", daemon=True)
     thread.start()
     try:
