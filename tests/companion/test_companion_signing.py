@@ -26,7 +26,7 @@ def test_signed_fleet_arms_flies_and_no_message_is_rejected(tmp_path: Path) -> N
     key_file.write_text(PASSPHRASE + "\n")
     result = run_fleet(
         FleetOptions(profile="paper-fixed", out=tmp_path, vehicles=2, speedup=50.0,
-                     duration=120.0, base_port=25500, seed=3, wall_limit=200,
+                     duration=120.0, seed=3, wall_limit=200,
                      signing_key_file=key_file)
     )  # fmt: skip
     assert len(result.end_reasons) == 2, result.end_reasons

@@ -55,7 +55,7 @@ def _fly(tmp_path: Path, drop: float) -> list[Log]:
     profile.write_text(PROFILE.replace("DROP", str(drop)).replace("PREFIX", prefix))
     out = tmp_path / f"run-{drop}"
     run_fleet(FleetOptions(profile=str(profile), out=out, speedup=50.0, duration=200.0,
-                           base_port=35680, seed=11, wall_limit=60))  # fmt: skip
+                           seed=11, wall_limit=60))  # fmt: skip
     return [list(read_records(out / f"mission-{i}.jsonl")) for i in range(VEHICLES)]
 
 
