@@ -39,6 +39,8 @@ class Trace:
     landed_state: int = 0
     texts: list[str] = field(default_factory=list)
     last_position: tuple[float, float] | None = None
+    track: list[tuple[float, float, float, int]] = field(default_factory=list)
+    """(lat, lon, relative altitude, custom mode) of every position while airborne."""
 
 
 class Observer:
@@ -93,6 +95,7 @@ class Observer:
             here = (msg.lat * 1e-7, msg.lon * 1e-7)  # type: ignore[attr-defined]
             if t.last_position is not None and t.alt > 1.0:
                 t.distance += _metres(t.last_position, here)
+                t.track.append((*here, t.alt, t.mode))
             t.last_position = here
             t.max_speed = max(t.max_speed, math.hypot(msg.vx, msg.vy) / 100.0)  # type: ignore[attr-defined]
         elif kind == "EXTENDED_SYS_STATE":
@@ -112,7 +115,8 @@ class Observer:
         with self._lock:
             t = self.trace
             return Trace(t.armed_ever, t.armed, t.mode, list(t.modes), t.max_alt, t.alt,
-                         t.distance, t.max_speed, t.landed_state, list(t.texts), t.last_position)  # fmt: skip
+                         t.distance, t.max_speed, t.landed_state, list(t.texts), t.last_position,
+                         list(t.track))  # fmt: skip
 
     def wait_for(self, what: str, predicate: object, timeout: float) -> Trace:
         """Poll the trace until ``predicate(trace)`` holds; fails naming ``what`` and the trace."""

@@ -16,9 +16,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
+from companion.fence_from_profile import fence_for
+from companion.link.geo import LocalFrame
 from companion.telemetry.mission_log import read_records
+from mdm_profiles import load_profile
 from tests import sitl
 from tests.companion.sitl_observer import Observer, Trace
 
@@ -74,15 +78,15 @@ mission: {{duration: 600.0, ts_cap: 5000.0}}
 class Companion:
     """One `companion run` process in its own process group; output in ``log``."""
 
-    def __init__(self, out: Path, profile: Path, vehicle: int, url: str, backend: str,
-                 duration: float) -> None:  # fmt: skip
+    def __init__(self, out: Path, profile: Path | str, vehicle: int, url: str, backend: str,
+                 duration: float, extra: tuple[str, ...] = ()) -> None:  # fmt: skip
         self.out, self.vehicle = out, vehicle
         self.log = out / f"companion-{vehicle}.out"
         with self.log.open("ab") as f:
             self.process = subprocess.Popen(
                 [sys.executable, "-m", "companion.cli", "run", "--profile", str(profile),
                  "--vehicle", str(vehicle), "--connect", url, "--backend", backend,
-                 "--log-dir", str(out), "--duration", str(duration), "--land-wait", "300"],
+                 "--log-dir", str(out), "--duration", str(duration), "--land-wait", "300", *extra],
                 stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
                 env=dict(os.environ, PYTHONUNBUFFERED="1"),
             )  # fmt: skip
@@ -97,6 +101,15 @@ class Companion:
         if self.process.poll() is None:
             os.killpg(self.process.pid, signal.SIGKILL)
             self.process.wait()
+
+
+def _trace_context(obs: Observer, comp: Companion) -> Callable[[], str]:
+    def context() -> str:
+        snap = obs.snapshot()
+        snap.track = snap.track[-3:]
+        return f"trace {snap}\ncompanion:\n{comp.output()[-3000:]}"
+
+    return context
 
 
 def _until(
@@ -243,6 +256,52 @@ def test_mavsdk_flies_a_search_and_a_signal_during_rtl_waits_for_landing(
         assert trace.distance >= 500.0, context()
         assert ap.rtl_custom in trace.modes
         _figures(f"{ap.kind} mavsdk", trace, started)
+    finally:
+        comp.kill()
+        obs.close()
+
+
+def test_field_profile_on_px4_stays_inside_its_fence_with_virtual_sensors(
+    px4: Callable[..., sitl.SitlInstance], tmp_path: Path
+) -> None:
+    """The Duebendorf field profile on PX4 started at the profile's origin (its EKF origin is
+    then the search box's corner): virtual sensors (no MDM_SENSOR on a stock PX4), every
+    position flown in OFFBOARD after entering the fence stays inside it (a few metres of
+    overshoot allowed), RTL, landed."""
+    started = time.monotonic()
+    profile = load_profile("field-duebendorf")
+    origin = profile.origin
+    inst = px4(speedup=SPEEDUP, home=f"{origin.lat},{origin.lon},{origin.alt}")
+    assert inst.index < profile.fleet.vehicles, "instance index beyond the profile's 4 vehicles"
+    comp = Companion(tmp_path, "field-duebendorf", inst.index, inst.companion_url, "pymavlink",
+                     duration=90.0, extra=("--sensor-source", "virtual"))  # fmt: skip
+    obs = Observer(inst.observer_url, inst.sysid)
+    context = _trace_context(obs, comp)
+    try:
+        _until("RTL at mission time", lambda: obs.snapshot().mode == PX4.rtl_custom, 200.0, context)
+        _until("landed and disarmed", lambda: (
+            (t := obs.snapshot()).landed_state == ON_GROUND and not t.armed
+        ), 150.0, context)  # fmt: skip
+        assert comp.process.wait(timeout=30) == 0, context()
+        trace = obs.snapshot()
+        fence = fence_for(profile)
+        frame = LocalFrame(origin.lat, origin.lon, origin.alt)
+        local = [
+            (frame.to_local(lat, lon, origin.alt)[:2], mode) for lat, lon, _, mode in trace.track
+        ]
+        offboard = [np.array(p) for p, mode in local if mode == PX4.guided_custom]
+        entered = next(i for i, p in enumerate(offboard) if fence.contains(p))
+        outside = [fence.clamp(p) - p for p in offboard[entered:] if not fence.contains(p)]
+        worst = max((float(np.hypot(*d)) for d in outside), default=0.0)
+        assert worst < 15.0, f"{len(outside)} positions outside the fence, worst {worst:.1f} m"
+        assert trace.distance >= 500.0, context()
+        assert trace.max_alt >= 0.9 * profile.fleet.altitude
+        out = comp.output()
+        assert "sensor source virtual" in out
+        assert "MDM_SENSOR" not in out  # virtual sensors never touch the vehicle's parameters
+        print(f"\npx4 field profile: {len(offboard)} OFFBOARD positions, {len(outside)} outside "
+              f"the fence after entering it (worst {worst:.1f} m)")  # fmt: skip
+        _figures("px4 field-duebendorf", trace, started)
     finally:
         comp.kill()
         obs.close()
