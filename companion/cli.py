@@ -16,7 +16,7 @@ from typing import Any
 
 from companion.autopilots import FlightMode
 from companion.fleet.cli_args import add_fleet_parser
-from companion.fly import STOPPED_BY_SECOND_SIGNAL, check_flight, fly
+from companion.fly import REFUSED, STOPPED_BY_SECOND_SIGNAL, check_flight, fly
 from companion.link.factory import BACKENDS, Backend, make_link
 from companion.mission import MissionConfig
 from companion.run_map.cli_args import add_map_parser, map_after_run, map_command
@@ -138,7 +138,9 @@ def _map(config: MissionConfig, reason: str) -> None:
 
 def _exit_status(reason: str) -> int:
     """0 for a mission that ended (including by one signal); 130 when a second signal cut it
-    short: the end action was not seen through."""
+    short: the end action was not seen through; 1 when the companion refused to start."""
+    if reason.startswith(REFUSED):
+        return 1
     return 130 if reason == STOPPED_BY_SECOND_SIGNAL else 0
 
 

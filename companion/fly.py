@@ -18,10 +18,11 @@ from collections.abc import AsyncIterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from companion.fence_from_profile import fence_for
+from companion.fence_from_profile import fence_watch, guidance_fence, profile_frame
 from companion.link.base import VehicleLink
 from companion.mission import MissionConfig, VehicleMission
 from companion.mission.core_for import is_swarm
+from companion.mission.start_point import start_point
 from companion.mission.swarm_core import SwarmCore
 from companion.sensors.factory import DetectorFeed, make_sensor_source
 from companion.telemetry import EventSink, MissionLog, read_log
@@ -37,6 +38,9 @@ log = logging.getLogger(__name__)
 
 STOPPED_BY_SECOND_SIGNAL = "stopped by a second signal"
 """What :meth:`Flight.ended` returns when a second stop cut the end action short."""
+REFUSED = "refused: "
+"""How :meth:`Flight.ended` begins when the companion would not start the vehicle (too far
+outside the profile's area)."""
 
 
 @dataclass
@@ -119,8 +123,15 @@ async def fly(
         sensors = make_sensor_source(source, profile=profile, seed=config.seed, link=link,
                                      feed=feed)  # fmt: skip
         log.info("vehicle %d: sensor source %s", vehicle, source)
-        mission = VehicleMission(config, link, sink, recovered=recovered, fence=fence_for(profile),
-                                 peers=peers, sensors=sensors)  # fmt: skip
+        fence = guidance_fence(profile)
+        start, own_fence = None, None
+        if profile.site is not None:  # geo-referenced: flown in its own frame, from its start
+            link.use_profile_frame(profile_frame(profile))
+            start = start_point(profile, config.seed, vehicle, fence)
+            own_fence = [(p.lat, p.lon) for p in profile.site.geofence]
+        mission = VehicleMission(config, link, sink, recovered=recovered, fence=fence, peers=peers,
+                                 sensors=sensors, watch=fence_watch(profile), start=start,
+                                 own_fence=own_fence)  # fmt: skip
         task = asyncio.create_task(_run(mission, telemetry, peers), name=f"v{vehicle}-flight")
         try:
             yield Flight(mission, task)

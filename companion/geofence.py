@@ -63,6 +63,48 @@ class Geofence:
         _, n, e = self._nearest(north, east)
         return n, e
 
+    def distance(self, north: float, east: float) -> float:
+        """Distance to the boundary, metres (inside or out)."""
+        return self._nearest(north, east)[0]
+
+    def nearest(self, north: float, east: float) -> tuple[float, float]:
+        """The nearest point on the boundary."""
+        _, n, e = self._nearest(north, east)
+        return n, e
+
+    def inset(self, margin: float) -> Geofence:
+        """The fence with every edge moved ``margin`` metres inwards (a convex polygon, as a
+        site fence is; each vertex is where its two moved edges meet)."""
+        if margin <= 0:
+            return self
+        v = self.vertices
+        signed_area = 0.5 * float(
+            np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
+        )
+        # (north, east) is a left-handed plane: a positive area here is a clockwise ring on a map
+        turn = 1.0 if signed_area > 0 else -1.0
+        moved = []
+        for (an, ae), (bn, be) in zip(v, np.roll(v, -1, axis=0), strict=True):
+            dn, de = bn - an, be - ae
+            length = math.hypot(dn, de)
+            # inward normal of edge a -> b
+            nn, ne = -de / length * turn, dn / length * turn
+            moved.append((an + nn * margin, ae + ne * margin, dn, de))
+        out = []
+        for i in range(len(moved)):
+            pn, pe, pdn, pde = moved[i - 1]
+            qn, qe, qdn, qde = moved[i]
+            cross = pdn * qde - pde * qdn
+            if abs(cross) < 1e-12:
+                out.append((qn, qe))
+                continue
+            t = ((qn - pn) * qde - (qe - pe) * qdn) / cross
+            out.append((pn + t * pdn, pe + t * pde))
+        inner = Geofence(np.array(out))
+        if not all(self.contains(p) and self.distance(*p) >= margin - 1e-6 for p in out):
+            raise ValueError(f"the geofence is too small (or not convex) for a {margin:g} m inset")
+        return inner
+
     def _nearest(self, x: float, y: float) -> tuple[float, float, float]:
         """Distance to the boundary and the nearest boundary point (first edge on ties)."""
         best, bn_, be_ = math.inf, math.nan, math.nan

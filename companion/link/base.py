@@ -15,9 +15,11 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.autopilots import Autopilot, FlightMode
 from companion.guidance import Setpoint
-from companion.link.messages import LinkEvent
+from companion.link.geo import LocalFrame
+from companion.link.messages import GlobalPosition, LinkEvent, LocalPosition
 from companion.link.outcome import CommandResult, Outcome, denied
 from companion.link.streams import StreamNeed, StreamWatch
+from companion.link.vehicle_frame import FrameAlignment
 
 log = logging.getLogger(__name__)
 
@@ -45,8 +47,9 @@ class VehicleLink(ABC):
     autopilot: Autopilot | None
     """Set from the first HEARTBEAT of the vehicle."""
     target_system: int
-    global_position: bool = False
-    """The position comes from GLOBAL_POSITION_INT (around the profile origin), not LOCAL_POSITION_NED."""
+    alignment: FrameAlignment | None = None
+    """Set by :meth:`use_profile_frame`: positions in and position setpoints out are in the
+    profile's frame, whatever the vehicle's own local origin."""
 
     def __init__(self) -> None:
         self.events = asyncio.Queue()
@@ -56,6 +59,8 @@ class VehicleLink(ABC):
         """System ids heard on this link (any sender), for the 'waiting for system N' line."""
         self._texts: deque[tuple[float, int, str]] = deque(maxlen=32)
         self._param_known: dict[str, bool] = {}
+        self._home: tuple[float, float, float, float, float] | None = None
+        """The latest HOME_POSITION (lat, lon, alt, x, y), for :meth:`learn_origin`."""
 
     @abstractmethod
     def describe(self) -> str:
@@ -119,6 +124,74 @@ class VehicleLink(ABC):
     @abstractmethod
     async def set_param(self, name: str, value: float, param_type: int) -> float | None:
         """PARAM_SET; the value the vehicle echoed (it may clamp it), None without an echo."""
+
+    # -- frames: the only place converting the vehicle's frame to the profile's ----------
+
+    @property
+    def global_position(self) -> bool:
+        """The mission also reads GLOBAL_POSITION_INT (the fence watch on the GPS position)."""
+        return self.alignment is not None
+
+    def use_profile_frame(self, profile: LocalFrame) -> None:
+        """Fly in the profile's frame: positions are held back until the vehicle's origin is
+        known (:meth:`learn_origin`), then shifted; GLOBAL_POSITION_INT becomes events."""
+        self.alignment = FrameAlignment(profile)
+
+    def _local(
+        self, t: float, x: float, y: float, z: float, vx: float, vy: float, vz: float,
+        received: float,
+    ) -> LocalPosition | None:  # fmt: skip
+        """A LOCAL_POSITION_NED as an event in the profile's frame (None while unaligned)."""
+        a = self.alignment
+        if a is None:
+            return LocalPosition(t, x, y, z, vx, vy, vz, received)
+        if a.origin is None:
+            return None
+        return LocalPosition(t, x + a.north, y + a.east, z, vx, vy, vz, received)
+
+    def _global(
+        self, t: float, lat: float, lon: float, relative_alt: float
+    ) -> GlobalPosition | None:
+        """A GLOBAL_POSITION_INT as an event (only when flying in the profile's frame)."""
+        a = self.alignment
+        if a is None:
+            return None
+        self.streams.note("GLOBAL_POSITION_INT", t)
+        n, e, _ = a.profile.to_local(lat, lon, a.profile.alt)
+        return GlobalPosition(t, lat, lon, relative_alt, n, e)
+
+    def _note_origin(self, lat: float, lon: float, alt: float) -> None:
+        """GPS_GLOBAL_ORIGIN: the local frame's origin. Taken only before the alignment is
+        set: a jump of the offset in flight would move every commanded point."""
+        if self.alignment is not None and not self.alignment.ready:
+            self.alignment.from_global_origin(lat, lon, alt)
+
+    def _note_home(self, lat: float, lon: float, alt: float, x: float, y: float) -> None:
+        self._home = (lat, lon, alt, x, y)
+
+    def _vehicle_xy(self, north: float, east: float) -> tuple[float, float]:
+        """A profile-frame point in the vehicle's local frame (position setpoints)."""
+        a = self.alignment
+        return (north, east) if a is None else a.to_vehicle(north, east)
+
+    async def learn_origin(self, wait: float = 3.0) -> str | None:
+        """Ask for GPS_GLOBAL_ORIGIN (the local frame's origin); without one within ``wait``
+        wall s, use HOME_POSITION (home in WGS84 and in the local frame). Returns None once
+        aligned, else what was missing (call again)."""
+        a = self.alignment
+        if a is None or a.ready:
+            return None
+        for msg_id in (mavlink2.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN,
+                       mavlink2.MAVLINK_MSG_ID_HOME_POSITION):  # fmt: skip
+            await self.command_long(mavlink2.MAV_CMD_REQUEST_MESSAGE, float(msg_id))
+        deadline = time.monotonic() + wait
+        while not a.ready and time.monotonic() < deadline:
+            await asyncio.sleep(0.05)
+        if not a.ready and self._home is not None:
+            a.from_home(*self._home)
+        if a.ready:
+            return None
+        return "neither GPS_GLOBAL_ORIGIN nor HOME_POSITION (asked with REQUEST_MESSAGE)"
 
     # -- the vehicle's words ---------------------------------------------------------------
 

@@ -6,7 +6,6 @@ from pathlib import Path
 from typing import Literal
 
 from companion.link.base import VehicleLink
-from companion.link.geo import LocalFrame
 
 Backend = Literal["pymavlink", "mavsdk"]
 BACKENDS: tuple[Backend, ...] = ("pymavlink", "mavsdk")
@@ -28,7 +27,6 @@ def make_link(
     url: str,
     target_system: int,
     tlog: Path | None,
-    frame: LocalFrame | None = None,
     signing_key: bytes | None = None,
 ) -> VehicleLink:
     """A closed link of the given backend; ``open`` it (or use ``async with``)."""
@@ -37,7 +35,7 @@ def make_link(
         from companion.link.pymavlink_link import PymavlinkLink
 
         return PymavlinkLink(
-            url=url, target_system=target_system, tlog=tlog, frame=frame, signing_key=signing_key
+            url=url, target_system=target_system, tlog=tlog, signing_key=signing_key
         )
     if backend == "mavsdk":
         from companion.link.mavsdk_link import MavsdkLink

@@ -30,7 +30,6 @@ from companion.link.base import LinkError, SetpointKind, VehicleLink
 from companion.link.messages import (
     Heartbeat,
     LinkEvent,
-    LocalPosition,
     SensorContact,
     SensorSignal,
     StatusText,
@@ -41,7 +40,7 @@ from companion.link.tlog import TelemetryLog
 
 log = logging.getLogger(__name__)
 _SUBSCRIBED = ("HEARTBEAT", "LOCAL_POSITION_NED", "SYS_STATUS", "DEBUG_VECT", "NAMED_VALUE_FLOAT",
-               "STATUSTEXT")  # fmt: skip
+               "STATUSTEXT", "GLOBAL_POSITION_INT", "GPS_GLOBAL_ORIGIN", "HOME_POSITION")  # fmt: skip
 _HEALTH_BITS = mavlink2.MAV_SYS_STATUS_SENSOR_GPS | mavlink2.MAV_SYS_STATUS_PREARM_CHECK
 _NOT_AUTOPILOT_TYPES = (
     mavlink2.MAV_TYPE_GCS,
@@ -169,10 +168,20 @@ class MavsdkLink(VehicleLink):
     ) -> LinkEvent | None:
         if name == "LOCAL_POSITION_NED":
             self.streams.note(name, f["time_boot_ms"] / 1000.0)
-            return LocalPosition(
+            return self._local(
                 f["time_boot_ms"] / 1000.0, f["x"], f["y"], f["z"], f["vx"], f["vy"], f["vz"],
                 received,
             )  # fmt: skip
+        if name == "GLOBAL_POSITION_INT":
+            return self._global(f["time_boot_ms"] / 1000.0, f["lat"] * 1e-7, f["lon"] * 1e-7,
+                                f["relative_alt"] * 1e-3)  # fmt: skip
+        if name == "GPS_GLOBAL_ORIGIN":
+            self._note_origin(f["latitude"] * 1e-7, f["longitude"] * 1e-7, f["altitude"] * 1e-3)
+            return None
+        if name == "HOME_POSITION":
+            self._note_home(f["latitude"] * 1e-7, f["longitude"] * 1e-7, f["altitude"] * 1e-3,
+                            f["x"], f["y"])  # fmt: skip
+            return None
         if name == "DEBUG_VECT":
             label = str(f["name"]).rstrip("\x00")
             if label in ("DET", "CNF"):
@@ -227,7 +236,8 @@ class MavsdkLink(VehicleLink):
             if kind == "velocity":
                 off.set_velocity_ned(VelocityNedYaw(sp.vn, sp.ve, sp.vd, 0.0))
             else:
-                off.set_position_ned(PositionNedYaw(sp.north, sp.east, sp.down, 0.0))
+                north, east = self._vehicle_xy(sp.north, sp.east)
+                off.set_position_ned(PositionNedYaw(north, east, sp.down, 0.0))
         except Exception as exc:
             log.debug("setpoint not sent: %s", exc)
 

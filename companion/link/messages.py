@@ -34,6 +34,21 @@ class LocalPosition:
 
 
 @dataclass(frozen=True, slots=True)
+class GlobalPosition:
+    """GLOBAL_POSITION_INT (the GPS position, independent of any local frame), with the same
+    point in the profile's frame (north, east: converted by the link from lat/lon, never from
+    the vehicle's local position)."""
+
+    time: float
+    lat: float
+    lon: float
+    relative_alt: float
+    """Metres above home."""
+    north: float
+    east: float
+
+
+@dataclass(frozen=True, slots=True)
 class SystemStatus:
     """Health and battery (SYS_STATUS)."""
 
@@ -81,6 +96,6 @@ class StraySource:
 
 
 LinkEvent = (
-    Heartbeat | LocalPosition | SystemStatus | SensorContact | SensorSignal | StatusText
+    Heartbeat | LocalPosition | GlobalPosition | SystemStatus | SensorContact | SensorSignal | StatusText
     | StraySource
 )  # fmt: skip

@@ -19,11 +19,9 @@ from companion.guidance import Setpoint
 from companion.link import fast_frames
 from companion.link.address import Address, parse_address
 from companion.link.base import LinkError, SetpointKind, VehicleLink
-from companion.link.geo import LocalFrame
 from companion.link.messages import (
     Heartbeat,
     LinkEvent,
-    LocalPosition,
     SensorContact,
     SensorSignal,
     StatusText,
@@ -76,9 +74,6 @@ class PymavlinkLink(VehicleLink):
         target_system: the vehicle's system id; messages of other systems are ignored.
         system_id / component_id: the companion's own ids (onboard computer 191).
         tlog: path of the .tlog to append to, or None.
-        frame: None to read LOCAL_POSITION_NED as is; a LocalFrame to derive the local position
-            from GLOBAL_POSITION_INT around the profile origin (real vehicles, whose local origin
-            is their own EKF origin).
         command_timeout / command_tries: transport retries of COMMAND_LONG and PARAM_SET (wall s).
         signing_key: MAVLink 2 signing secret (32 bytes), or None. With a key, every message sent
             is signed, and received messages that are unsigned, wrongly signed or replayed are
@@ -93,7 +88,6 @@ class PymavlinkLink(VehicleLink):
         system_id: int = 245,
         component_id: int = 191,
         tlog: Path | None = None,
-        frame: LocalFrame | None = None,
         command_timeout: float = 1.0,
         command_tries: int = 5,
         signing_key: bytes | None = None,
@@ -105,8 +99,6 @@ class PymavlinkLink(VehicleLink):
         self._mav.robust_parsing = True
         self._tlog_path = tlog
         self._tlog: TelemetryLog | None = None
-        self._frame = frame
-        self.global_position = frame is not None
         self._timeout = command_timeout
         self._tries = command_tries
         self._transport: asyncio.BaseTransport | None = None
@@ -213,9 +205,7 @@ class PymavlinkLink(VehicleLink):
             t, x, y, z, vx, vy, vz = cast(tuple[int, float, float, float, float, float, float], f)
             self._time_ms = t
             self.streams.note("LOCAL_POSITION_NED", t / 1000.0)
-            if self._frame is not None:
-                return None
-            return LocalPosition(t / 1000.0, x, y, z, vx, vy, vz, received)
+            return self._local(t / 1000.0, x, y, z, vx, vy, vz, received)
         if msg_id == fast_frames.DEBUG_VECT:
             usec, x, y, z, raw = cast(tuple[int, float, float, float, bytes], f)
             name = _text(raw)
@@ -289,17 +279,19 @@ class PymavlinkLink(VehicleLink):
         if kind == "LOCAL_POSITION_NED":
             self._time_ms = msg.time_boot_ms
             self.streams.note(kind, msg.time_boot_ms / 1000.0)
-            if self._frame is not None:
-                return None
-            return LocalPosition(
+            return self._local(
                 msg.time_boot_ms / 1000.0, msg.x, msg.y, msg.z, msg.vx, msg.vy, msg.vz, received
             )
-        if kind == "GLOBAL_POSITION_INT" and self._frame is not None:
-            self._time_ms = msg.time_boot_ms
-            self.streams.note(kind, msg.time_boot_ms / 1000.0)
-            n, e, d = self._frame.to_local(msg.lat * 1e-7, msg.lon * 1e-7, msg.alt * 1e-3)
-            v = (msg.vx / 100.0, msg.vy / 100.0, msg.vz / 100.0)
-            return LocalPosition(msg.time_boot_ms / 1000.0, n, e, d, *v, received)
+        if kind == "GLOBAL_POSITION_INT":
+            return self._global(msg.time_boot_ms / 1000.0, msg.lat * 1e-7, msg.lon * 1e-7,
+                                msg.relative_alt * 1e-3)  # fmt: skip
+        if kind == "GPS_GLOBAL_ORIGIN":
+            self._note_origin(msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3)
+            return None
+        if kind == "HOME_POSITION":
+            self._note_home(msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3,
+                            msg.x, msg.y)  # fmt: skip
+            return None
         if kind == "DEBUG_VECT":
             name = _text(msg.name)
             if name in ("DET", "CNF"):
@@ -374,22 +366,13 @@ class PymavlinkLink(VehicleLink):
         )  # fmt: skip
 
     def send_setpoint(self, setpoint: Setpoint, kind: SetpointKind) -> None:
-        if self._frame is not None and kind == "position":
-            lat, lon, alt = self._frame.to_geodetic(setpoint.north, setpoint.east, setpoint.down)
-            self._send(
-                self._mav.set_position_target_global_int_encode(
-                    self._time_ms, self.target_system, 1,
-                    mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, POSITION_MASK,
-                    round(lat * 1e7), round(lon * 1e7), alt, 0, 0, 0, 0, 0, 0, 0, 0,
-                )
-            )  # fmt: skip
-            return
         mask = VELOCITY_MASK if kind == "velocity" else POSITION_MASK
         sp = setpoint
+        north, east = self._vehicle_xy(sp.north, sp.east)
         self._send(
             self._mav.set_position_target_local_ned_encode(
                 self._time_ms, self.target_system, 1, mavlink2.MAV_FRAME_LOCAL_NED, mask,
-                sp.north, sp.east, sp.down, sp.vn, sp.ve, sp.vd, 0, 0, 0, 0, 0,
+                north, east, sp.down, sp.vn, sp.ve, sp.vd, 0, 0, 0, 0, 0,
             )
         )  # fmt: skip
 
@@ -438,10 +421,10 @@ class PymavlinkLink(VehicleLink):
     async def configure_streams(self) -> None:
         """SET_MESSAGE_INTERVAL -1 for the streams the mission does not read: ATTITUDE,
         SYSTEM_TIME, GPS_RAW_INT, BATTERY_STATUS, HOME_POSITION, EXTENDED_SYS_STATE (and
-        GLOBAL_POSITION_INT in the local frame): at high speed-ups every message not parsed is
+        GLOBAL_POSITION_INT unless the fence watch reads it): at high speed-ups every message not parsed is
         CPU for the rest of the fleet. Only on a dedicated link (``--dedicated-link``): a ground
         station sharing the link would lose them."""
-        unused = [30, 2, 24, 147, 242, 245] + ([33] if self._frame is None else [])
+        unused = [30, 2, 24, 147, 242, 245] + ([] if self.global_position else [33])
         for msg_id in unused:
             if not await self.command_long(
                 mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL, float(msg_id), -1.0

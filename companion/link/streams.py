@@ -35,21 +35,24 @@ POSITION_RATE_HZ = 10.0
 control period scale (tau = 0.33 s)."""
 
 
+FENCE_WATCH_RATE_HZ = 2.0
+"""GLOBAL_POSITION_INT for the fence watch: at 10 m/s a breach is seen within 5 m."""
+
+
 def needs(*, global_position: bool) -> tuple[StreamNeed, ...]:
-    """What the mission reads: the position (local, or global around the profile origin) and
-    SYS_STATUS (health, battery)."""
-    position = (
-        StreamNeed("GLOBAL_POSITION_INT", mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
-                   POSITION_RATE_HZ, mavlink2.MAV_DATA_STREAM_POSITION)
-        if global_position
-        else StreamNeed("LOCAL_POSITION_NED", mavlink2.MAVLINK_MSG_ID_LOCAL_POSITION_NED,
-                        POSITION_RATE_HZ, mavlink2.MAV_DATA_STREAM_POSITION)
-    )  # fmt: skip
+    """What the mission reads: LOCAL_POSITION_NED (the decision loop), SYS_STATUS (health,
+    battery) and, for a geo-referenced profile, GLOBAL_POSITION_INT (the fence watch)."""
+    position = StreamNeed("LOCAL_POSITION_NED", mavlink2.MAVLINK_MSG_ID_LOCAL_POSITION_NED,
+                          POSITION_RATE_HZ, mavlink2.MAV_DATA_STREAM_POSITION)  # fmt: skip
     status = StreamNeed(
         "SYS_STATUS", mavlink2.MAVLINK_MSG_ID_SYS_STATUS, 0.0,
         mavlink2.MAV_DATA_STREAM_EXTENDED_STATUS,
     )  # fmt: skip
-    return (position, status)
+    if not global_position:
+        return (position, status)
+    gps = StreamNeed("GLOBAL_POSITION_INT", mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
+                     FENCE_WATCH_RATE_HZ, mavlink2.MAV_DATA_STREAM_POSITION)  # fmt: skip
+    return (position, status, gps)
 
 
 class StreamWatch:

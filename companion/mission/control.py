@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 from companion.mission.phase import Phase
 
-COMMANDING = frozenset({Phase.PREPARE, Phase.CLIMB, Phase.SEARCH})
+COMMANDING = frozenset({Phase.PREPARE, Phase.CLIMB, Phase.TRANSIT, Phase.SEARCH})
 """Phases in which the companion sends setpoints and may ask for modes."""
 
 

@@ -12,6 +12,8 @@ class Phase(enum.Enum):
     """Streaming setpoints, switching to the guided mode, arming."""
     CLIMB = "climb"
     """Taking off to this vehicle's altitude."""
+    TRANSIT = "transit"
+    """Flying at its altitude to the profile's start point; the search clock has not started."""
     SEARCH = "search"
     PAUSED = "paused"
     """Someone else changed the mode (a pilot): not commanding, waiting."""

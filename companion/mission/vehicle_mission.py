@@ -18,6 +18,7 @@ from companion.geofence import Geofence
 from companion.guidance import GuidanceConfig, Setpoint
 from companion.link.base import LinkError, VehicleLink
 from companion.link.messages import (
+    GlobalPosition,
     Heartbeat,
     LinkEvent,
     LocalPosition,
@@ -43,6 +44,7 @@ from companion.mission.control import (
     step,
 )
 from companion.mission.core_for import core_for
+from companion.mission.fence_watch import FenceWatch
 from companion.mission.phase import Phase
 from companion.mission.swarm_core import SwarmCore, SwarmExchange
 from companion.sensors.base import SensorSource
@@ -79,6 +81,8 @@ class VehicleMission:
         fence: Geofence | None = None,
         peers: SwarmExchange | None = None,
         sensors: SensorSource | None = None,
+        watch: FenceWatch | None = None,
+        start: tuple[float, float] | None = None,
     ) -> None:
         profile = config.profile
         self.config = config
@@ -123,6 +127,16 @@ class VehicleMission:
         """What setting the profile's speed on the vehicle gave (once per process)."""
         self.max_search_speed = 0.0
         """Fastest horizontal speed the vehicle reported while searching, m/s."""
+        self.watch = watch
+        """The fence and search area against the GPS position (geo-referenced profiles)."""
+        self.gps: GlobalPosition | None = None
+        self._inside_fence = False
+        """The GPS position was inside the fence since the transit began: from then on,
+        outside is a breach (a vehicle may start outside and fly in)."""
+        self.start = start
+        """Where the search begins (profile frame); None: where the vehicle is."""
+        self.refusal: str | None = None
+        """Why the companion did not start the vehicle, when it refused."""
 
     # -- public ----------------------------------------------------------------------------
 
@@ -279,6 +293,8 @@ class VehicleMission:
     def _handle(self, event: LinkEvent) -> None:
         if isinstance(event, LocalPosition):
             self._on_position(event)
+        elif isinstance(event, GlobalPosition):
+            self._on_gps(event)
         elif isinstance(event, SensorContact | SensorSignal):
             self.sensors.accept(event)
         elif isinstance(event, Heartbeat):
@@ -372,15 +388,40 @@ class VehicleMission:
             # Neutral stream before arming: stay where it is (a climb here would start the
             # moment the mode switches, before the vehicle is armed).
             self._send(Setpoint(pos.north, pos.east, pos.down, 0.0, 0.0, 0.0), pos)
+        elif self.phase is Phase.TRANSIT and self.start is not None:
+            here = np.array([pos.north, pos.east])
+            goal = np.array(self.start)
+            self._send(guidance.pursuit(here, pos.down, goal, self.guide, self.fence,
+                                        self._period), pos)  # fmt: skip
         elif self.phase is Phase.CLIMB and not self._climbing_by_command:
             here = np.array([pos.north, pos.east])
             self._send(guidance.pursuit(here, pos.down, here, self.guide, self.fence, 1.0), pos)
+
+    def _on_gps(self, gps: GlobalPosition) -> None:
+        """The fence watch: outside the fence after having been inside it (transit or
+        search) ends the search; the end action (RTL) flies the vehicle home, inside."""
+        self.gps = gps
+        watch = self.watch
+        if watch is None or self.phase not in (Phase.TRANSIT, Phase.SEARCH):
+            return
+        breach = watch.breach(gps.north, gps.east)
+        if breach is None:
+            self._inside_fence = True
+            return
+        if self._inside_fence and self.end_reason is None:
+            log.error("vehicle %d is %s (GPS %.7f, %.7f): ending the search", self.config.vehicle,
+                      breach, gps.lat, gps.lon)  # fmt: skip
+            self.emit("fence", state="breach", where=breach, lat=gps.lat, lon=gps.lon)
+            self.request_end(f"outside the fence: {breach}")
 
     def _search_step(self, t: float, pos: LocalPosition) -> None:
         self.max_search_speed = max(self.max_search_speed, math.hypot(pos.vn, pos.ve))
         here = np.array([pos.north, pos.east])
         contacts = self.sensors.take()
-        reached = guidance.reached(here, self.core.waypoint, self.guide.acceptance_radius)
+        # Reached means reached as far as the fence lets the vehicle go: a waypoint between the
+        # area's edge and the fence is clamped, and the clamped point is where it stops.
+        goal = self.fence.clamp(self.core.waypoint)
+        reached = guidance.reached(here, goal, self.guide.acceptance_radius)
         if self.core.needs_step(t, reached, contacts):
             d = self.core.step(t, here, reached, contacts)
             if d.detected:
@@ -425,6 +466,8 @@ class VehicleMission:
         if self.config.dedicated_link:
             await self.link.configure_streams()
         await self._ensure_streams()
+        await self._learn_origin()
+        await self._check_start()
         while self.end_reason is None:
             await self._until(lambda: self.heartbeat is not None and self.position is not None)
             if self.end_reason is not None:
@@ -440,6 +483,8 @@ class VehicleMission:
                 self._speed_report = await self.link.set_speed(self.config.profile.fleet.speed)
                 log.info("vehicle %d speed: %s", self.config.vehicle, self._speed_report)
                 self.emit("speed", report=self._speed_report)
+            if self.search_start is None and self.start is not None and not await self._transit():
+                continue
             self._start_search()
             await self._until(lambda: self.phase is not Phase.SEARCH)
         await self._finish()
@@ -462,6 +507,73 @@ class VehicleMission:
                 if self.end_reason is not None:
                     return False
                 await asyncio.sleep(0.1)
+
+    async def _learn_origin(self) -> None:
+        """Geo-referenced profiles: where the vehicle's local frame starts (the link shifts
+        positions into the profile's frame from then on); asked again until known."""
+        if self.link.alignment is None:
+            return
+        while self.end_reason is None:
+            missing = await self.link.learn_origin()
+            origin = self.link.alignment.origin
+            if missing is None and origin is not None:
+                a = self.link.alignment
+                self.emit("frame", source=origin.source, lat=round(origin.lat, 7),
+                          lon=round(origin.lon, 7), north=round(a.north, 2),
+                          east=round(a.east, 2))  # fmt: skip
+                return
+            log.warning("vehicle %d: origin of its local frame unknown: %s; asking again",
+                        self.config.vehicle, missing)  # fmt: skip
+            await asyncio.sleep(2.0)
+
+    async def _check_start(self) -> None:
+        """Refuse to start a vehicle (GPS position) too far outside the search area."""
+        if self.watch is None:
+            return
+        await self._until(lambda: self.gps is not None)
+        gps = self.gps
+        if gps is None:
+            return
+        why = self.watch.start_refusal(gps.north, gps.east)
+        if why is None:
+            return
+        self.refusal = (f"vehicle {self.config.vehicle} (system {self.config.system_id}) at "
+                        f"{gps.lat:.6f}, {gps.lon:.6f} is {why} of profile "
+                        f"{self.config.profile.name}: not starting")  # fmt: skip
+        log.error("%s", self.refusal)
+        self.emit("refused", command="start", reason=self.refusal)
+        self.request_end(f"refused: {self.refusal}")
+
+    async def _transit(self) -> bool:
+        """Fly at the search altitude to the start point; the search clock starts there.
+        False when the phase changed on the way (a pilot, a fall-back): the lifecycle retries."""
+        pos, start = self.position, self.start
+        assert pos is not None
+        assert start is not None
+        distance = math.hypot(start[0] - pos.north, start[1] - pos.east)
+        t0 = self.clock.now
+        self._set_phase(Phase.TRANSIT)
+        self.emit("transit", state="begin", north=round(pos.north, 1), east=round(pos.east, 1),
+                  to_north=round(start[0], 1), to_east=round(start[1], 1),
+                  distance=round(distance, 1))  # fmt: skip
+        log.info("vehicle %d: transit %.0f m to its start point (%.0f, %.0f)",
+                 self.config.vehicle, distance, *start)  # fmt: skip
+        limit = 60.0 + 3.0 * distance / self.config.profile.fleet.speed
+        arrived = await self._until(
+            lambda: not self._in(Phase.TRANSIT) or (
+                self.position is not None and guidance.reached(
+                    np.array([self.position.north, self.position.east]), np.array(start),
+                    self.guide.acceptance_radius)),
+            limit,
+        )  # fmt: skip
+        if not self._in(Phase.TRANSIT):
+            return False
+        if not arrived:
+            if self.end_reason is None:
+                self.request_end(f"transit not done in {limit:.0f} s")
+            return False
+        self.emit("transit", state="done", seconds=round(self.clock.now - t0, 1))
+        return True
 
     async def _await_vehicle(self) -> None:
         """Wait for the vehicle's HEARTBEAT, saying every few seconds what is heard instead."""
