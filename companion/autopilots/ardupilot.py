@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-from companion.autopilots.base import Autopilot, FlightMode, ModeCommand
+from companion.autopilots.base import Autopilot, FenceParams, FlightMode, ModeCommand
 
 _MODES: dict[FlightMode, int] = {
     FlightMode.GUIDED: 4,
@@ -34,6 +34,9 @@ class ArduCopter(Autopilot):
     # GUIDED's velocity controller starts with WPNAV_SPEED as its limit (and RTL flies at it):
     # ArduCopter/mode_guided.cpp, velaccel_control_start / set_speed_xy.
     speed_param: ClassVar[tuple[str, float] | None] = ("WPNAV_SPEED", 100.0)
+    # FENCE_TYPE bits (libraries/AC_Fence/AC_Fence.h): 1 max altitude, 2 circle around home
+    # (FENCE_RADIUS, 300 m by default: it would cut a field area), 4 polygon, 8 min altitude.
+    fence_params: ClassVar[FenceParams | None] = FenceParams("FENCE_ENABLE", "FENCE_TYPE", 4, 2)
 
     def custom_mode(self, mode: FlightMode) -> int:
         return _MODES[mode]

@@ -30,6 +30,20 @@ class ModeCommand:
     """Param 3: PX4's sub mode; 0 elsewhere."""
 
 
+@dataclass(frozen=True)
+class FenceParams:
+    """The parameters that make an autopilot enforce an uploaded inclusion polygon."""
+
+    enable: str
+    """Set to 1 to enforce the fence."""
+    kind: str
+    """Bit mask of the fence types enforced."""
+    polygon_bit: int
+    """The bit of ``kind`` that enforces the uploaded polygons."""
+    drop_bits: int
+    """Bits of ``kind`` cleared: fences of their own that would cut the profile's area."""
+
+
 class Autopilot(ABC):
     """One autopilot family: how its modes are encoded and how it takes off."""
 
@@ -43,6 +57,8 @@ class Autopilot(ABC):
     """The guided mode is refused unless setpoints already flow (PX4 OFFBOARD)."""
     speed_param: ClassVar[tuple[str, float] | None] = None
     """The parameter that caps horizontal speed and its units per m/s, where there is one."""
+    fence_params: ClassVar[FenceParams | None] = None
+    """How the vehicle's own polygon fence is switched on, where the companion does it."""
 
     @abstractmethod
     def custom_mode(self, mode: FlightMode) -> int:

@@ -15,6 +15,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.autopilots import Autopilot, FlightMode
 from companion.guidance import Setpoint
+from companion.link.fence_protocol import FenceTransferError
 from companion.link.geo import LocalFrame
 from companion.link.messages import GlobalPosition, LinkEvent, LocalPosition
 from companion.link.outcome import CommandResult, Outcome, denied
@@ -157,6 +158,8 @@ class VehicleLink(ABC):
         if a is None:
             return None
         self.streams.note("GLOBAL_POSITION_INT", t)
+        if lat == 0.0 and lon == 0.0:  # no position yet (ArduPilot before its EKF origin)
+            return None
         n, e, _ = a.profile.to_local(lat, lon, a.profile.alt)
         return GlobalPosition(t, lat, lon, relative_alt, n, e)
 
@@ -192,6 +195,17 @@ class VehicleLink(ABC):
         if a.ready:
             return None
         return "neither GPS_GLOBAL_ORIGIN nor HOME_POSITION (asked with REQUEST_MESSAGE)"
+
+    # -- the vehicle's own fence -------------------------------------------------------------
+
+    async def upload_fence(self, vertices: list[tuple[int, int]]) -> None:
+        """Replace the vehicle's fence with this inclusion polygon ((lat, lon) in 1e-7 deg);
+        raises FenceTransferError saying at which step it failed."""
+        raise FenceTransferError(f"the {type(self).__name__} backend does not upload fences")
+
+    async def download_fence(self) -> list[tuple[int, int]]:
+        """The inclusion-polygon vertices the vehicle stores."""
+        raise FenceTransferError(f"the {type(self).__name__} backend does not read fences")
 
     # -- the vehicle's words ---------------------------------------------------------------
 

@@ -19,6 +19,7 @@ from companion.guidance import Setpoint
 from companion.link import fast_frames
 from companion.link.address import Address, parse_address
 from companion.link.base import LinkError, SetpointKind, VehicleLink
+from companion.link.fence_protocol import MISSION_KINDS, FenceTransfer
 from companion.link.messages import (
     Heartbeat,
     LinkEvent,
@@ -114,6 +115,7 @@ class PymavlinkLink(VehicleLink):
         self.bad_packets = 0
         self._signing = SigningState(signing_key) if signing_key is not None else None
         self.signing_rejected = 0
+        self._fence = FenceTransfer(self._mav, self._send, target_system)
 
     def describe(self) -> str:
         return self.address.url()
@@ -292,6 +294,9 @@ class PymavlinkLink(VehicleLink):
             self._note_home(msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3,
                             msg.x, msg.y)  # fmt: skip
             return None
+        if kind in MISSION_KINDS:
+            self._fence.inbox.put_nowait(msg)
+            return None
         if kind == "DEBUG_VECT":
             name = _text(msg.name)
             if name in ("DET", "CNF"):
@@ -375,6 +380,12 @@ class PymavlinkLink(VehicleLink):
                 north, east, sp.down, sp.vn, sp.ve, sp.vd, 0, 0, 0, 0, 0,
             )
         )  # fmt: skip
+
+    async def upload_fence(self, vertices: list[tuple[int, int]]) -> None:
+        await self._fence.upload(vertices)
+
+    async def download_fence(self) -> list[tuple[int, int]]:
+        return await self._fence.download()
 
     async def command_long(self, command: int, *params: float) -> CommandResult:
         """COMMAND_LONG with retries until a final COMMAND_ACK; a refusal carries the

@@ -8,7 +8,8 @@ import logging
 import math
 import random
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Coroutine
+from typing import Any
 
 import numpy as np
 
@@ -47,6 +48,7 @@ from companion.mission.core_for import core_for
 from companion.mission.fence_watch import FenceWatch
 from companion.mission.phase import Phase
 from companion.mission.swarm_core import SwarmCore, SwarmExchange
+from companion.mission.vehicle_fence import VehicleFence
 from companion.sensors.base import SensorSource
 from companion.sensors.mavlink_source import MavlinkSensorSource
 from companion.telemetry import events
@@ -83,6 +85,7 @@ class VehicleMission:
         sensors: SensorSource | None = None,
         watch: FenceWatch | None = None,
         start: tuple[float, float] | None = None,
+        own_fence: list[tuple[float, float]] | None = None,
     ) -> None:
         profile = config.profile
         self.config = config
@@ -137,6 +140,9 @@ class VehicleMission:
         """Where the search begins (profile frame); None: where the vehicle is."""
         self.refusal: str | None = None
         """Why the companion did not start the vehicle, when it refused."""
+        self.vehicle_fence = (
+            VehicleFence(link, own_fence, config.vehicle, self.emit) if own_fence else None
+        )
 
     # -- public ----------------------------------------------------------------------------
 
@@ -344,9 +350,7 @@ class VehicleMission:
         v = self.config.vehicle
         for action in actions:
             if action is Action.HOLD:
-                task = asyncio.ensure_future(self._hold())
-                self._chores.add(task)
-                task.add_done_callback(self._chores.discard)
+                self._chore(self._hold())
             elif action is Action.SAY_RESUMING:
                 log.info("vehicle %d back in the guided mode: resuming", v)
             elif action is Action.WARN_FALLBACK:
@@ -358,6 +362,12 @@ class VehicleMission:
                     "vehicle %d: mode changed to %s by someone else; not commanding", v, mode
                 )
         return None
+
+    def _chore(self, work: Coroutine[Any, Any, None]) -> None:
+        """Run ``work`` beside the loops (kept referenced until done)."""
+        task = asyncio.ensure_future(work)
+        self._chores.add(task)
+        task.add_done_callback(self._chores.discard)
 
     def _on_position(self, pos: LocalPosition) -> None:
         self._received_time = max(self._received_time, pos.time)
@@ -402,9 +412,15 @@ class VehicleMission:
         search) ends the search; the end action (RTL) flies the vehicle home, inside."""
         self.gps = gps
         watch = self.watch
-        if watch is None or self.phase not in (Phase.TRANSIT, Phase.SEARCH):
+        if watch is None:
             return
         breach = watch.breach(gps.north, gps.east)
+        own = self.vehicle_fence
+        if (breach is None and own is not None and own.installed and not own.enabling
+                and self.phase not in (Phase.RETURN, Phase.DONE)):  # fmt: skip
+            self._chore(own.enable())
+        if self.phase not in (Phase.TRANSIT, Phase.SEARCH):
+            return
         if breach is None:
             self._inside_fence = True
             return
@@ -468,6 +484,8 @@ class VehicleMission:
         await self._ensure_streams()
         await self._learn_origin()
         await self._check_start()
+        if self.vehicle_fence is not None and self.end_reason is None:
+            self._chore(self.vehicle_fence.install())
         while self.end_reason is None:
             await self._until(lambda: self.heartbeat is not None and self.position is not None)
             if self.end_reason is not None:
@@ -530,6 +548,7 @@ class VehicleMission:
         """Refuse to start a vehicle (GPS position) too far outside the search area."""
         if self.watch is None:
             return
+        self.gps = None  # one taken after the origin is known: the GPS has a fix by then
         await self._until(lambda: self.gps is not None)
         gps = self.gps
         if gps is None:

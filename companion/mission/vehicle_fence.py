@@ -1,0 +1,84 @@
+"""The profile's fence as the vehicle's own: uploaded (mission protocol, mission_type FENCE),
+read back and compared, and switched on once the vehicle is inside it, so the autopilot keeps
+the vehicle in even if the companion dies."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from companion.link.base import LinkError, VehicleLink
+from companion.link.fence_protocol import FenceTransferError
+
+log = logging.getLogger(__name__)
+
+
+class VehicleFence:
+    """One vehicle's copy of the site fence; ``emit`` writes ``vehicle_fence`` events."""
+
+    def __init__(self, link: VehicleLink, polygon: list[tuple[float, float]], vehicle: int,
+                 emit: Callable[..., None]) -> None:  # fmt: skip
+        self.link = link
+        self.vertices = [(round(lat * 1e7), round(lon * 1e7)) for lat, lon in polygon]
+        self.vehicle = vehicle
+        self.emit = emit
+        self.installed = False
+        """Uploaded, read back equal, its fence type set: ready to switch on."""
+        self.enabling = False
+
+    async def install(self) -> None:
+        """Upload, read back, compare; set the fence type. Says why where it cannot."""
+        ap = self.link.autopilot
+        params = ap.fence_params if ap is not None else None
+        if params is None:
+            why = f"not done for {ap.name if ap else 'an unknown autopilot'}"
+            log.info("vehicle %d: own fence %s; the companion's fence watch still applies",
+                     self.vehicle, why)  # fmt: skip
+            self.emit("vehicle_fence", state="skipped", reason=why)
+            return
+        try:
+            await self.link.upload_fence(self.vertices)
+            back = await self.link.download_fence()
+        except (FenceTransferError, LinkError) as exc:
+            log.warning("vehicle %d: own fence not installed: %s", self.vehicle, exc)
+            self.emit("vehicle_fence", state="failed", reason=str(exc))
+            return
+        if back != self.vertices:
+            log.error("vehicle %d: fence read back differs: sent %s, vehicle has %s",
+                      self.vehicle, self.vertices, back)  # fmt: skip
+            self.emit("vehicle_fence", state="mismatch", sent=self.vertices, read=back)
+            return
+        kind = await self.link.read_param(params.kind)
+        if kind is None:
+            self.emit("vehicle_fence", state="failed", reason=f"{params.kind} not readable")
+            return
+        wanted = (int(kind) | params.polygon_bit) & ~params.drop_bits
+        if wanted != int(kind):
+            echoed = await self.link.set_param(params.kind, float(wanted),
+                                               mavlink2.MAV_PARAM_TYPE_INT8)  # fmt: skip
+            if echoed is None or int(echoed) != wanted:
+                self.emit("vehicle_fence", state="failed",
+                          reason=f"{params.kind} {int(kind)} -> {wanted} not confirmed")  # fmt: skip
+                return
+        log.info("vehicle %d: own fence uploaded, %d vertices read back equal; %s %d -> %d",
+                 self.vehicle, len(back), params.kind, int(kind), wanted)  # fmt: skip
+        self.emit("vehicle_fence", state="uploaded", vertices=len(back), read_back="equal",
+                  fence_type=[int(kind), wanted])  # fmt: skip
+        self.installed = True
+
+    async def enable(self) -> None:
+        """Switch the fence on (once; the vehicle is inside it now)."""
+        ap = self.link.autopilot
+        if self.enabling or ap is None or ap.fence_params is None:
+            return
+        self.enabling = True
+        name = ap.fence_params.enable
+        echoed = await self.link.set_param(name, 1.0, mavlink2.MAV_PARAM_TYPE_INT8)
+        if echoed is None or int(echoed) != 1:
+            log.warning("vehicle %d: %s=1 not confirmed (%s)", self.vehicle, name, echoed)
+            self.emit("vehicle_fence", state="failed", reason=f"{name}=1 not confirmed")
+            return
+        log.info("vehicle %d: own fence on (%s=1)", self.vehicle, name)
+        self.emit("vehicle_fence", state="enabled", param=name)
