@@ -184,10 +184,14 @@ class VehicleLink(ABC):
         a = self.alignment
         if a is None or a.ready:
             return None
-        for msg_id in (mavlink2.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN,
-                       mavlink2.MAVLINK_MSG_ID_HOME_POSITION):  # fmt: skip
-            await self.command_long(mavlink2.MAV_CMD_REQUEST_MESSAGE, float(msg_id))
-        deadline = time.monotonic() + wait
+        origin = await self.command_long(
+            mavlink2.MAV_CMD_REQUEST_MESSAGE, float(mavlink2.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN)
+        )
+        await self.command_long(
+            mavlink2.MAV_CMD_REQUEST_MESSAGE, float(mavlink2.MAVLINK_MSG_ID_HOME_POSITION)
+        )
+        # A vehicle that refused the request (the emulator) sends no origin: do not wait for it.
+        deadline = time.monotonic() + (wait if origin.outcome is Outcome.ACCEPTED else 0.2)
         while not a.ready and time.monotonic() < deadline:
             await asyncio.sleep(0.05)
         if not a.ready and self._home is not None:

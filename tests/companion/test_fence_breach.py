@@ -1,0 +1,45 @@
+"""The fence watch reads the GPS position, not the local frame the setpoints use: a vehicle whose
+frame goes wrong in flight (a fault injected here: the link's offset shifted 2.5 km west) is
+steered out of the fence by its own guidance, and the watch ends the search at the fence line
+with the end action. Against the emulator (in this process, over UDP) with field-duebendorf."""
+
+from __future__ import annotations
+
+import asyncio
+import re
+from pathlib import Path
+
+from companion.fly import fly
+from companion.link.pymavlink_link import PymavlinkLink
+from companion.mission.phase import Phase
+from companion.telemetry.mission_log import read_records
+from mdm_profiles import load_profile
+from tests.emulator_harness import free_udp_base, make_config, running_emulator
+
+FIELD = load_profile("field-duebendorf")
+
+
+def test_a_wrong_frame_is_caught_at_the_fence_and_flown_home(tmp_path: Path) -> None:
+    base = free_udp_base(1)
+
+    async def main() -> str:
+        link = PymavlinkLink(url=f"udpin:127.0.0.1:{base}", target_system=1)
+        async with fly(FIELD, 0, link, log_dir=tmp_path, duration=900.0, land_wait=300.0,
+                       sensor_source="virtual") as flight:  # fmt: skip
+            while flight.mission.phase is not Phase.SEARCH:
+                await asyncio.sleep(0.05)
+            assert link.alignment is not None
+            link.alignment.east -= 2500.0  # the vehicle now believes it is 2.5 km further west
+            return await asyncio.wait_for(flight.ended(), 120.0)
+
+    config = make_config(1, base, profile=FIELD, speedup=50.0, start_positions=((600.0, 1000.0),))
+    with running_emulator(config):
+        reason = asyncio.run(main())
+    assert reason.startswith("outside the fence: "), reason
+    records = read_records(tmp_path / "mission-0.jsonl")
+    (breach,) = [r for r in records if r["event"] == "fence"]
+    found = re.fullmatch(r"(\d+\.\d) m (east|north-east|south-east) of the fence", breach["where"])
+    assert found, breach
+    assert float(found.group(1)) < 10.0  # seen at the line (GLOBAL_POSITION_INT at 10 Hz)
+    assert [r["phase"] for r in records if r["event"] == "phase"][-2:] == ["return", "done"]
+    assert [r["mode"] for r in records if r["event"] == "mode"][-1] == "RTL"
