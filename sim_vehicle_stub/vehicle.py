@@ -94,6 +94,8 @@ class Vehicle:
         self.status: list[tuple[int, str]] = []
         """STATUSTEXT (severity, text) waiting to be sent."""
         self.limits: FailsafeLimits
+        self.climb_limit = 0.0
+        """Climb rate limit outside takeoffs, m/s (parameters, DO_CHANGE_SPEED)."""
         self.apply_params()
 
     # ----- facts
@@ -116,6 +118,7 @@ class Vehicle:
         speed, climb, descent, _ = p.speeds(params)
         i = self.index
         self.fleet.speed[i], self.fleet.climb[i], self.fleet.descent[i] = speed, climb, descent
+        self.climb_limit = climb
         self.limits = FailsafeLimits(
             setpoint=p.setpoint_loss(params),
             link=p.link_loss(params),
@@ -174,6 +177,7 @@ class Vehicle:
             self.takeoff_alt = self.pending_takeoff or self.persona.default_takeoff_alt(self.params)
             self.pending_takeoff = None
             f.climb_to(i, self.takeoff_alt)
+            self._climb_cap()
         elif b is Behaviour.LAND:
             f.hold(i)
             f.climb_rate(i, -self.persona.speeds(self.params)[3])
@@ -228,6 +232,7 @@ class Vehicle:
             self.takeoff_alt = req.altitude
             self.fleet.hold(self.index)
             self.fleet.climb_to(self.index, req.altitude)
+            self._climb_cap()
         return ACCEPTED
 
     def change_speed(self, kind: float, speed: float) -> int:
@@ -242,7 +247,7 @@ class Vehicle:
         if kind in (0, 1):
             f.speed[i] = min(speed, top)
         elif kind == 2:
-            f.climb[i] = min(speed, climb)
+            self.climb_limit = f.climb[i] = min(speed, climb)
         else:
             f.descent[i] = min(speed, descent)
         return ACCEPTED
@@ -317,10 +322,17 @@ class Vehicle:
             self.takeoff_alt = None
 
     # ----- per tick
+    def _climb_cap(self) -> None:
+        """The climb rate limit: the persona's takeoff speed while a takeoff climbs."""
+        tko = self.persona.takeoff_climb(self.params)
+        climbing = self.takeoff_alt is not None and tko is not None
+        self.fleet.climb[self.index] = tko if climbing and tko is not None else self.climb_limit
+
     def update(self) -> None:
         """Mode phases that end on their own: takeoff reached, RTL legs, touchdown."""
         i, f = self.index, self.fleet
         b = self.mode.behaviour
+        self._climb_cap()
         if self.takeoff_alt is not None and f.alt[i] >= self.takeoff_alt - 0.3:
             self.takeoff_alt = None
             nxt = self.persona.after_takeoff()
@@ -332,6 +344,9 @@ class Vehicle:
         if touching and (b is Behaviour.LAND or (b is Behaviour.RTL and self.rtl_phase == 2)):
             self.arm(False, force=True)
             self.say(6, "Landed, disarmed")
+            after = self.persona.mode_after_landing
+            if after is not None:
+                self.set_mode(self.persona.mode(after), "landed")
 
     def _rtl_step(self) -> None:
         i, f = self.index, self.fleet

@@ -134,6 +134,8 @@ class Persona(ABC):
     """MAV_RESULT of a refused takeoff."""
     reposition_mode: ClassVar[str]
     """Mode MAV_CMD_DO_REPOSITION flies in."""
+    mode_after_landing: ClassVar[str | None] = None
+    """Mode a landing that disarmed switches to (PX4: HOLD, measured on PX4 SITL)."""
     reposition_elsewhere: ClassVar[int]
     """MAV_RESULT of a DO_REPOSITION outside that mode without the mode-change flag."""
 
@@ -205,6 +207,10 @@ class Persona(ABC):
     @abstractmethod
     def speed_limits(self, params: ParamTable) -> tuple[float, float, float, float]:
         """The most MAV_CMD_DO_CHANGE_SPEED may set: horizontal, climb, descent, landing."""
+
+    def takeoff_climb(self, params: ParamTable) -> float | None:
+        """Climb rate of a takeoff, m/s (None: the ordinary climb limit)."""
+        return None
 
     def default_takeoff_alt(self, params: ParamTable) -> float:
         """Height a TAKEOFF mode entered without a takeoff command climbs to, m."""

@@ -49,6 +49,7 @@ class Px4Persona(Persona):
     takeoff_while_disarmed = True
     takeoff_refusal = 2  # MAV_RESULT_DENIED
     reposition_mode = "HOLD"
+    mode_after_landing = "HOLD"
     reposition_elsewhere = 0  # ACCEPTED: commander switches nothing without the flag
 
     def param_specs(self, facts: ProfileFacts) -> list[ParamSpec]:
@@ -69,6 +70,7 @@ class Px4Persona(Persona):
             ParamSpec("MPC_Z_VEL_MAX_UP", 3.0, low=0.1, high=100.0),
             ParamSpec("MPC_Z_VEL_MAX_DN", 1.5, low=0.1, high=100.0),
             ParamSpec("MPC_LAND_SPEED", 0.7, low=0.1, high=100.0),
+            ParamSpec("MPC_TKO_SPEED", 1.5, low=1.0, high=5.0, doc="takeoff climb rate, m/s"),
             ParamSpec("RTL_RETURN_ALT", 60.0, low=0.0, high=1e4),
         ]
 
@@ -128,6 +130,11 @@ class Px4Persona(Persona):
         # FlightTaskAuto caps the cruise speed at MPC_XY_VEL_MAX, and the position controller
         # every velocity (mc_pos_control/PositionControl): a change of speed cannot exceed them.
         return self.speeds(params)
+
+    def takeoff_climb(self, params: ParamTable) -> float | None:
+        # FlightTaskAuto's takeoff climbs at MPC_TKO_SPEED (PX4 SITL: 1.9 m/s measured between
+        # 5 and 15 m on a 20 m takeoff, the ramp towards MPC_Z_V_AUTO_UP not modelled).
+        return float(params.get("MPC_TKO_SPEED"))
 
     def rtl_altitude(self, params: ParamTable) -> float:
         return params.get("RTL_RETURN_ALT")

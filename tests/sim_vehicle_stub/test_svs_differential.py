@@ -1,5 +1,5 @@
 """Differential test: the same scripted flight (tests/flight_script.py) on the emulator's
-persona and on the real autopilot's SITL (ArduCopter at 5x, PX4 SIH at 1x). Command results and
+persona and on the real autopilot's SITL (ArduCopter at 5x, PX4 SIH at 4x). Command results and
 the mode sequence must be identical; climb rate, cruise speed, top speed and the time to reach
 a position setpoint agree within the tolerances below (the emulator flies the paper's tau-lag
 model, not the autopilots' jerk-limited controllers). docs/protocol.md has the measured table."""
@@ -18,16 +18,23 @@ from tests.sitl import SitlInstance
 
 log = logging.getLogger(__name__)
 PERSONA = {"arducopter": "ardupilot", "px4": "px4"}
-SPEEDUP = {"arducopter": 5.0, "px4": None}
+SPEEDUP = {"arducopter": 5.0, "px4": 4.0}
+"""Both autopilots fly this script stably at these speed-ups here (PX4 SIH through
+PX4_SIM_SPEED_FACTOR); the emulator runs at the same one."""
 HOME_AMSL = 488.0
 """The emulator profile's origin altitude; the SITLs are started at the same altitude."""
 TOLERANCE = {
-    "climb_rate": 0.25,
-    "cruise_speed": 0.10,
-    "top_speed": 0.15,
-    "time_to_setpoint": 0.35,
-}
-"""Relative differences allowed, emulator vs SITL (see docs/protocol.md, differential table)."""
+    "arducopter": {"climb_rate": 0.15, "cruise_speed": 0.10, "top_speed": 0.10,
+                   "time_to_setpoint": 0.30},
+    "px4": {"climb_rate": 0.30, "cruise_speed": 0.25, "top_speed": 0.10,
+            "time_to_setpoint": 0.30},
+}  # fmt: skip
+"""Relative differences allowed, emulator vs SITL, from repeated measurements plus a margin
+(docs/protocol.md, differential table): the speed caps agree within 5 %; ArduCopter's
+jerk-limited acceleration and braking make it reach a setpoint 150 m away ~20 % later than the
+critically damped lag loop; PX4's takeoff ramps from MPC_TKO_SPEED towards MPC_Z_V_AUTO_UP
+(13-22 % faster in four runs than the persona's constant MPC_TKO_SPEED) and its SIH airframe answers a
+5 m/s OFFBOARD velocity setpoint slowly (4.2-4.45 m/s after 10 s, 12-16 % under)."""
 
 
 def _fly(kind: str, url: str, sysid: int, wall_timeout: float) -> Record:
@@ -43,16 +50,20 @@ def _fly(kind: str, url: str, sysid: int, wall_timeout: float) -> Record:
 @pytest.mark.timeout(600)
 @pytest.mark.parametrize("autopilot", ["arducopter", "px4"])
 def test_emulator_persona_flies_the_script_like_the_real_autopilot(
-    autopilot: str, request: pytest.FixtureRequest
+    autopilot: str, request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     factory: Callable[..., SitlInstance] = request.getfixturevalue(autopilot)
     speedup = SPEEDUP[autopilot]
     base = free_udp_base(1)
-    cfg = make_config(1, base, personas=(PERSONA[autopilot],), speedup=speedup or 1.0)
+    cfg = make_config(1, base, personas=(PERSONA[autopilot],), speedup=speedup)
     with running_emulator(cfg):
         emulated = _fly(autopilot, f"udpin:127.0.0.1:{base}", 1, 240.0)
     home = f"47.397742,8.545594,{HOME_AMSL}" + (",0" if autopilot == "arducopter" else "")
-    inst = factory(home=home, **({"speedup": speedup} if speedup else {}))
+    if autopilot == "px4":
+        monkeypatch.setenv("PX4_SIM_SPEED_FACTOR", str(speedup))
+        inst = factory(home=home)
+    else:
+        inst = factory(home=home, speedup=speedup)
     real = _fly(autopilot, inst.companion_url, inst.sysid, 300.0)
     log.info("%s emulated %s", autopilot, asdict(emulated))
     log.info("%s real     %s", autopilot, asdict(real))
@@ -61,6 +72,6 @@ def test_emulator_persona_flies_the_script_like_the_real_autopilot(
     assert emulated.modes == real.modes
     assert emulated.landed_disarmed
     assert real.landed_disarmed
-    for key, tol in TOLERANCE.items():
+    for key, tol in TOLERANCE[autopilot].items():
         e, r = getattr(emulated, key), getattr(real, key)
         assert e == pytest.approx(r, rel=tol), f"{key}: emulator {e:.2f}, {autopilot} {r:.2f}"
