@@ -48,6 +48,8 @@ class VehicleLink(ABC):
     autopilot: Autopilot | None
     """Set from the first HEARTBEAT of the vehicle."""
     target_system: int
+    uploads_fence: bool = False
+    """The backend implements :meth:`upload_fence` and :meth:`download_fence`."""
     alignment: FrameAlignment | None = None
     """Set by :meth:`use_profile_frame`: positions in and position setpoints out are in the
     profile's frame, whatever the vehicle's own local origin."""

@@ -81,6 +81,8 @@ class PymavlinkLink(VehicleLink):
             dropped and counted in ``signing_rejected``.
     """
 
+    uploads_fence = True
+
     def __init__(
         self,
         *,

@@ -32,8 +32,9 @@ class VehicleFence:
         """Upload, read back, compare; set the fence type. Says why where it cannot."""
         ap = self.link.autopilot
         params = ap.fence_params if ap is not None else None
-        if params is None:
-            why = f"not done for {ap.name if ap else 'an unknown autopilot'}"
+        if params is None or not self.link.uploads_fence:
+            why = (f"not done for {ap.name if ap else 'an unknown autopilot'}" if params is None
+                   else f"the {type(self.link).__name__} backend has no fence upload")  # fmt: skip
             log.info("vehicle %d: own fence %s; the companion's fence watch still applies",
                      self.vehicle, why)  # fmt: skip
             self.emit("vehicle_fence", state="skipped", reason=why)
