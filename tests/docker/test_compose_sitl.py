@@ -1,8 +1,9 @@
-"""docker/compose.sitl.yaml for real against stock ArduCopter SITL on the host: two instances
-(the first free indices from MDM_SITL_INSTANCE_BASE), the broker and two companions in
-containers on the host's network, a short search flown to the landing. What the vehicles did is
-read from SERIAL1 of each instance, never from the companions' logs; the logs and the MQTT
-events are read from the host; `down -v` leaves nothing behind."""
+"""docker/compose.sitl.yaml for real against stock SITL autopilots on the host (ArduCopter, PX4
+SIH: the autopilot is a test parameter): two instances (the first free indices from
+MDM_SITL_INSTANCE_BASE), the broker and two companions in containers on the host's network, a
+short search flown to the landing. What the vehicles did is read from a second link of each
+instance (ArduCopter SERIAL1, PX4's GCS link), never from the companions' logs; the logs and the
+MQTT events are read from the host; `down -v` leaves nothing behind."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ from tests.companion.sitl_observer import Observer
 from tests.docker.stack import Stack, all_events, project
 from tests.mqtt_harness import free_port
 
-SPEEDUP = 5  # stable on 2 shared cores (tests/companion/test_arducopter_sitl.py)
+SPEEDUP = 5  # stable on 2 shared cores (tests/companion/test_sitl_flights.py)
 HOME = (47.3960, 8.6380, 440.0)
 """The profile's origin and every vehicle's home: the autopilot's local frame is the profile's."""
 ON_GROUND = 1  # MAV_LANDED_STATE_ON_GROUND
@@ -54,10 +55,18 @@ mission: {{duration: 60.0, ts_cap: 600.0}}
     path.chmod(0o644)
 
 
-@pytest.fixture
-def instances(arducopter: Callable[..., sitl.SitlInstance]) -> list[sitl.SitlInstance]:
-    home = ",".join(map(str, (*HOME, 0)))
-    return [arducopter(speedup=SPEEDUP, home=home) for _ in range(2)]
+@pytest.fixture(params=["arducopter", "px4"])
+def instances(request: pytest.FixtureRequest) -> list[sitl.SitlInstance]:
+    """Two instances of the autopilot, homed at the profile's origin (ArduCopter's home takes
+    a heading too)."""
+    start: Callable[..., sitl.SitlInstance] = request.getfixturevalue(request.param)
+    home = ",".join(map(str, HOME if request.param == "px4" else (*HOME, 0)))
+    first = start(speedup=SPEEDUP, home=home)
+    # the second from the next index up: a PX4 instance has not bound its ports yet when it
+    # returns, and the first free index would be the first instance's again
+    with pytest.MonkeyPatch.context() as env:
+        env.setenv(sitl.INSTANCE_BASE_ENV, str(first.index + 1))
+        return [first, start(speedup=SPEEDUP, home=home)]
 
 
 @pytest.fixture
@@ -74,7 +83,7 @@ def stack(images: None, instances: list[sitl.SitlInstance], tmp_path: Path) -> I
 
 
 @pytest.mark.timeout(900)
-def test_compose_sitl_flies_stock_arducopter_to_the_landing(
+def test_compose_sitl_flies_stock_autopilots_to_the_landing(
     stack: Stack, instances: list[sitl.SitlInstance], tmp_path: Path
 ) -> None:
     observers = [Observer(i.observer_url, i.sysid) for i in instances]
