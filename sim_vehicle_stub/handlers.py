@@ -10,7 +10,7 @@ from sim_vehicle_stub.commands import CommandHandler
 from sim_vehicle_stub.geo import GeoFrame
 from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.node import VehicleNode
-from sim_vehicle_stub.setpoints import global_setpoint, local_setpoint
+from sim_vehicle_stub.setpoints import attitude_setpoint, global_setpoint, local_setpoint
 from sim_vehicle_stub.vehicle import ACCEPTED, DENIED
 
 _CONTROLLER_TYPES = (d.MAV_TYPE_GCS, d.MAV_TYPE_ONBOARD_CONTROLLER)
@@ -34,6 +34,7 @@ class MessageHandler:
             "PARAM_SET": self._param_set,
             "SET_POSITION_TARGET_LOCAL_NED": self._local_target,
             "SET_POSITION_TARGET_GLOBAL_INT": self._global_target,
+            "SET_ATTITUDE_TARGET": self._attitude_target,
             "MISSION_REQUEST_LIST": self._mission_list,
             "MISSION_COUNT": self._mission_count,
             "MISSION_CLEAR_ALL": self._mission_clear,
@@ -113,6 +114,13 @@ class MessageHandler:
 
     def _global_target(self, node: VehicleNode, msg: Any) -> None:
         sp = global_setpoint(msg, self.geo, self.now())
+        if sp is None:
+            node.stats.nacks += 1
+        else:
+            node.vehicle.on_setpoint(sp)
+
+    def _attitude_target(self, node: VehicleNode, msg: Any) -> None:
+        sp = attitude_setpoint(msg, node.vehicle, self.now())
         if sp is None:
             node.stats.nacks += 1
         else:

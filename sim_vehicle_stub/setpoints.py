@@ -125,3 +125,46 @@ def global_setpoint(msg: Any, geo: GeoFrame, t: float) -> Setpoint | None:
         climb = -float(msg.vz)
     yaw_cmd = float(msg.yaw) if use_yaw and _ok(msg.yaw) else None
     return Setpoint(t, position, velocity, alt, climb, yaw_cmd, _yaw_rate(msg, mask), accel)
+
+
+_G = 9.80665
+_MAX_TILT = math.radians(30.0)
+"""ArduCopter's ANGLE_MAX default (3000 cd): the steepest lean a guided attitude gets."""
+_THROTTLE_IGNORE, _ATTITUDE_IGNORE = 64, 128
+
+
+def attitude_setpoint(msg: Any, v: Vehicle, t: float) -> Setpoint | None:
+    """SET_ATTITUDE_TARGET as ArduCopter's guided mode reads it (GCS_MAVLink_Copter.cpp,
+    handle_message_set_attitude_target): thrust 0.5 holds altitude, above climbs at up to the
+    climb limit, below descends at up to the descent limit; a quaternion that is not unit length
+    or an ignored thrust stops the vehicle (here: a hold where it is). Roll and pitch become the
+    horizontal acceleration g tan(angle) that lean would give (capped at 30 degrees), yaw the
+    commanded heading; the lag loop and speed limit do the rest. None: not a number."""
+    i, f = v.index, v.fleet
+    mask = int(msg.type_mask)
+    q = [float(x) for x in msg.q]
+    if not _ok(*q, msg.thrust):
+        return None
+    hold = Setpoint(t, (float(f.pos[i, 0]), float(f.pos[i, 1])), None, float(f.alt[i]), None, None)
+    if mask & _THROTTLE_IGNORE:
+        return hold
+    roll = pitch = 0.0
+    yaw: float | None = None
+    if not mask & _ATTITUDE_IGNORE:
+        w, x, y, z = q
+        if abs(math.sqrt(w * w + x * x + y * y + z * z) - 1.0) > 1e-3:
+            return hold
+        roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+        pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+        yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    heading = float(f.yaw[i]) if yaw is None else yaw
+    forward = -_G * math.tan(max(-_MAX_TILT, min(_MAX_TILT, pitch)))
+    right = _G * math.tan(max(-_MAX_TILT, min(_MAX_TILT, roll)))
+    c, s = math.cos(heading), math.sin(heading)
+    accel = (forward * c - right * s, forward * s + right * c, 0.0)
+    thrust = max(0.0, min(1.0, float(msg.thrust)))
+    if thrust >= 0.5:
+        climb = (thrust - 0.5) * 2.0 * float(f.climb[i])
+    else:
+        climb = -(0.5 - thrust) * 2.0 * float(f.descent[i])
+    return Setpoint(t, None, None, None, climb, yaw, None, accel)

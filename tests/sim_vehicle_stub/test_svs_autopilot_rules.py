@@ -200,3 +200,35 @@ def test_acceleration_targets_and_yaw_rate_are_followed_not_dropped() -> None:
         c.stream(spin_and_watch, 2.0)
         turned = sum(math.remainder(b - a, 2 * math.pi) for a, b in itertools.pairwise(yaws))
         assert turned > 0.3
+
+
+@pytest.mark.timeout(60)
+def test_attitude_targets_lean_the_vehicle_and_thrust_sets_the_climb() -> None:
+    base = free_udp_base(1)
+    cfg = make_config(1, base, personas=("ardupilot",))
+    with running_emulator(cfg) as emu, Client(base, 1) as c:
+        assert c.command(DO_SET_MODE, 1, 4, 0) == ACCEPTED
+        assert c.command(COMPONENT_ARM, ARM) == ACCEPTED
+        assert c.command(TAKEOFF, 0, 0, 0, 0, 0, 0, 10.0) == ACCEPTED
+        assert _wait(c, _high(9.7), 20.0) is not None
+        half = math.radians(-10.0) / 2  # 10 degrees nose down, heading north
+        q = [math.cos(half), 0.0, math.sin(half), 0.0]
+
+        def lean() -> None:
+            c.conn.mav.set_attitude_target_send(0, 1, 1, 7, q, 0, 0, 0, 0.7)
+
+        fast = _wait(c, lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.vx > 4.0, 15.0, lean)
+        assert fast is not None
+        assert abs(fast.vy) < 0.1
+        assert fast.vz < -0.5  # thrust 0.7: climbing
+        # A quaternion that is not unit length stops the vehicle where it is.
+        bad = [1.0, 0.5, 0.0, 0.0]
+
+        def bad_lean() -> None:
+            c.conn.mav.set_attitude_target_send(0, 1, 1, 7, bad, 0, 0, 0, 0.7)
+
+        stopped = _wait(
+            c, lambda m: m.get_type() == "LOCAL_POSITION_NED" and abs(m.vx) < 0.05, 15.0, bad_lean
+        )
+        assert stopped is not None
+        assert emu.vehicles[0].mode.name == "GUIDED"
