@@ -26,7 +26,7 @@ from mdm_profiles import load_profile
 from tests import sitl
 from tests.companion.sitl_observer import Observer, Trace
 
-SPEEDUP = 5  # stable on 2 shared cores; the companion's timers are wall time, the vehicle's not
+SPEEDUP = 5  # the field test's; the companion's timers are wall time, the vehicle's not
 ON_GROUND = 1  # MAV_LANDED_STATE_ON_GROUND
 
 
@@ -41,12 +41,16 @@ class Autopilot:
     guided: tuple[float, float]
     guided_custom: int
     rtl_custom: int
+    speedup: float
+    """Stable here: at 5x under load ~11 PX4's clock outran the companion's setpoints (gaps of
+    0.5 vehicle s and more), and a pilot's HOLD then reads as PX4's own fall-back (by design,
+    docs/companion.md) and is taken back; 3x leaves that margin."""
 
 
 # ArduCopter: LOITER 5, GUIDED 4, RTL 6. PX4: custom = main << 16 | sub << 24; HOLD (4, 3),
 # OFFBOARD (6, 0), RTL (4, 5).
-ARDUCOPTER = Autopilot("arducopter", (5, 0), 5, (4, 0), 4, 6)
-PX4 = Autopilot("px4", (4, 3), 4 << 16 | 3 << 24, (6, 0), 6 << 16, 4 << 16 | 5 << 24)
+ARDUCOPTER = Autopilot("arducopter", (5, 0), 5, (4, 0), 4, 6, speedup=5.0)
+PX4 = Autopilot("px4", (4, 3), 4 << 16 | 3 << 24, (6, 0), 6 << 16, 4 << 16 | 5 << 24, speedup=3.0)
 AUTOPILOTS = [pytest.param(ARDUCOPTER, id="arducopter"), pytest.param(PX4, id="px4")]
 
 
@@ -154,7 +158,7 @@ def test_pymavlink_flies_through_takeover_kill_and_restart(
         line = "retry 1 in" if ap.kind == "arducopter" else "heard nothing"
         _until(f"'{line}' before the autopilot starts", lambda: line in comp.output(), 15.0,
                comp.output)  # fmt: skip
-        inst = start(speedup=SPEEDUP, index=index)
+        inst = start(speedup=ap.speedup, index=index)
         obs = Observer(inst.observer_url, inst.sysid)
         ob = obs
 
@@ -174,7 +178,7 @@ def test_pymavlink_flies_through_takeover_kill_and_restart(
         _until("paused after the pilot's mode", lambda: "paused" in _phases(comp.events()), 20.0,
                context)  # fmt: skip
         held = time.monotonic()
-        while time.monotonic() - held < 10.0 / SPEEDUP:  # 10 vehicle s: nobody takes it back
+        while time.monotonic() - held < 10.0 / ap.speedup:  # 10 vehicle s: nobody takes it back
             assert ob.snapshot().mode == ap.pilot_custom, context()
             time.sleep(0.1)
         before = ob.snapshot().distance
@@ -190,7 +194,7 @@ def test_pymavlink_flies_through_takeover_kill_and_restart(
             _until("PX4's offboard-loss failsafe", lambda: ob.snapshot().mode != ap.guided_custom,
                    20.0, context)  # fmt: skip
         else:
-            time.sleep(5.0 / SPEEDUP)  # past GUID_TIMEOUT (3 vehicle s): it stopped, still GUIDED
+            time.sleep(5.0 / ap.speedup)  # past GUID_TIMEOUT (3 vehicle s): stopped, still GUIDED
             assert ob.snapshot().mode == ap.guided_custom, context()
         failsafe_mode = ob.snapshot().mode
         before = ob.snapshot().distance
