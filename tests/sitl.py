@@ -117,12 +117,14 @@ class SitlInstance:
 
 def free_index(kind: Kind) -> int:
     """The first instance index, from ``MDM_SITL_INSTANCE_BASE`` up, whose ports are all free."""
-    index = int(os.environ.get(INSTANCE_BASE_ENV, "0"))
-    while not _free(*_ports(kind, index)):
-        index += 1
-        if index > _MAX_INSTANCE[kind]:
-            raise RuntimeError(f"no free {kind} SITL instance index (ports of 0..{index - 1} busy)")
-    return index
+    base = int(os.environ.get(INSTANCE_BASE_ENV, "0"))
+    for index in range(base, _MAX_INSTANCE[kind] + 1):
+        if _free(*_ports(kind, index)):
+            return index
+    raise RuntimeError(
+        f"no free {kind} SITL instance index in {base}..{_MAX_INSTANCE[kind]} "
+        f"({INSTANCE_BASE_ENV}={base}; {kind} instances stop at {_MAX_INSTANCE[kind]})"
+    )
 
 
 def companion_url(kind: Kind, index: int) -> str:
@@ -171,8 +173,11 @@ def start(
             cmd, stdout=out, stderr=subprocess.STDOUT, start_new_session=True, env=env
         )
     instance = SitlInstance(kind, index, process, workdir)
+    # Back only once the instance holds its ports, so the next start cannot pick the same index.
     if kind == "arducopter":
-        _await_tcp(instance, 5760 + 10 * index)
+        _await_bound(instance, tcp=5760 + 10 * index)
+    else:
+        _await_bound(instance, udp=18570 + index)
     return instance
 
 
@@ -197,19 +202,22 @@ def _script(kind: Kind, folder: Path, workdir: Path) -> Path:
     return private / _SCRIPT[kind]
 
 
-def _await_tcp(instance: SitlInstance, port: int, timeout: float = 30.0) -> None:
-    """Wait until the instance listens on ``port`` (seen as the port turning busy: a probing
-    connection would take the autopilot's one client slot on that serial port)."""
+def _await_bound(
+    instance: SitlInstance, *, tcp: int | None = None, udp: int | None = None, timeout: float = 30.0
+) -> None:
+    """Wait until the instance has bound ``tcp`` / ``udp`` (seen as the port turning busy: a
+    probing connection would take the autopilot's one client slot on that serial port)."""
+    ports = ([tcp] if tcp else [], [udp] if udp else [])
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if instance.process.poll() is not None:
             raise RuntimeError(f"{instance.kind} SITL exited: {instance.log()}")
-        if not _free([port], []):
+        if not _free(*ports):
             return
         time.sleep(0.2)
     instance.stop()
     raise RuntimeError(
-        f"{instance.kind} SITL did not open TCP {port} in {timeout} s: {instance.log()}"
+        f"{instance.kind} SITL did not bind {ports} in {timeout} s: {instance.log()}"
     )
 
 

@@ -61,12 +61,7 @@ def instances(request: pytest.FixtureRequest) -> list[sitl.SitlInstance]:
     a heading too)."""
     start: Callable[..., sitl.SitlInstance] = request.getfixturevalue(request.param)
     home = ",".join(map(str, HOME if request.param == "px4" else (*HOME, 0)))
-    first = start(speedup=SPEEDUP, home=home)
-    # the second from the next index up: a PX4 instance has not bound its ports yet when it
-    # returns, and the first free index would be the first instance's again
-    with pytest.MonkeyPatch.context() as env:
-        env.setenv(sitl.INSTANCE_BASE_ENV, str(first.index + 1))
-        return [first, start(speedup=SPEEDUP, home=home)]
+    return [start(speedup=SPEEDUP, home=home) for _ in range(2)]
 
 
 @pytest.fixture
