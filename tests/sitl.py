@@ -142,12 +142,13 @@ def start(
     home: str | None = None,
     speedup: float | None = None,
     defaults: Path | None = None,
+    battery_mah: int | None = None,
 ) -> SitlInstance:
     """Start one instance of ``kind`` in ``workdir`` on the first free instance index.
 
     ``index`` is taken as given (a test that starts its client first picks it with
     :func:`free_index`); ``home`` is ``LAT,LON,ALT[,HDG]``; ``speedup`` is ArduCopter's ``--speedup`` or PX4's
-    ``PX4_SIM_SPEED_FACTOR``; ``defaults`` (an extra .parm file) is ArduCopter only. Returns once the process runs; readiness (GPS, EKF) is the
+    ``PX4_SIM_SPEED_FACTOR``; ``defaults`` (an extra .parm file) and ``battery_mah`` are ArduCopter only. Returns once the process runs; readiness (GPS, EKF) is the
     caller's to await.
     """
     folder = sitl_dir(kind)
@@ -161,6 +162,12 @@ def start(
         cmd += ["--home", home]
     if defaults is not None:
         cmd += ["--defaults", str(defaults)]
+    if battery_mah is not None:
+        # A bigger pack (ArduCopter's BATT_CAPACITY, stock 3300 mAh) for tests that fly long
+        # random searches: the companion ends a search below 20 % and would test the battery.
+        pack = workdir / "battery.parm"
+        pack.write_text(f"BATT_CAPACITY {battery_mah}\n")
+        cmd += ["--defaults", str(pack)]
     env = dict(os.environ)
     if kind == "px4" and speedup is not None:
         env["PX4_SIM_SPEED_FACTOR"] = str(

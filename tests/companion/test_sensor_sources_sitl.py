@@ -87,11 +87,8 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
     arducopter: Callable[..., sitl.SitlInstance], tmp_path: Path
 ) -> None:
     # Two searches on one boot: a random first search can take 5 vehicle minutes, which drains
-    # the stock 3300 mAh pack below the companion's 20 % end; a bigger pack keeps the second
-    # flight about the sensors, not the battery.
-    battery = tmp_path / "battery.parm"
-    battery.write_text("BATT_CAPACITY 20000\n")
-    inst = arducopter(speedup=SPEEDUP, home=",".join(map(str, (*HOME, 0))), defaults=battery)
+    # the stock pack below the companion's 20 % end; the second flight is about the sensors.
+    inst = arducopter(speedup=SPEEDUP, home=",".join(map(str, (*HOME, 0))), battery_mah=20000)
     profile = _profile(tmp_path / "profile.yaml", vehicles=inst.index + 1)
     obs = Observer(inst.observer_url, inst.sysid)
     flights: list[subprocess.Popen[bytes]] = []
