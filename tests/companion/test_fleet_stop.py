@@ -60,7 +60,8 @@ def test_one_sigint_lands_every_vehicle_then_writes_the_summary(tmp_path: Path) 
     for i in range(3):
         mine = [r["event"] if r["event"] != "mode" else r["mode"] for r in events
                 if r.get("vehicle") == i and r["event"] in ("mode", "armed", "disarmed")]  # fmt: skip
-        assert mine[-2:] == ["RTL", "disarmed"], f"vehicle {i}: {mine}"
+        # RTL flown to the ground; the PX4 persona, as PX4, then holds once landed and disarmed
+        assert mine[-3:] == ["RTL", "disarmed", "HOLD"], f"vehicle {i}: {mine}"
     assert not processes_naming(str(out))
 
 

@@ -112,4 +112,5 @@ def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> No
     emulator = [r for r in read_records(out / "emulator-events.jsonl") if r["event"] == "mode"]
     modes = {i: [r["mode"] for r in emulator if r["vehicle"] == i] for i in (0, 1)}
     assert modes[0][-3:] == ["HOLD", "OFFBOARD", "LAND"], modes[0]
-    assert modes[1][-1] == "RTL", modes[1]
+    # abort -> RTL; the PX4 persona, as PX4, holds once landed and disarmed
+    assert modes[1][-2:] == ["RTL", "HOLD"], modes[1]
