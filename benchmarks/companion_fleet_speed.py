@@ -6,7 +6,13 @@ Ratio: sim seconds / wall seconds between the first and the last 'tick' record (
 apart, with the wall clock) of vehicles in the search phase. CPU: user + system seconds of the
 emulator and of every companion process (read from /proc every 0.25 s, Linux), over the same
 search window, per sim second: the fleet cannot run faster than (cores / total) however the
-work is scheduled, nor faster than 1 / emulator (one process, one core). Latency: from the
+work is scheduled, nor faster than 1 / emulator (one process, one core). That window also
+holds companions starting (imports: seconds of CPU each) and companions that ended their search
+drawing their map (matplotlib: 1-3 CPU s each) while others still search, so
+``cpu_s_per_sim_s_companion_own_search_mean`` takes each companion over its own search only
+(its first to its last search tick) per sim s of it, and ``cpu_us_per_answer_own_search`` is
+that per setpoint (10 per sim s): what answering costs (benchmarks/companion_answer_cost.py
+gives the same without the fleet's contention). Latency: from the
 arrival of a LOCAL_POSITION_NED datagram to the setpoint leaving the socket, per vehicle (p50,
 p99 of each vehicle's mission; the summary gives the median p50 and the worst p99). Setpoint
 rate: SET_POSITION_TARGET_LOCAL_NED per vehicle second during the search (from each .tlog; a
@@ -19,6 +25,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import subprocess
 import threading
 import time
 from pathlib import Path
@@ -26,6 +33,7 @@ from pathlib import Path
 import numpy as np
 from pymavlink import mavutil
 
+import companion
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry.mission_log import read_records
 
@@ -38,6 +46,8 @@ class CpuSampler:
     def __init__(self, every: float = 0.25) -> None:
         self.every = every
         self.samples: list[tuple[float, dict[int, tuple[str, float]]]] = []
+        self.vehicle: dict[int, int] = {}
+        """Companion pid -> vehicle index."""
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
 
@@ -66,6 +76,8 @@ class CpuSampler:
                     if pid not in roles:
                         cmd = Path(f"/proc/{entry}/cmdline").read_bytes().split(b"\0")
                         roles[pid] = "emulator" if b"sim_vehicle_stub.cli" in cmd else "companion"
+                        if b"--vehicle" in cmd:
+                            self.vehicle[pid] = int(cmd[cmd.index(b"--vehicle") + 1])
                     seen[pid] = (roles[pid], (int(fields[11]) + int(fields[12])) / _TICK)
                 except (OSError, ValueError, IndexError):
                     continue
@@ -88,6 +100,14 @@ class CpuSampler:
             out.setdefault(role, []).append(cpu - first[pid])
         return out
 
+    def of_vehicle(self, vehicle: int, w0: float, w1: float) -> float | None:
+        """CPU seconds of vehicle ``vehicle``'s companion between the first sample at or after
+        wall time w0 and the last at or before w1 (None without two such samples)."""
+        pids = [pid for pid, v in self.vehicle.items() if v == vehicle]
+        inside = [(wall, seen[pid][1]) for wall, seen in self.samples
+                  for pid in pids if pid in seen and w0 <= wall <= w1]  # fmt: skip
+        return inside[-1][1] - inside[0][1] if len(inside) > 1 else None
+
 
 def setpoint_rate(tlog: Path, search_start: float) -> tuple[float, float]:
     """Setpoints per vehicle second after ``search_start`` and the longest gap (vehicle s)."""
@@ -100,6 +120,15 @@ def setpoint_rate(tlog: Path, search_start: float) -> tuple[float, float]:
     if len(t) < 2:
         return float("nan"), float("nan")
     return float((len(t) - 1) / np.ptp(t)), float(np.diff(t).max())
+
+
+def code_commit() -> str:
+    """The commit of the checkout ``companion`` was imported from (a PYTHONPATH run of an older
+    commit says so in its output)."""
+    where = Path(companion.__file__).resolve().parent.parent
+    done = subprocess.run(["git", "-C", str(where), "rev-parse", "--short", "HEAD"],
+                          capture_output=True, text=True, check=False)  # fmt: skip
+    return done.stdout.strip() or f"unknown ({where})"
 
 
 def main() -> None:
@@ -125,16 +154,25 @@ def main() -> None:
                                         # (only when asked: runs on commits without it too)
                                         **({"lockstep": True} if args.lockstep else {})))  # type: ignore[arg-type]  # fmt: skip
     wall_total = time.perf_counter() - started
-    ticks, p50, p99, rates = [], [], [], []
+    ticks, p50, p99, rates, own = [], [], [], [], []
     for i in range(args.vehicles):
+        mine = []
         for r in read_records(args.out / f"mission-{i}.jsonl"):
             if r.get("event") == "phase" and "search_start" in r:
                 rates.append(setpoint_rate(args.out / f"vehicle-{i}.tlog", r["search_start"]))
             if r.get("event") == "tick" and r.get("phase") == "search" and "wall" in r:
-                ticks.append((float(r["t"]), float(r["wall"])))
+                mine.append((float(r["t"]), float(r["wall"])))
             elif r.get("event") == "latency":
                 p50.append(float(r["p50_ms"]))
                 p99.append(float(r["p99_ms"]))
+        ticks += mine
+        if len(mine) > 1:
+            # this companion's CPU over its own search only (not its start-up, nor its map
+            # drawn after its search while others still search), per sim s of it
+            (t0, w0), (t1, w1) = mine[0], mine[-1]
+            spent = cpu.of_vehicle(i, w0, w1)
+            if spent is not None and t1 > t0:
+                own.append(spent / (t1 - t0))
     sim = np.array(ticks)
     ratio = float(np.ptp(sim[:, 0]) / np.ptp(sim[:, 1])) if len(sim) > 1 else float("nan")
     usage: dict[str, object] = {}
@@ -149,12 +187,14 @@ def main() -> None:
         usage = {
             "cpu_s_per_sim_s_emulator": round(emu, 5),
             "cpu_s_per_sim_s_companion_mean": round(float(comps.mean()), 5) if len(comps) else None,
+            "cpu_s_per_sim_s_companion_own_search_mean": round(float(np.mean(own)), 5) if own else None,
+            "cpu_us_per_answer_own_search": round(float(np.mean(own)) * 1e5, 1) if own else None,
             "cpu_s_per_sim_s_total": round(total, 5),
             "bound_2_cores": round(2.0 / total, 1) if total > 0 else None,
             "bound_emulator_core": round(1.0 / emu, 1) if emu > 0 else None,
         }  # fmt: skip
     out = {
-        "vehicles": args.vehicles, "backend": args.backend, "speedup_requested": args.speedup,
+        "code": code_commit(), "vehicles": args.vehicles, "backend": args.backend, "speedup_requested": args.speedup,
         "lockstep": args.lockstep or args.speedup <= 0,
         "sim_wall_ratio_search": round(ratio, 1), "wall_total_s": round(wall_total, 1),
         **usage,

@@ -6,7 +6,9 @@ so it can use at most one core. A size fits one core when the process needs less
 core-seconds of CPU per sim second at speed-up 1 (one core keeps real time with headroom) and
 every vehicle delivered >= 9.9 telemetry datagrams per sim second (one per 10 Hz tick). Whether
 the sim clock actually kept pace (sim/wall >= 0.98) is printed too: on a shared, oversubscribed
-host the process is descheduled and that column measures the host, not the emulator. Usage: python benchmarks/emulator_capacity.py [N ...]
+host the process is descheduled and that column measures the host, not the emulator.
+Beyond 254 vehicles the MAVLink system ids repeat (vehicle i is system i % 254 + 1), every
+vehicle on its own UDP port as always. Usage: python benchmarks/emulator_capacity.py [N ...]
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ WALL = 10.0
 
 
 def main() -> None:
-    sizes = [int(a) for a in sys.argv[1:]] or [100, 150, 200, 254]
+    sizes = [int(a) for a in sys.argv[1:]] or [254, 508, 1000, 1500, 2000]
     best = paced = 0
     print(load_note())
     print(
@@ -41,7 +43,7 @@ def main() -> None:
     print(load_note())
     print(f"vehicles at real time with 10 Hz telemetry within one core's CPU: {best}")
     print(f"largest size whose sim clock kept pace on this host during the run: {paced}")
-    print("(254 is the most one process can host: MAVLink system ids 1..254, 255 = GCS)")
+    print("(system ids repeat every 254 vehicles, each vehicle on its own UDP port)")
 
 
 if __name__ == "__main__":

@@ -14,7 +14,7 @@ from pathlib import Path
 from mdm_profiles import builtin_profile
 from sim_vehicle_stub.config import EmulatorConfig
 from sim_vehicle_stub.emulator import Emulator
-from sim_vehicle_stub.vehicle import Setpoint
+from sim_vehicle_stub.vehicle import NeuSetpoint
 
 SINK = Path(__file__).with_name("emulator_sink.py")
 
@@ -57,10 +57,11 @@ def fly_everyone(emu: Emulator) -> None:
             if name in v.params:
                 v.params.set(name, 1e9)
         v.params.set("MDM_SENSOR", 0)
-        v.on_setpoint(Setpoint(0.0, centre, None, 30.0, None, None))
+        v.apply_params()  # (the failsafes and the sensor read the parameters from here)
+        v.on_setpoint(NeuSetpoint(0.0, centre, None, 30.0, None, None))
         v.arm(True)
         v.set_mode(v.persona.mode(v.persona.external_mode))
-        v.on_setpoint(Setpoint(0.0, centre, None, 30.0, None, None))
+        v.on_setpoint(NeuSetpoint(0.0, centre, None, 30.0, None, None))
 
 
 def run(n: int, speedup: float | None, wall: float, base_port: int) -> RunResult:

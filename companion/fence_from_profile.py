@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from companion.geofence import Geofence
-from companion.link.geo import LocalFrame
+from companion.link.local_frame import LocalFrame
 from companion.mission.fence_watch import FenceWatch
 from mdm_profiles import MissionProfile
 

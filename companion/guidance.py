@@ -30,7 +30,7 @@ class GuidanceConfig:
 
 
 @dataclass(frozen=True)
-class Setpoint:
+class NedSetpoint:
     """One setpoint in the local NED frame; velocity and the point it steers to."""
 
     north: float
@@ -53,7 +53,7 @@ def pursuit(
     config: GuidanceConfig,
     fence: Geofence,
     period: float,
-) -> Setpoint:
+) -> NedSetpoint:
     """Velocity pointing at the (fenced) waypoint, slowed so one ``period`` never overshoots it.
 
     ``period`` is the vehicle time until the next setpoint; the look-ahead point
@@ -77,4 +77,4 @@ def pursuit(
             vn, ve = vn * scale, ve * scale
     target_down = -config.altitude
     vd = min(max(config.climb_gain * (target_down - down), -config.max_climb), config.max_climb)
-    return Setpoint(tn, te, target_down, vn, ve, float(vd))
+    return NedSetpoint(tn, te, target_down, vn, ve, float(vd))

@@ -289,7 +289,17 @@ def check_requests(s: Session) -> list[CheckResult]:
     ]
 
 
-def check_params(s: Session) -> list[CheckResult]:
+_PARAM_REREAD_ROUNDS = 3
+"""Rounds of PARAM_REQUEST_READ by index for values the list stream dropped, as a GCS does."""
+
+
+def _param_list(s: Session) -> tuple[dict[int, Any], int | None, int]:
+    """Every PARAM_VALUE by index, the count the vehicle reports, and how many were re-read.
+
+    The list is streamed once; indices it dropped (a lossy UDP link under load: stock PX4 SITL
+    lost 76 of 901 once) are asked for one by one, in a few rounds, as QGroundControl and
+    MAVProxy do.
+    """
     assert s.sysid is not None
     s.mav.param_request_list_send(s.sysid, s.compid)
     values: dict[int, Any] = {}
@@ -301,14 +311,34 @@ def check_params(s: Session) -> list[CheckResult]:
         if m is None:
             break
         total = m.param_count
-        values[m.param_index] = m
+        if m.param_index < total:  # PX4 announces changes made on board with index 65535
+            values[m.param_index] = m
+    # PX4's count can change while it streams (parameters become used): the last one holds.
+    values = {i: m for i, m in values.items() if total is not None and i < total}
+    reread = 0
+    for _ in range(_PARAM_REREAD_ROUNDS):
+        missing = [i for i in range(total or 0) if i not in values]
+        if not missing:
+            break
+        reread += len(missing)
+        for index in missing:
+            s.mav.param_request_read_send(s.sysid, s.compid, b"", index)
+            m = s.recv({"PARAM_VALUE"}, s.timeout, lambda m, i=index: m.param_index == i)
+            if m is not None:
+                values[index] = m
+    return values, total, reread
+
+
+def check_params(s: Session) -> list[CheckResult]:
+    assert s.sysid is not None
+    values, total, reread = _param_list(s)
     if not values:
         return [CheckResult("params_list", False, "no PARAM_VALUE after PARAM_REQUEST_LIST")]
     complete = total is not None and len(values) == total
-    out = [CheckResult("params_list", complete, f"{len(values)} of {total}")]
+    detail = f"{len(values)} of {total}" + (f" ({reread} re-read by index)" if reread else "")
+    out = [CheckResult("params_list", complete, detail)]
     first = values[min(values)]
-    by_name = s.mav.param_request_read_send(s.sysid, s.compid, first.param_id.encode(), -1)
-    del by_name
+    s.mav.param_request_read_send(s.sysid, s.compid, first.param_id.encode(), -1)
     got = s.recv({"PARAM_VALUE"}, s.timeout, lambda m: m.param_id == first.param_id)
     out.append(CheckResult("params_read", got is not None, f"{first.param_id}"))
     real = [m for m in values.values() if m.param_type == ml.MAV_PARAM_TYPE_REAL32]
@@ -332,6 +362,85 @@ def check_mission_count(s: Session) -> CheckResult:
     if m is None:
         return CheckResult("mission_count", False, "no MISSION_COUNT")
     return CheckResult("mission_count", True, f"count {m.count}")
+
+
+_FENCE = ml.MAV_MISSION_TYPE_FENCE
+_FENCE_HALF_SIDE = 100_000
+"""1e-7 degrees: the check's fence is a square about 2.2 km across around the vehicle."""
+
+
+def _fence_download(s: Session) -> list[Any] | None:
+    """Every fence item the vehicle stores (MISSION_ITEM_INT), None where it did not answer."""
+    assert s.sysid is not None
+    s.mav.mission_request_list_send(s.sysid, s.compid, _FENCE)
+    count = s.recv({"MISSION_COUNT"}, s.timeout, lambda m: m.mission_type == _FENCE)
+    if count is None:
+        return None
+    items = []
+    for seq in range(count.count):
+        s.mav.mission_request_int_send(s.sysid, s.compid, seq, _FENCE)
+        item = s.recv({"MISSION_ITEM_INT"}, s.timeout,
+                      lambda m, seq=seq: m.mission_type == _FENCE and m.seq == seq)  # fmt: skip
+        if item is None:
+            return None
+        items.append(item)
+    s.mav.mission_ack_send(s.sysid, s.compid, ml.MAV_MISSION_ACCEPTED, _FENCE)
+    return items
+
+
+def _fence_upload(s: Session, items: list[tuple[Any, ...]]) -> str:
+    """Upload fence items (MISSION_ITEM_INT fields after seq); '' when accepted, else why not."""
+    assert s.sysid is not None
+    if not items:
+        s.mav.mission_clear_all_send(s.sysid, s.compid, _FENCE)
+    else:
+        s.mav.mission_count_send(s.sysid, s.compid, len(items), _FENCE)
+    while True:
+        m = s.recv({"MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK"}, s.timeout,
+                   lambda m: m.mission_type == _FENCE)  # fmt: skip
+        if m is None:
+            return "no answer"
+        if m.get_type() == "MISSION_ACK":
+            name = ml.enums["MAV_MISSION_RESULT"][m.type].name
+            return "" if m.type == ml.MAV_MISSION_ACCEPTED else name
+        if not 0 <= m.seq < len(items):
+            return f"asked for item {m.seq} of {len(items)}"
+        s.mav.mission_item_int_send(s.sysid, s.compid, m.seq, *items[m.seq], _FENCE)
+
+
+def _fields(item: Any) -> tuple[Any, ...]:
+    return (item.frame, item.command, 0, item.autocontinue, item.param1, item.param2,
+            item.param3, item.param4, item.x, item.y, item.z)  # fmt: skip
+
+
+def check_fence(s: Session) -> CheckResult:
+    """A fence (an inclusion square around the vehicle, mission_type FENCE) is taken, read back
+    equal, and the vehicle's own fence (none, or what it held) put back."""
+    where = next((m for kind in ("HOME_POSITION", "GLOBAL_POSITION_INT")
+                  for _, m in reversed(s.seen.get(kind, []))), None)  # fmt: skip
+    if where is None:
+        return CheckResult("fence", False, "no HOME_POSITION or GLOBAL_POSITION_INT to centre on")
+    home = where.get_type() == "HOME_POSITION"
+    lat, lon = (where.latitude, where.longitude) if home else (where.lat, where.lon)
+    before = _fence_download(s)
+    if before is None:
+        return CheckResult("fence", False, "no fence download (MISSION_REQUEST_LIST, FENCE)")
+    d = _FENCE_HALF_SIDE
+    square = [(lat - d, lon - d), (lat + d, lon - d), (lat + d, lon + d), (lat - d, lon + d)]
+    vertex = ml.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
+    items = [(ml.MAV_FRAME_GLOBAL, vertex, 0, 1, 4.0, 0.0, 0.0, 0.0, la, lo, 0.0)
+             for la, lo in square]  # fmt: skip
+    refused = _fence_upload(s, items)
+    back = _fence_download(s) if not refused else None
+    restored = _fence_upload(s, [_fields(m) for m in before])
+    if refused:
+        return CheckResult("fence", False, f"upload of 4 vertices: {refused}")
+    got = [(m.command, m.x, m.y) for m in back or []]
+    if got != [(vertex, la, lo) for la, lo in square]:
+        return CheckResult("fence", False, f"read back {got}, sent {square}")
+    if restored:
+        return CheckResult("fence", False, f"4 vertices read back equal; restore: {restored}")
+    return CheckResult("fence", True, f"4 vertices read back equal; {len(before)} put back")
 
 
 def check_ftp(s: Session) -> CheckResult:
@@ -371,6 +480,7 @@ CHECKS: tuple[Callable[[Session], CheckResult | list[CheckResult]], ...] = (
     check_requests,
     check_params,
     check_mission_count,
+    check_fence,
     check_ftp,
     check_timesync,
 )

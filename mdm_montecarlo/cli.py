@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import sys
 import tempfile
 import time
@@ -178,6 +179,13 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cpu_seconds() -> float:
+    """User + system CPU of this process and of its finished children (workers, plotters)."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
 def _reproduce(args: argparse.Namespace) -> int:
     tables = tuple(t.strip() for t in args.tables.split(",") if t.strip())
     rows = study_rows(tables)
@@ -186,6 +194,7 @@ def _reproduce(args: argparse.Namespace) -> int:
     out = Path(args.out)
     _check_writable(out)
     start = time.perf_counter()
+    cpu_start = _cpu_seconds()
     partial = ""
     try:
         results = dict(zip(cases, _simulate(profiles, args, "reproduce"), strict=True))
@@ -196,6 +205,7 @@ def _reproduce(args: argparse.Namespace) -> int:
         partial = f"{len(results)} of {len(cases)} configurations finished"
         rows = [r for r in rows if r.case in results]
     wall = time.perf_counter() - start
+    cpu_simulated = _cpu_seconds()
     if partial and not rows:
         print(f"mdm-montecarlo: interrupted; {partial}, no report written", file=sys.stderr)
         return INTERRUPTED
@@ -214,6 +224,15 @@ def _reproduce(args: argparse.Namespace) -> int:
     _emit(measured, args.json)
     if not args.json:
         print(f"\nreport: {path} ({wall:.1f} s)", file=sys.stderr)
+    # Where the time went (benchmarks/reproduce_wall.py reads this line): start-up is the
+    # imports and the validated profiles, before the first run.
+    print(
+        f"phases: start-up {cpu_start:.1f} CPU-s; simulation {wall:.1f} s wall, "
+        f"{cpu_simulated - cpu_start:.1f} CPU-s; report "
+        f"{time.perf_counter() - start - wall:.1f} s wall, "
+        f"{_cpu_seconds() - cpu_simulated:.1f} CPU-s",
+        file=sys.stderr,
+    )
     return 0
 
 

@@ -25,6 +25,14 @@ step, strengths only for the pairs within the signal radius. A delivery touches 
 whose message or losses changed since the last one (a few per cent of them per iteration).
 All of this gives bit-for-bit the results of solving every pair and delivering everywhere.
 
+When every message arrives at once and none is lost (message_delay 0, message_drop 0, the
+paper's setting), what receiver i heard from sender j is sender j's own best and reading as
+they stand (both are dropped by the same ``forget``: after a delivery every vehicle of a run
+knows the same confirmed targets). The (runs, receivers, senders) inbox is then not kept: the
+heard tables are views of the own bests, the best of all peers is found from the two best of
+each run, and the losses' draw is skipped by advancing the generator. Same results bit for bit
+as the inbox (tests/montecarlo/test_pso_engine.py compares the two).
+
 Randomness: SeedSequence([seed, block]) as in engine.py, drawn in a fixed order over the whole
 block, so results are identical for any number of workers.
 """
@@ -34,6 +42,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -42,8 +51,9 @@ from numpy.typing import NDArray
 from mdm_core.search import SearchPolicy
 from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.planar import length
-from mdm_core.search.pso import Best, forget, random_informants, signal_fitness
+from mdm_core.search.pso import Best, forget, random_informants, signal_fitness, swarm_best
 from mdm_core.search.swarm_iteration import (
+    BestOf,
     choose_move,
     explore,
     read_into_best,
@@ -256,8 +266,13 @@ def _nonzero(mask: BoolArray) -> tuple[IntArray, IntArray, IntArray]:
     return i, j, k
 
 
-def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
-    """Simulate ``n_runs`` missions of a pso/spso/arpso profile (block ``block`` of ``seed``)."""
+def run_swarm_block(
+    profile: MissionProfile, seed: int, block: int, n_runs: int, *, keep_inbox: bool = False
+) -> BlockResult:
+    """Simulate ``n_runs`` missions of a pso/spso/arpso profile (block ``block`` of ``seed``).
+
+    keep_inbox: keep the per-receiver inbox even where every message arrives at once and none
+    is lost (same results, slower; the module's docstring)."""
     scenario = Scenario.from_profile(profile)
     config = swarm_config(profile)
     spec = profile.policy.swarm
@@ -295,6 +310,12 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
         links = random_informants(rng, (n_runs,), n_vehicles, spec.informants)
     delay = round(spec.message_delay / dt)
     outbox: deque[Message] = deque(maxlen=delay + 1)
+    broadcast = delay == 0 and spec.message_drop == 0.0 and not keep_inbox
+    best_of: BestOf = swarm_best
+    if broadcast:
+        best_of = _best_of_all_peers
+        if config.variant == "spso":
+            best_of = partial(_best_of_informants, informants=min(spec.informants, n_vehicles - 1))
 
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
     gaps = sensors.squared_gaps(position, 0.0)
@@ -308,6 +329,9 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
     followed = 0
 
     while t < stop - 1e-9:
+        heard, heard_current = inbox.heard, inbox.current
+        if broadcast:
+            heard, heard_current = _heard_from_own(own), _to_every_receiver(current)
         move, follow, from_peer = choose_move(
             config,
             explorer,
@@ -316,13 +340,14 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
             waypoint=waypoint,
             guided=guided,
             own=own,
-            heard=inbox.heard,
-            heard_current=inbox.current,
+            heard=heard,
+            heard_current=heard_current,
             current=current,
             previous_best=previous_best,
             links=links,
             distance=speed * dt,
             rng=rng,
+            best_of=best_of,
         )
         new_position = np.clip(position + move, 0.0, area)
         step = new_position - position
@@ -344,25 +369,108 @@ def run_swarm_block(profile: MissionProfile, seed: int, block: int, n_runs: int)
         current, source = sensors.fitness(gaps, t, known)
         own, previous_best = read_into_best(own, known, position, current, source)
 
-        outbox.append(Message(own.copy(), current.copy(), known.astype(np.float32)))
-        # Drawn every iteration, so the random stream does not depend on delay or drop.
-        got = (rng.random((*shape, n_vehicles)) >= spec.message_drop) & others
-        if len(outbox) > delay:
-            inbox.deliver(outbox[0], got, known)
+        if broadcast:
+            # The losses are drawn every iteration, so the random stream does not depend on
+            # delay or drop; with drop 0 none is lost and the numbers are not needed.
+            _skip_uniforms(rng, n * n_vehicles)
+            known |= known.any(axis=1, keepdims=True)
+        else:
+            outbox.append(Message(own.copy(), current.copy(), known.astype(np.float32)))
+            got = (rng.random((*shape, n_vehicles)) >= spec.message_drop) & others
+            if len(outbox) > delay:
+                inbox.deliver(outbox[0], got, known)
         own = forget(own, known)
-        inbox.forget(known)
+        if not broadcast:
+            inbox.forget(known)
         if config.variant == "spso":
             links, social_fitness = refresh_informants(
                 own,
-                inbox.heard,
+                _heard_from_own(own) if broadcast else inbox.heard,
                 links,
                 social_fitness,
                 lambda: random_informants(rng, (n_runs,), n_vehicles, spec.informants),
+                best_of,
             )
         if t >= duration and _all_confirmed(first, real):
             break
 
     return BlockResult(block, first, steps * n, float(t * n), followed)
+
+
+def _skip_uniforms(rng: np.random.Generator, count: int) -> None:
+    """Move ``rng`` past ``count`` numbers of random(): PCG64 (default_rng) makes each from
+    one 64-bit output, so it jumps ahead without drawing them (these engines draw nothing
+    narrower, which would leave a buffered half behind)."""
+    bits = rng.bit_generator
+    if isinstance(bits, np.random.PCG64):
+        bits.advance(count)
+    else:
+        rng.random(count)
+
+
+def _to_every_receiver(values: NDArray[Any]) -> NDArray[Any]:
+    """(runs, senders, ...) as every receiver holds them: (runs, receivers, senders, ...), a
+    view."""
+    n = values.shape[1]
+    return np.broadcast_to(values[:, None], (values.shape[0], n, *values.shape[1:]))
+
+
+def _heard_from_own(own: Best) -> Best:
+    """The inbox's heard bests when every message arrives at once: each sender's own best."""
+    return Best(
+        _to_every_receiver(own.position),
+        _to_every_receiver(own.fitness),
+        _to_every_receiver(own.source),
+    )
+
+
+def _best_of_all_peers(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArray]:
+    """swarm_best(own, heard, links) for heard = _heard_from_own(own) and links = every other
+    vehicle (PSO, ARPSO): every receiver compares its own best with the run's first best. For
+    the vehicle holding it, that is its own best, which wins the tie, as it wins against the
+    others' best in swarm_best; for the others it is the first best of their peers."""
+    fitness = own.fitness
+    first = np.argmax(fitness, axis=1)
+    top = fitness[np.arange(len(fitness)), first]
+    slot = np.broadcast_to(first[:, None], fitness.shape)
+    return _own_or_peer(own, slot, np.broadcast_to(top[:, None], fitness.shape))
+
+
+def _best_of_informants(
+    own: Best, heard: Best, links: BoolArray, informants: int
+) -> tuple[Best, BoolArray]:
+    """swarm_best(own, heard, links) for heard = _heard_from_own(own) and SPSO's links from
+    random_informants, which gives every particle exactly ``informants`` (<= vehicles - 1):
+    only those are compared, in the order of their index (argmax's tie order kept)."""
+    runs, n = own.fitness.shape
+    if informants == 0:
+        return _own_or_peer(own, np.zeros((runs, n), dtype=np.intp), np.full((runs, n), -np.inf))
+    # Each (run, particle) row of links holds its informants in increasing index order.
+    cell = np.flatnonzero(links).reshape(runs, n, informants)
+    peer = cell % n
+    heard_fitness = own.fitness.reshape(-1)[cell // (n * n) * n + peer]
+    pick = np.argmax(heard_fitness, axis=-1)[..., None]
+    slot = np.take_along_axis(peer, pick, axis=-1)[..., 0]
+    other = np.take_along_axis(heard_fitness, pick, axis=-1)[..., 0]
+    return _own_or_peer(own, slot, other)
+
+
+def _own_or_peer(own: Best, slot: IntArray, other: FloatArray) -> tuple[Best, BoolArray]:
+    """The end of swarm_best: peer ``slot`` of the same run (fitness ``other``) or the own best
+    where it is at least as good."""
+    runs, n = own.fitness.shape
+    flat = (np.arange(runs)[:, None] * n + slot).reshape(-1)
+    position = _as_complex(np.ascontiguousarray(own.position)).reshape(-1)[flat]
+    source = own.source.reshape(-1)[flat].reshape(slot.shape)
+    mine = own.fitness >= other
+    best = Best(
+        np.where(
+            mine[..., None], own.position, position.reshape(slot.shape)[..., None].view(np.float64)
+        ),
+        np.where(mine, own.fitness, other),
+        np.where(mine, own.source, source).astype(np.intp),
+    )
+    return best, mine
 
 
 def _as_complex(points: FloatArray) -> NDArray[np.complex128]:

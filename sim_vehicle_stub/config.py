@@ -5,10 +5,19 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from mdm_core.ports import GCS_UDP, TCP_BASE, VEHICLE_OWN_UDP_BASE, VEHICLE_UDP_BASE
+from mdm_core.ports import GCS_UDP, TCP_BASE, TCP_STRIDE, VEHICLE_OWN_UDP_BASE, VEHICLE_UDP_BASE
 from mdm_profiles import MissionProfile
 
-MAX_VEHICLES = 254
+SYSID_SPACE = 254
+"""MAVLink system ids 1..254 (255 is the GCS). Vehicle i is system ``i % 254 + 1``: ids repeat in
+blocks of 254, every vehicle keeping its own UDP port (and TCP port), so one link never carries
+two vehicles with the same id. The one shared link, the GCS output, allows one block only."""
+MAX_PORT = 65535
+
+
+def system_id(index: int) -> int:
+    """MAVLink system id of vehicle ``index`` (0-based)."""
+    return index % SYSID_SPACE + 1
 
 
 @dataclass(frozen=True)
@@ -58,11 +67,26 @@ class EmulatorConfig:
     environment (mavlink_signing.load_signing_key), never from the profile."""
 
     def __post_init__(self) -> None:
-        if not 1 <= self.fleet_size <= MAX_VEHICLES:
+        n = self.fleet_size
+        if n < 1:
+            raise ValueError(f"vehicles must be >= 1, got {n}")
+        if self.gcs and n > SYSID_SPACE:
             raise ValueError(
-                f"vehicles must be 1..{MAX_VEHICLES} (system ids 1..254; 255 is the GCS), "
-                f"got {self.fleet_size}"
+                f"--gcs carries every vehicle on one link, so at most {SYSID_SPACE} vehicles "
+                f"(system ids 1..254; 255 is the GCS), got {n}; without --gcs system ids "
+                "repeat every 254 vehicles, each vehicle on its own port"
             )
+        ports = [("base_port", self.base_port, n - 1)]
+        if self.bind_port_base:
+            ports.append(("bind_port_base", self.bind_port_base, n - 1))
+        if self.tcp:
+            ports.append(("tcp_base", self.tcp_base, TCP_STRIDE * (n - 1)))
+        for name, base, span in ports:
+            if not (base >= 1 and base + span <= MAX_PORT):
+                raise ValueError(
+                    f"{name} {base} with {n} vehicles needs ports up to {base + span}; "
+                    f"UDP/TCP ports stop at {MAX_PORT}"
+                )
         if self.telemetry_hz <= 0 or self.sim_step <= 0:
             raise ValueError("telemetry_hz and sim_step must be > 0")
         if self.signing_key is not None and len(self.signing_key) != 32:

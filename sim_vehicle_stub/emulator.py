@@ -18,9 +18,8 @@ from mavlink_signing import SigningState
 from mdm_core.dynamics import LagModel
 from mdm_core.ports import TCP_STRIDE
 from mdm_core.world import Scenario
-from sim_vehicle_stub.clock import SimClock
 from sim_vehicle_stub.commands import CommandHandler
-from sim_vehicle_stub.config import EmulatorConfig
+from sim_vehicle_stub.config import EmulatorConfig, system_id
 from sim_vehicle_stub.encoder import Encoder
 from sim_vehicle_stub.endpoints import GcsEndpoint, TcpServer, UdpEndpoint
 from sim_vehicle_stub.events import EventLog
@@ -29,27 +28,35 @@ from sim_vehicle_stub.fast_streams import (
     CRC_EXTRA,
     DEBUG_VECT,
     NVF,
+    POSITION_STREAMS,
     contact_payload,
     signal_payload,
 )
-from sim_vehicle_stub.fleet import Fleet
-from sim_vehicle_stub.geo import GeoFrame
+from sim_vehicle_stub.fleet_kinematics import Fleet
+from sim_vehicle_stub.geo_frame import GeoFrame
 from sim_vehicle_stub.handlers import MessageHandler
 from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.node import VehicleNode
 from sim_vehicle_stub.personas import ProfileFacts, create_persona
 from sim_vehicle_stub.personas.base import Behaviour
 from sim_vehicle_stub.sensing import Reading, SensorWorld
+from sim_vehicle_stub.sim_clock import SimClock
 from sim_vehicle_stub.telemetry import Telemetry
 from sim_vehicle_stub.vehicle import Vehicle
 
 log = logging.getLogger(__name__)
+HEARTBEAT = d.MAVLINK_MSG_ID_HEARTBEAT
 _RCVBUF = 1 << 20
 _MIN_SLEEP = 0.002
 
 
 def _same(endpoint: UdpEndpoint) -> UdpEndpoint:
     return endpoint
+
+
+def _resolve(future: asyncio.Future[None]) -> None:
+    if not future.done():
+        future.set_result(None)
 
 
 def _udp_socket(host: str, port: int) -> socket.socket:
@@ -95,7 +102,7 @@ class Emulator:
                 speed=profile.fleet.speed,
                 tau=profile.fleet.tau,
                 sensor_radii=tuple(s.radius for s in self.scenario.sensors),
-                system_id=i + 1,
+                system_id=system_id(i),
                 timeout_scale=max(scale, 1.0),
                 battery_endurance=config.battery_endurance,
             )
@@ -103,7 +110,7 @@ class Emulator:
                 i, persona, persona.param_table(facts), self.fleet, self.events, self._now
             )
             signing = SigningState(config.signing_key) if config.signing_key else None
-            self.nodes.append(VehicleNode(vehicle, Encoder(i + 1, signing=signing)))
+            self.nodes.append(VehicleNode(vehicle, Encoder(vehicle.sysid, signing=signing)))
         self.handler = MessageHandler(CommandHandler(self.telemetry, o.alt), self.geo, self._now)
         self.udp: list[UdpEndpoint] = []
         self.tcp: list[TcpServer] = []
@@ -113,8 +120,8 @@ class Emulator:
         """Messages skipped because a value did not fit its field."""
         self._task: asyncio.Task[None] | None = None
         self._stop = asyncio.Event()
-        self._setpoint_in = asyncio.Event()
-        self._holding = False
+        self._held: asyncio.Future[None] | None = None
+        """While lockstep holds a tick: resolved by the last answer it waits for."""
         self._setpoint_wall = [-math.inf] * n
         """Wall time (monotonic) of each vehicle's last setpoint (lockstep)."""
         self.lockstep_waits = 0
@@ -155,6 +162,12 @@ class Emulator:
         self._task = asyncio.create_task(self._loop(), name="sim-loop")
         log.info("emulator up: %d vehicles, speedup %s, MAVLink signing %s", len(self.nodes),
                  cfg.speedup or "max", "on" if cfg.signing_key else "off")  # fmt: skip
+
+    @property
+    def running(self) -> bool:
+        """The simulation loop is stepping (started, and neither stopped nor crashed): what a
+        test of hostile input checks after every batch."""
+        return self._task is not None and not self._task.done()
 
     async def stop(self) -> None:
         self._stop.set()
@@ -207,8 +220,9 @@ class Emulator:
                 log.exception("vehicle %d: error handling %s", node.vehicle.index, msg.get_type())
         if node.vehicle.setpoint is not before:
             self._setpoint_wall[node.vehicle.index] = time.monotonic()
-            if self._holding and not self._behind():
-                self._setpoint_in.set()  # the last answer the held tick waited for
+            held = self._held
+            if held is not None and not held.done() and not self._behind():
+                held.set_result(None)  # the last answer the held tick waited for
         self._flush_state(node)
 
     def _flush_state(self, node: VehicleNode) -> None:
@@ -278,17 +292,21 @@ class Emulator:
             return
         self.lockstep_waits += 1
         deadline = time.monotonic() + self.config.lockstep_wall
-        self._holding = True
+        loop = asyncio.get_running_loop()
+        # One future and one timer per wait (asyncio.wait_for would wrap a task around it).
         try:
             while self._behind() and not self._stop.is_set():
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
                     return
-                self._setpoint_in.clear()
-                with contextlib.suppress(TimeoutError):
-                    await asyncio.wait_for(self._setpoint_in.wait(), remaining)
+                held = self._held = loop.create_future()
+                timer = loop.call_later(remaining, _resolve, held)
+                try:
+                    await held
+                finally:
+                    timer.cancel()
         finally:
-            self._holding = False
+            self._held = None
 
     def _tick(self, dt: float) -> None:
         t = self.clock.now
@@ -303,25 +321,30 @@ class Emulator:
         active = np.array([v.limits.sensor for v in vehicles], dtype=np.intp)
         radius = np.array([v.sensor_radius() for v in vehicles])
         readings = self.sensors.tick(t, self.fleet.pos, active, radius)
-        builders = self.telemetry.builders
-        batch = self.telemetry.position_batch()
+        tel = self.telemetry
+        args, layouts, builders = tel.args, tel.layouts, tel.builders
+        batch = tel.position_batch()
         for node in self.nodes:
             v = node.vehicle
             enc = node.encoder
+            frame = enc.frame
             due = node.schedule.due(t)
-            if d.MAVLINK_MSG_ID_HEARTBEAT not in due and node.early_heartbeat_due(t):
-                due.insert(0, d.MAVLINK_MSG_ID_HEARTBEAT)
-            if d.MAVLINK_MSG_ID_HEARTBEAT in due:
+            if HEARTBEAT not in due and node.early_heartbeat_due(t):
+                due.insert(0, HEARTBEAT)
+            if HEARTBEAT in due:
                 v.state_changed = False
                 node.last_heartbeat = t
             frames = []
             for m in due:
-                rows = batch.get(m)
-                if rows is not None:
-                    frames.append(enc.frame(m, CRC_EXTRA[m], rows[v.index]))
+                if m in POSITION_STREAMS:
+                    frames.append(frame(m, CRC_EXTRA[m], batch[m][v.index]))
                     continue
                 try:
-                    frames.append(enc.pack(builders[m](v)))
+                    layout = layouts.get(m)
+                    if layout is None:
+                        frames.append(enc.pack(builders[m](v)))
+                    else:
+                        frames.append(frame(m, layout.crc_extra, layout.payload(args[m](v))))
                 except (ValueError, OverflowError, struct.error):
                     # A state no field can carry (a vehicle flown thousands of km away):
                     # that one message is skipped; the vehicle and the others carry on.
@@ -329,9 +352,10 @@ class Emulator:
             reading = readings.get(v.index)
             if reading is not None:
                 frames += self._sensor_frames(enc, reading)
-            for severity, text in v.status:
-                frames.append(enc.pack(d.MAVLink_statustext_message(severity, text.encode())))
-            v.status.clear()
+            if v.status:
+                for severity, text in v.status:
+                    frames.append(enc.pack(d.MAVLink_statustext_message(severity, text.encode())))
+                v.status.clear()
             node.send_frames(frames)
 
     def _sensor_frames(self, enc: Encoder, r: Reading) -> list[bytes]:

@@ -16,8 +16,10 @@ from pymavlink.generator import mavcrc
 from mavlink_signing import SigningState
 from sim_vehicle_stub.mavlink import dialect
 
-_HEADER = struct.Struct("<BBBBBBBHB")
+_HEADER = struct.Struct("<BBBBBBHB")
+"""A MAVLink 2 header after its magic byte: length, flags, seq, system, component, 24-bit id."""
 _CRC = struct.Struct("<H")
+_EXTRA = [bytes((i,)) for i in range(256)]
 _COUNTED = re.compile(r"(\d+)([a-zA-Z?])")
 _FAST: dict[type, tuple[str, ...] | None] = {}
 
@@ -32,10 +34,13 @@ def _fast_fields(cls: type) -> tuple[str, ...] | None:
     return _FAST[cls]
 
 
-def _crc16(data: bytes) -> int:
-    if mavcrc.mcrf4xx is not None:
-        return int(mavcrc.mcrf4xx(data))
+def _x25crc(data: bytes) -> int:
     return int(mavcrc.x25crc(data).crc)
+
+
+# fastcrc's C function when installed (pymavlink uses it too), called without a wrapper:
+# every telemetry frame goes through here.
+_crc = mavcrc.mcrf4xx or _x25crc
 
 
 class Encoder:
@@ -62,13 +67,14 @@ class Encoder:
 
     def frame(self, msg_id: int, crc_extra: int, payload: bytes) -> bytes:
         """A MAVLink 2 frame around a payload whose trailing zeros are already cut."""
-        head = _HEADER.pack(
-            0xFD, len(payload), self._incompat, 0, self.mav.seq, self.sysid, self.compid,
-            msg_id & 0xFFFF, msg_id >> 16,
-        )  # fmt: skip
-        body = head[1:] + payload
-        self.mav.seq = (self.mav.seq + 1) % 256
-        data = head[:1] + body + _CRC.pack(_crc16(body + bytes((crc_extra,))))
+        mav = self.mav
+        seq = mav.seq
+        mav.seq = (seq + 1) & 0xFF
+        body = _HEADER.pack(
+            len(payload), self._incompat, 0, seq, self.sysid, self.compid, msg_id & 0xFFFF,
+            msg_id >> 16,
+        ) + payload  # fmt: skip
+        data = b"\xfd" + body + _CRC.pack(_crc(body + _EXTRA[crc_extra]))
         if self.signing is not None:
             data += self.signing.signature(data)
         return data

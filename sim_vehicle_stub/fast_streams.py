@@ -1,5 +1,6 @@
 """The 10 Hz streams (GLOBAL_POSITION_INT, LOCAL_POSITION_NED, ATTITUDE) and the sensor messages
-packed for every vehicle at once with numpy, byte-identical to pymavlink's encoding.
+packed for every vehicle at once with numpy, and the 1 Hz streams packed from their fields by a
+precomputed layout; all byte-identical to pymavlink's encoding.
 
 These are most of what the emulator sends; packing them per vehicle through message objects was
 the main cost at high speed-ups.
@@ -7,11 +8,15 @@ the main cost at high speed-ups.
 
 from __future__ import annotations
 
+import inspect
+import operator
 import struct
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
-from sim_vehicle_stub.fleet import Fleet
+from sim_vehicle_stub.fleet_kinematics import Fleet
 from sim_vehicle_stub.mavlink import dialect as d
 
 GPI, LPN, ATT = (
@@ -19,54 +24,62 @@ GPI, LPN, ATT = (
     d.MAVLINK_MSG_ID_LOCAL_POSITION_NED,
     d.MAVLINK_MSG_ID_ATTITUDE,
 )
+POSITION_STREAMS = frozenset((GPI, LPN, ATT))
+"""The 10 Hz streams packed for the whole fleet at once."""
 NVF, DEBUG_VECT = d.MAVLINK_MSG_ID_NAMED_VALUE_FLOAT, d.MAVLINK_MSG_ID_DEBUG_VECT
 CRC_EXTRA = {k: d.mavlink_map[k].crc_extra for k in (GPI, LPN, ATT, NVF, DEBUG_VECT)}
 
-_GPI = np.dtype(
-    [("t", "<u4"), ("lat", "<i4"), ("lon", "<i4"), ("alt", "<i4"), ("rel", "<i4"),
-     ("vx", "<i2"), ("vy", "<i2"), ("vz", "<i2"), ("hdg", "<u2")]
-)  # fmt: skip
-_LPN = np.dtype([("t", "<u4")] + [(k, "<f4") for k in ("x", "y", "z", "vx", "vy", "vz")])
-_ATT = np.dtype([("t", "<u4")] + [(k, "<f4") for k in ("r", "p", "y", "rs", "ps", "ys")])
 _NVF = struct.Struct("<If10s")
 _DVEC = struct.Struct("<Qfff10s")
 
 
 def _rows(arr: np.ndarray) -> list[bytes]:
-    buf, size = arr.tobytes(), arr.dtype.itemsize
+    buf, size = arr.tobytes(), arr.itemsize * arr.shape[1]
     return [buf[i : i + size].rstrip(b"\x00") or b"\x00" for i in range(0, len(buf), size)]
 
 
-def position_payloads(
-    fleet: Fleet,
-    boot_ms: int,
-    lat: np.ndarray,
-    lon: np.ndarray,
-    amsl: np.ndarray,
-    roll: np.ndarray,
-    pitch: np.ndarray,
-) -> dict[int, list[bytes]]:
-    """Payloads of the three position/attitude messages, one per vehicle (trailing zeros cut)."""
-    n = len(fleet)
-    gpi = np.zeros(n, _GPI)
-    gpi["t"] = boot_ms
-    gpi["lat"] = (lat * 1e7).astype(np.int32)
-    gpi["lon"] = (lon * 1e7).astype(np.int32)
-    gpi["alt"] = (amsl * 1000).astype(np.int32)
-    gpi["rel"] = (fleet.alt * 1000).astype(np.int32)
-    gpi["vx"] = (fleet.vel[:, 0] * 100).astype(np.int16)
-    gpi["vy"] = (fleet.vel[:, 1] * 100).astype(np.int16)
-    gpi["vz"] = (-fleet.vz * 100).astype(np.int16)
-    gpi["hdg"] = (np.mod(np.degrees(fleet.yaw), 360.0) * 100).astype(np.uint16)
-    lpn = np.zeros(n, _LPN)
-    lpn["t"] = boot_ms
-    lpn["x"], lpn["y"], lpn["z"] = fleet.pos[:, 0], fleet.pos[:, 1], -fleet.alt
-    lpn["vx"], lpn["vy"], lpn["vz"] = fleet.vel[:, 0], fleet.vel[:, 1], -fleet.vz
-    att = np.zeros(n, _ATT)
-    att["t"] = boot_ms
-    att["r"], att["p"] = roll, pitch
-    att["y"] = np.remainder(fleet.yaw + np.pi, 2 * np.pi) - np.pi
-    return {GPI: _rows(gpi), LPN: _rows(lpn), ATT: _rows(att)}
+# Each message is a row of one plain array whose columns are its fields in wire order (a 4-byte
+# column holding the two 2-byte fields that share it), filled a few columns per operation; the
+# casts are numpy's astype casts.
+
+
+def gpi_rows(
+    fleet: Fleet, boot_ms: int, lat: np.ndarray, lon: np.ndarray, amsl: np.ndarray
+) -> list[bytes]:
+    """GLOBAL_POSITION_INT payloads: time_boot_ms u4, lat, lon, alt, relative_alt i4, vx, vy,
+    vz i2, hdg u2."""
+    gpi = np.empty((len(fleet), 7), np.int32)
+    gpi.view(np.uint32)[:, 0] = boot_ms
+    gpi[:, 1] = lat * 1e7
+    gpi[:, 2] = lon * 1e7
+    gpi[:, 3] = amsl * 1000
+    gpi[:, 4] = fleet.alt * 1000
+    short = gpi.view(np.int16)
+    short[:, 10:12] = fleet.vel * 100
+    short[:, 12] = -fleet.vz * 100
+    gpi.view(np.uint16)[:, 13] = np.mod(np.degrees(fleet.yaw), 360.0) * 100
+    return _rows(gpi)
+
+
+def lpn_rows(fleet: Fleet, boot_ms: int) -> list[bytes]:
+    """LOCAL_POSITION_NED payloads: time_boot_ms u4, x, y, z, vx, vy, vz f4 (z and vz down)."""
+    lpn = np.empty((len(fleet), 7), np.float32)
+    lpn.view(np.uint32)[:, 0] = boot_ms
+    lpn[:, 1:3] = fleet.pos
+    lpn[:, 3] = -fleet.alt
+    lpn[:, 4:6] = fleet.vel
+    lpn[:, 6] = -fleet.vz
+    return _rows(lpn)
+
+
+def att_rows(fleet: Fleet, boot_ms: int, roll: np.ndarray, pitch: np.ndarray) -> list[bytes]:
+    """ATTITUDE payloads: time_boot_ms u4, roll, pitch, yaw, and the three rates (0) f4."""
+    att = np.zeros((len(fleet), 7), np.float32)
+    att.view(np.uint32)[:, 0] = boot_ms
+    att[:, 1] = roll
+    att[:, 2] = pitch
+    att[:, 3] = np.remainder(fleet.yaw + np.pi, 2 * np.pi) - np.pi
+    return _rows(att)
 
 
 def signal_payload(boot_ms: int, value: float) -> bytes:
@@ -77,3 +90,36 @@ def signal_payload(boot_ms: int, value: float) -> bytes:
 def contact_payload(name: bytes, usec: int, north: float, east: float, strength: float) -> bytes:
     """DEBUG_VECT "DET"/"CNF" with x north, y east, z signal strength."""
     return _DVEC.pack(usec, north, east, strength, name).rstrip(b"\x00") or b"\x00"
+
+
+class WireLayout:
+    """Where a message's constructor arguments lie in its MAVLink 2 payload, so the payload is
+    one struct.pack without a pymavlink message object (arguments left out take the
+    constructor's defaults, as the object would)."""
+
+    def __init__(self, cls: Any) -> None:
+        self.msg_id: int = cls.id
+        self.crc_extra: int = cls.crc_extra
+        self._struct: struct.Struct = cls.unpacker
+        params = list(inspect.signature(cls.__init__).parameters.values())[1:]
+        self._defaults = tuple(p.default for p in params)
+        names: list[str] = cls.fieldnames
+        order = [names.index(f) for f in cls.ordered_fieldnames]
+        self._pick = operator.itemgetter(*order)
+        lengths: list[int] = list(cls.array_lengths)
+        self._arrays = lengths if any(lengths) else []
+        """Array length of each field in wire order (0: a scalar); empty without arrays."""
+
+    def payload(self, args: Sequence[Any]) -> bytes:
+        """The payload of ``cls(*args)``, trailing zeros cut."""
+        values = self._pick(tuple(args) + self._defaults[len(args) :])
+        if self._arrays:
+            flat: list[Any] = []
+            for value, n in zip(values, self._arrays, strict=True):
+                if n:
+                    flat.extend(value)
+                else:
+                    flat.append(value)
+            values = flat
+        data: bytes = self._struct.pack(*values)
+        return data.rstrip(b"\x00") or b"\x00"

@@ -7,7 +7,8 @@ from collections.abc import Callable
 from typing import Any
 
 from sim_vehicle_stub.commands import CommandHandler
-from sim_vehicle_stub.geo import GeoFrame
+from sim_vehicle_stub.fence_store import FENCE, FenceStore
+from sim_vehicle_stub.geo_frame import GeoFrame
 from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.node import VehicleNode
 from sim_vehicle_stub.setpoints import attitude_setpoint, global_setpoint, local_setpoint
@@ -24,6 +25,8 @@ class MessageHandler:
         self.commands = commands
         self.geo = geo
         self.now = now
+        self._fences: dict[int, FenceStore] = {}
+        """Each vehicle's fence (mission_type FENCE), by vehicle index."""
         self._table: dict[str, Callable[[VehicleNode, Any], None]] = {
             "HEARTBEAT": self._heartbeat,
             "COMMAND_LONG": self._command_long,
@@ -37,6 +40,8 @@ class MessageHandler:
             "SET_ATTITUDE_TARGET": self._attitude_target,
             "MISSION_REQUEST_LIST": self._mission_list,
             "MISSION_COUNT": self._mission_count,
+            "MISSION_ITEM_INT": self._mission_item,
+            "MISSION_REQUEST_INT": self._mission_request,
             "MISSION_CLEAR_ALL": self._mission_clear,
             "FILE_TRANSFER_PROTOCOL": self._ftp,
             "TIMESYNC": self._timesync,
@@ -127,15 +132,31 @@ class MessageHandler:
             node.vehicle.on_setpoint(sp)
 
     # ----- mission, FTP, time
+    def _fence(self, node: VehicleNode) -> FenceStore:
+        return self._fences.setdefault(node.vehicle.index, FenceStore())
+
     def _mission_list(self, node: VehicleNode, msg: Any) -> None:
+        kind = getattr(msg, "mission_type", 0)
+        count = len(self._fence(node).items) if kind == FENCE else 0
         node.send([d.MAVLink_mission_count_message(msg.get_srcSystem(), msg.get_srcComponent(),
-                                                   0, getattr(msg, "mission_type", 0))])  # fmt: skip
+                                                   count, kind)])  # fmt: skip
+
+    def _ask_item(self, node: VehicleNode, msg: Any, seq: int) -> None:
+        node.send([d.MAVLink_mission_request_int_message(
+            msg.get_srcSystem(), msg.get_srcComponent(), seq, FENCE)])  # fmt: skip
 
     def _mission_ack(self, node: VehicleNode, msg: Any, result: int) -> None:
         node.send([d.MAVLink_mission_ack_message(msg.get_srcSystem(), msg.get_srcComponent(),
                                                  result, getattr(msg, "mission_type", 0))])  # fmt: skip
 
     def _mission_count(self, node: VehicleNode, msg: Any) -> None:
+        if getattr(msg, "mission_type", 0) == FENCE:
+            result = self._fence(node).begin_upload(msg.count)
+            if result is None:
+                self._ask_item(node, msg, 0)
+            else:
+                self._mission_ack(node, msg, result)
+            return
         # No mission storage: an empty upload is done at once (MISSION_ACK ACCEPTED, as PX4 and
         # ArduPilot answer a count of 0), a longer one is refused at once with NO_SPACE instead
         # of leaving the client to its time-out.
@@ -144,7 +165,28 @@ class MessageHandler:
             node.stats.nacks += 1
         self._mission_ack(node, msg, d.MAV_MISSION_ACCEPTED if ok else d.MAV_MISSION_NO_SPACE)
 
+    def _mission_item(self, node: VehicleNode, msg: Any) -> None:
+        if msg.mission_type != FENCE:
+            return
+        next_seq, result = self._fence(node).add_item(msg)
+        if next_seq is not None:
+            self._ask_item(node, msg, next_seq)
+        elif result is not None:
+            self._mission_ack(node, msg, result)
+
+    def _mission_request(self, node: VehicleNode, msg: Any) -> None:
+        if msg.mission_type != FENCE:
+            return
+        target = (msg.get_srcSystem(), msg.get_srcComponent())
+        item = self._fence(node).item_message(target, msg.seq)
+        if item is None:
+            self._mission_ack(node, msg, d.MAV_MISSION_INVALID_SEQUENCE)
+        else:
+            node.send([item])
+
     def _mission_clear(self, node: VehicleNode, msg: Any) -> None:
+        if getattr(msg, "mission_type", 0) in (FENCE, d.MAV_MISSION_TYPE_ALL):
+            self._fence(node).clear()
         self._mission_ack(node, msg, d.MAV_MISSION_ACCEPTED)
 
     def _ftp(self, node: VehicleNode, msg: Any) -> None:

@@ -78,6 +78,11 @@ class VehicleNode:
         """Send encoded frames, bundled into datagrams of at most ~1400 bytes."""
         if not frames:
             return
+        data = b"".join(frames)
+        if len(data) <= _MAX_DATAGRAM:  # a tick's telemetry: one datagram, one join
+            for out in self.outputs:
+                out(data)
+            return
         chunk = bytearray()
         for data in frames:
             if chunk and len(chunk) + len(data) > _MAX_DATAGRAM:

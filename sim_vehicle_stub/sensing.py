@@ -6,7 +6,8 @@ Only the sensor a vehicle's companion switched on (parameter MDM_SENSOR) reads; 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,8 +19,7 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
 
-@dataclass(frozen=True)
-class Reading:
+class Reading(NamedTuple):
     """What one vehicle's active sensor reports at one tick."""
 
     sensor: int
@@ -46,6 +46,9 @@ class SensorWorld:
         self._detected = np.zeros((n_vehicles, m), dtype=bool)
         self._confirmed = np.zeros((n_vehicles, m), dtype=bool)
         self._static: FloatArray | None = None
+        self._present = np.zeros(m, dtype=bool)
+        """Targets that have appeared (recomputed when the next one is due)."""
+        self._next_appearance = -math.inf
 
     def targets_at(self, t: float) -> FloatArray:
         if not self.tracks.moving and self._static is not None:
@@ -61,39 +64,50 @@ class SensorWorld:
     ) -> dict[int, Reading]:
         """Readings of vehicles whose sensor is on; ``radius`` (n,) is each active radius."""
         spec = self.scenario.targets
-        present = spec.appear_times <= t
+        if t >= self._next_appearance:
+            self._appear(t)
+        on = np.flatnonzero(active >= 0)
+        if len(on) == 0:
+            return {}
         targets = self.targets_at(t)
-        for k in np.flatnonzero(present & ~self._appeared):
+        present = self._present
+        sensor = active[on]
+        confirms = sensor == self.n_sensors - 1
+        # contacts() broadcasts (m,)-shaped targets and presence over the vehicles
+        mask, strength = contacts(radius[on], confirms, vehicles[on], targets, present,
+                                  spec.false_mask)  # fmt: skip
+        visible = present & ~(confirms[:, None] & spec.false_mask[None, :])
+        signal = np.where(visible, strength, 0.0).max(axis=1, initial=0.0).tolist()
+        entered = mask & ~self._in_range[on, :, sensor]
+        self._in_range[on, :, sensor] = mask
+        if entered.any():
+            for row, k in zip(*np.nonzero(entered), strict=True):
+                self._log_entry(t, int(on[row]), int(sensor[row]), int(k), targets)
+        hits: dict[int, list[tuple[int, float, float, float]]] = {}
+        if mask.any():
+            for row, k in zip(*np.nonzero(mask), strict=True):
+                hits.setdefault(int(row), []).append(
+                    (int(k), float(targets[k, 0]), float(targets[k, 1]), float(strength[row, k]))
+                )
+        sensors, conf = sensor.tolist(), confirms.tolist()
+        return {
+            i: Reading(sensors[row], conf[row], signal[row], hits.get(row, []))
+            for row, i in enumerate(on.tolist())
+        }
+
+    def _appear(self, t: float) -> None:
+        """Targets whose time came: logged once, present from now on."""
+        spec = self.scenario.targets
+        self._present = spec.appear_times <= t
+        targets = self.targets_at(t)
+        for k in np.flatnonzero(self._present & ~self._appeared):
             self._appeared[k] = True
             self.events.write(
                 t, "target_appeared", target=int(k), north=float(targets[k, 0]),
                 east=float(targets[k, 1]), false_target=bool(spec.false_mask[k]),
             )  # fmt: skip
-        on = np.flatnonzero(active >= 0)
-        if len(on) == 0:
-            return {}
-        last = self.n_sensors - 1
-        sensor = active[on]
-        confirms = sensor == last
-        tgt = np.broadcast_to(targets, (len(on), *targets.shape))
-        pres = np.broadcast_to(present, (len(on), len(present)))
-        mask, strength = contacts(radius[on], confirms, vehicles[on], tgt, pres, spec.false_mask)
-        visible = pres & ~(confirms[:, None] & spec.false_mask[None, :])
-        signal = np.where(visible, strength, 0.0).max(axis=1, initial=0.0).tolist()
-        entered = mask & ~self._in_range[on, :, sensor]
-        self._in_range[on, :, sensor] = mask
-        for row, k in zip(*np.nonzero(entered), strict=True):
-            self._log_entry(t, int(on[row]), int(sensor[row]), int(k), targets)
-        hits: dict[int, list[tuple[int, float, float, float]]] = {}
-        for row, k in zip(*np.nonzero(mask), strict=True):
-            hits.setdefault(int(row), []).append(
-                (int(k), float(targets[k, 0]), float(targets[k, 1]), float(strength[row, k]))
-            )
-        sensors, conf = sensor.tolist(), confirms.tolist()
-        return {
-            int(i): Reading(sensors[row], conf[row], signal[row], hits.get(row, []))
-            for row, i in enumerate(on.tolist())
-        }
+        later = spec.appear_times[~self._present]
+        self._next_appearance = float(later.min()) if len(later) else math.inf
 
     def _log_entry(self, t: float, i: int, s: int, k: int, targets: FloatArray) -> None:
         name = self.scenario.sensors[s].name

@@ -1,4 +1,4 @@
-"""SET_POSITION_TARGET_LOCAL_NED / _GLOBAL_INT to a :class:`Setpoint` in the local frame.
+"""SET_POSITION_TARGET_LOCAL_NED / _GLOBAL_INT to a :class:`NeuSetpoint` in the local frame.
 
 type_mask bits set mean "ignore": 1 x, 2 y, 4 z, 8 vx, 16 vy, 32 vz, 64/128/256 acceleration,
 512 force, 1024 yaw, 2048 yaw rate. As ArduCopter (GCS_MAVLink_Copter.cpp,
@@ -12,8 +12,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from sim_vehicle_stub.geo import GeoFrame
-from sim_vehicle_stub.vehicle import Setpoint, Vehicle
+from sim_vehicle_stub.geo_frame import GeoFrame
+from sim_vehicle_stub.vehicle import NeuSetpoint, Vehicle
 
 LOCAL_NED, LOCAL_OFFSET_NED, BODY_NED, BODY_OFFSET_NED = 1, 7, 8, 9
 _GLOBAL_AMSL = (0, 5)
@@ -44,7 +44,7 @@ def _ok(*values: float) -> bool:
     return all(math.isfinite(x) and abs(x) < _LIMIT for x in values)
 
 
-def local_setpoint(msg: Any, v: Vehicle, t: float) -> Setpoint | None:
+def local_setpoint(msg: Any, v: Vehicle, t: float) -> NeuSetpoint | None:
     """The setpoint a LOCAL_NED-family message asks for, or None when it cannot be followed."""
     frame = int(msg.coordinate_frame)
     if frame not in (LOCAL_NED, LOCAL_OFFSET_NED, BODY_NED, BODY_OFFSET_NED):
@@ -88,10 +88,10 @@ def local_setpoint(msg: Any, v: Vehicle, t: float) -> Setpoint | None:
         yaw_cmd += yaw
     if accel is not None and body:
         accel = (*rotate(accel[0], accel[1]), accel[2])
-    return Setpoint(t, position, velocity, alt, climb, yaw_cmd, _yaw_rate(msg, mask), accel)
+    return NeuSetpoint(t, position, velocity, alt, climb, yaw_cmd, _yaw_rate(msg, mask), accel)
 
 
-def global_setpoint(msg: Any, geo: GeoFrame, t: float) -> Setpoint | None:
+def global_setpoint(msg: Any, geo: GeoFrame, t: float) -> NeuSetpoint | None:
     """The setpoint a SET_POSITION_TARGET_GLOBAL_INT asks for, or None."""
     frame = int(msg.coordinate_frame)
     if frame not in _GLOBAL_AMSL + _GLOBAL_RELATIVE:
@@ -124,7 +124,7 @@ def global_setpoint(msg: Any, geo: GeoFrame, t: float) -> Setpoint | None:
             return None
         climb = -float(msg.vz)
     yaw_cmd = float(msg.yaw) if use_yaw and _ok(msg.yaw) else None
-    return Setpoint(t, position, velocity, alt, climb, yaw_cmd, _yaw_rate(msg, mask), accel)
+    return NeuSetpoint(t, position, velocity, alt, climb, yaw_cmd, _yaw_rate(msg, mask), accel)
 
 
 _G = 9.80665
@@ -133,7 +133,7 @@ _MAX_TILT = math.radians(30.0)
 _THROTTLE_IGNORE, _ATTITUDE_IGNORE = 64, 128
 
 
-def attitude_setpoint(msg: Any, v: Vehicle, t: float) -> Setpoint | None:
+def attitude_setpoint(msg: Any, v: Vehicle, t: float) -> NeuSetpoint | None:
     """SET_ATTITUDE_TARGET as ArduCopter's guided mode reads it (GCS_MAVLink_Copter.cpp,
     handle_message_set_attitude_target): thrust 0.5 holds altitude, above climbs at up to the
     climb limit, below descends at up to the descent limit; a quaternion that is not unit length
@@ -145,7 +145,9 @@ def attitude_setpoint(msg: Any, v: Vehicle, t: float) -> Setpoint | None:
     q = [float(x) for x in msg.q]
     if not _ok(*q, msg.thrust):
         return None
-    hold = Setpoint(t, (float(f.pos[i, 0]), float(f.pos[i, 1])), None, float(f.alt[i]), None, None)
+    hold = NeuSetpoint(
+        t, (float(f.pos[i, 0]), float(f.pos[i, 1])), None, float(f.alt[i]), None, None
+    )
     if mask & _THROTTLE_IGNORE:
         return hold
     roll = pitch = 0.0
@@ -167,4 +169,4 @@ def attitude_setpoint(msg: Any, v: Vehicle, t: float) -> Setpoint | None:
         climb = (thrust - 0.5) * 2.0 * float(f.climb[i])
     else:
         climb = -(0.5 - thrust) * 2.0 * float(f.descent[i])
-    return Setpoint(t, None, None, None, climb, yaw, None, accel)
+    return NeuSetpoint(t, None, None, None, climb, yaw, None, accel)

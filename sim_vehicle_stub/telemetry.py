@@ -2,19 +2,20 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from sim_vehicle_stub.clock import SimClock
-from sim_vehicle_stub.fast_streams import position_payloads
-from sim_vehicle_stub.fleet import Fleet
-from sim_vehicle_stub.geo import GeoFrame
+from sim_vehicle_stub.fast_streams import ATT, GPI, LPN, WireLayout, att_rows, gpi_rows, lpn_rows
+from sim_vehicle_stub.fleet_kinematics import Fleet
+from sim_vehicle_stub.geo_frame import GeoFrame
 from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.personas.base import Behaviour
+from sim_vehicle_stub.sim_clock import SimClock
 from sim_vehicle_stub.vehicle import Vehicle
 
 # Sensors reported present, enabled and healthy: gyro, accel, mag, baro, GPS, motors, AHRS,
@@ -44,18 +45,53 @@ _CAPS = (
 )
 
 
+def _message(cls: Any, args: Callable[[Vehicle], tuple[Any, ...]], v: Vehicle) -> Any:
+    return cls(*args(v))
+
+
 @dataclass
 class GeoCache:
-    """WGS84 positions of all vehicles at one sim time (converted once per tick)."""
+    """WGS84 positions of all vehicles at one sim time (converted once per tick, when asked)."""
 
     t: float = -1.0
     lat: Any = None
     lon: Any = None
     amsl: Any = None
+
+
+@dataclass
+class AttitudeCache:
+    """Roll and pitch of all vehicles at one sim time."""
+
+    t: float = -1.0
     roll: Any = None
     pitch: Any = None
-    batch_t: float = -1.0
-    batch: dict[int, list[bytes]] = field(default_factory=dict)
+
+
+class PositionRows(dict[int, list[bytes]]):
+    """Payloads of the 10 Hz position/attitude messages of every vehicle at one sim time, each
+    message packed for the whole fleet when first asked for: a fleet whose clients switched
+    GLOBAL_POSITION_INT and ATTITUDE off never converts to WGS84 nor computes an attitude."""
+
+    def __init__(self, telemetry: Telemetry) -> None:
+        super().__init__()
+        self.telemetry = telemetry
+
+    def __missing__(self, msg_id: int) -> list[bytes]:
+        tel, f = self.telemetry, self.telemetry.fleet
+        boot_ms = tel.clock.boot_ms
+        if msg_id == GPI:
+            c = tel._geodetic()
+            rows = gpi_rows(f, boot_ms, c.lat, c.lon, c.amsl)
+        elif msg_id == LPN:
+            rows = lpn_rows(f, boot_ms)
+        elif msg_id == ATT:
+            a = tel._attitude()
+            rows = att_rows(f, boot_ms, a.roll, a.pitch)
+        else:
+            raise KeyError(msg_id)
+        self[msg_id] = rows
+        return rows
 
 
 class Telemetry:
@@ -67,22 +103,33 @@ class Telemetry:
         self.clock = clock
         self.epoch_usec = epoch_usec
         self._geo = GeoCache()
+        self._att = AttitudeCache()
+        self._batch = PositionRows(self)
+        self._batch_t = -1.0
         home = fleet.pos.copy()
         lat, lon, _ = geo.to_geodetic(home[:, 0], home[:, 1], np.zeros(len(home)))
         self._home_geo = (np.atleast_1d(lat), np.atleast_1d(lon))
+        self.args: dict[int, Callable[[Vehicle], tuple[Any, ...]]] = {
+            d.MAVLINK_MSG_ID_HEARTBEAT: self.heartbeat_args,
+            d.MAVLINK_MSG_ID_SYS_STATUS: self.sys_status_args,
+            d.MAVLINK_MSG_ID_SYSTEM_TIME: self.system_time_args,
+            d.MAVLINK_MSG_ID_BATTERY_STATUS: self.battery_status_args,
+            d.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: self.extended_sys_state_args,
+            d.MAVLINK_MSG_ID_GPS_RAW_INT: self.gps_raw_int_args,
+            d.MAVLINK_MSG_ID_HOME_POSITION: self.home_position_args,
+        }
+        """Constructor arguments of the 1 Hz streams' messages: packed by :attr:`layouts` every
+        tick, or made into message objects by :attr:`builders` when asked for."""
+        self.layouts = {k: WireLayout(d.mavlink_map[k]) for k in self.args}
         self.builders: dict[int, Callable[[Vehicle], Any]] = {
-            d.MAVLINK_MSG_ID_HEARTBEAT: self.heartbeat,
-            d.MAVLINK_MSG_ID_SYS_STATUS: self.sys_status,
-            d.MAVLINK_MSG_ID_SYSTEM_TIME: self.system_time,
-            d.MAVLINK_MSG_ID_BATTERY_STATUS: self.battery_status,
-            d.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: self.extended_sys_state,
-            d.MAVLINK_MSG_ID_GPS_RAW_INT: self.gps_raw_int,
-            d.MAVLINK_MSG_ID_HOME_POSITION: self.home_position,
+            k: functools.partial(_message, d.mavlink_map[k], args) for k, args in self.args.items()
+        }
+        self.builders.update({
             d.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self.global_position_int,
             d.MAVLINK_MSG_ID_LOCAL_POSITION_NED: self.local_position_ned,
             d.MAVLINK_MSG_ID_ATTITUDE: self.attitude,
             d.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
-        }
+        })  # fmt: skip
 
     def _geodetic(self) -> GeoCache:
         c = self._geo
@@ -94,34 +141,39 @@ class Telemetry:
             # over flat SITL terrain; the tangent plane's curvature drop (d^2 / 2R, 9 m at
             # 11 km) would make far vehicles' AMSL disagree with what they are commanded.
             c.amsl = self.geo.alt + f.alt
-            c.roll, c.pitch = f.attitude()
             c.t = self.clock.now
         return c
 
-    def position_batch(self) -> dict[int, list[bytes]]:
-        """Payloads of the 10 Hz position/attitude messages for every vehicle, now."""
-        c = self._geodetic()
-        if c.batch_t != self.clock.now:
-            c.batch = position_payloads(
-                self.fleet, self.clock.boot_ms, c.lat, c.lon, c.amsl, c.roll, c.pitch
-            )
-            c.batch_t = self.clock.now
-        return c.batch
+    def _attitude(self) -> AttitudeCache:
+        a = self._att
+        if a.t != self.clock.now:
+            a.roll, a.pitch = self.fleet.attitude()
+            a.t = self.clock.now
+        return a
+
+    def position_batch(self) -> PositionRows:
+        """Payloads of the 10 Hz position/attitude messages for every vehicle, now (each
+        message packed on first use)."""
+        if self._batch_t != self.clock.now:
+            self._batch = PositionRows(self)
+            self._batch_t = self.clock.now
+        return self._batch
 
     def heartbeat(self, v: Vehicle) -> Any:
+        return d.MAVLink_heartbeat_message(*self.heartbeat_args(v))
+
+    def heartbeat_args(self, v: Vehicle) -> tuple[Any, ...]:
         base = d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
         if v.armed:
             base |= d.MAV_MODE_FLAG_SAFETY_ARMED
         if v.mode.behaviour is Behaviour.EXTERNAL:
             base |= d.MAV_MODE_FLAG_GUIDED_ENABLED
         status = d.MAV_STATE_ACTIVE if v.armed else d.MAV_STATE_STANDBY
-        return d.MAVLink_heartbeat_message(
-            d.MAV_TYPE_QUADROTOR, v.persona.autopilot, base, v.mode.custom_mode, status, 3
-        )
+        return (d.MAV_TYPE_QUADROTOR, v.persona.autopilot, base, v.mode.custom_mode, status, 3)
 
-    def sys_status(self, v: Vehicle) -> Any:
+    def sys_status_args(self, v: Vehicle) -> tuple[Any, ...]:
         pct = round(v.battery * 100)
-        return d.MAVLink_sys_status_message(
+        return (
             SENSOR_BITS, SENSOR_BITS, SENSOR_BITS, 100, self._voltage_mv(v), 500, pct,
             0, 0, 0, 0, 0, 0, 0, 0, 0,
         )  # fmt: skip
@@ -130,17 +182,15 @@ class Telemetry:
     def _voltage_mv(v: Vehicle) -> int:
         return int(4 * (3500 + 700 * v.battery))
 
-    def system_time(self, v: Vehicle) -> Any:
-        return d.MAVLink_system_time_message(self.epoch_usec + self.clock.usec, self.clock.boot_ms)
+    def system_time_args(self, v: Vehicle) -> tuple[Any, ...]:
+        return (self.epoch_usec + self.clock.usec, self.clock.boot_ms)
 
-    def battery_status(self, v: Vehicle) -> Any:
+    def battery_status_args(self, v: Vehicle) -> tuple[Any, ...]:
         volts = [self._voltage_mv(v)] + [65535] * 9
         used = int((1.0 - v.battery) * 5200)
-        return d.MAVLink_battery_status_message(
-            0, 0, 1, 32767, volts, 500, used, -1, round(v.battery * 100)
-        )
+        return (0, 0, 1, 32767, volts, 500, used, -1, round(v.battery * 100))
 
-    def extended_sys_state(self, v: Vehicle) -> Any:
+    def extended_sys_state_args(self, v: Vehicle) -> tuple[Any, ...]:
         i = v.index
         if v.landed:
             state = d.MAV_LANDED_STATE_ON_GROUND
@@ -150,21 +200,21 @@ class Telemetry:
             state = d.MAV_LANDED_STATE_TAKEOFF
         else:
             state = d.MAV_LANDED_STATE_IN_AIR
-        return d.MAVLink_extended_sys_state_message(d.MAV_VTOL_STATE_UNDEFINED, state)
+        return (d.MAV_VTOL_STATE_UNDEFINED, state)
 
-    def gps_raw_int(self, v: Vehicle) -> Any:
+    def gps_raw_int_args(self, v: Vehicle) -> tuple[Any, ...]:
         c, i, f = self._geodetic(), v.index, self.fleet
         speed = float(np.hypot(*f.vel[i]))
         cog = math.degrees(math.atan2(f.vel[i, 1], f.vel[i, 0])) % 360.0
-        return d.MAVLink_gps_raw_int_message(
+        return (
             self.clock.usec, 3, int(c.lat[i] * 1e7), int(c.lon[i] * 1e7), int(c.amsl[i] * 1000),
             80, 120, int(speed * 100), int(cog * 100), 14,
         )  # fmt: skip
 
-    def home_position(self, v: Vehicle) -> Any:
+    def home_position_args(self, v: Vehicle) -> tuple[Any, ...]:
         lat, lon = (a[v.index] for a in self._home_geo)
         hn, he = v.home
-        return d.MAVLink_home_position_message(
+        return (
             int(lat * 1e7), int(lon * 1e7), round(self.geo.alt * 1000), hn, he, 0.0, [1.0, 0.0, 0.0, 0.0],
             0.0, 0.0, 0.0, self.clock.usec,
         )  # fmt: skip
@@ -186,8 +236,8 @@ class Telemetry:
         )  # fmt: skip
 
     def attitude(self, v: Vehicle) -> Any:
-        c, i = self._geodetic(), v.index
-        roll, pitch = c.roll, c.pitch
+        a, i = self._attitude(), v.index
+        roll, pitch = a.roll, a.pitch
         yaw = math.remainder(float(self.fleet.yaw[i]), 2 * math.pi)
         return d.MAVLink_attitude_message(
             self.clock.boot_ms, float(roll[i]), float(pitch[i]), yaw, 0.0, 0.0, 0.0

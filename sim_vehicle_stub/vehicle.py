@@ -9,8 +9,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sim_vehicle_stub.config import system_id
 from sim_vehicle_stub.events import EventLog
-from sim_vehicle_stub.fleet import GROUND_ALT, Fleet
+from sim_vehicle_stub.fleet_kinematics import GROUND_ALT, Fleet
 from sim_vehicle_stub.params import ParamTable
 from sim_vehicle_stub.personas.base import (
     Action,
@@ -42,7 +43,7 @@ class FailsafeLimits:
 
 
 @dataclass
-class Setpoint:
+class NeuSetpoint:
     """The last SET_POSITION_TARGET_* received, in the local frame (north, east, up)."""
 
     t: float
@@ -69,7 +70,7 @@ class Vehicle:
         now: Callable[[], float],
     ) -> None:
         self.index = index
-        self.sysid = index + 1
+        self.sysid = system_id(index)
         self.persona = persona
         self.params = params
         self.fleet = fleet
@@ -78,7 +79,7 @@ class Vehicle:
         self.home = tuple(fleet.pos[index])
         self.mode: ModeSpec = persona.mode(persona.default_mode)
         self.armed = False
-        self.setpoint: Setpoint | None = None
+        self.setpoint: NeuSetpoint | None = None
         self.setpoint_lost = False
         self.takeoff_alt: float | None = None
         self.pending_takeoff: float | None = None
@@ -262,7 +263,7 @@ class Vehicle:
         if result != ACCEPTED or not self.armed or self.landed:
             return result  # PX4 switches mode but moves nothing on the ground
         if target.behaviour is Behaviour.EXTERNAL:
-            self.setpoint = Setpoint(self.now, (north, east), None, alt, None, None)
+            self.setpoint = NeuSetpoint(self.now, (north, east), None, alt, None, None)
             self._apply(self.setpoint)
         else:
             self.fleet.go_to(self.index, north, east)
@@ -284,7 +285,7 @@ class Vehicle:
             self.set_mode(mode, why)
 
     # ----- setpoints
-    def on_setpoint(self, sp: Setpoint) -> None:
+    def on_setpoint(self, sp: NeuSetpoint) -> None:
         """A decoded setpoint; PX4 records it in any mode, ArduPilot only in GUIDED."""
         external = self.mode.behaviour is Behaviour.EXTERNAL
         if not external and not self.persona.offboard_needs_setpoints:
@@ -294,7 +295,7 @@ class Vehicle:
         if external and self.armed:
             self._apply(sp)
 
-    def _apply(self, sp: Setpoint) -> None:
+    def _apply(self, sp: NeuSetpoint) -> None:
         i, f = self.index, self.fleet
         f.h_acc[i] = 0.0
         f.v_acc[i] = 0.0

@@ -8,32 +8,13 @@ import subprocess
 import sys
 from pathlib import Path
 
-SMALL_PROFILE = """
-name: fleet-test
-area: {{north: 3000.0, east: 3000.0}}
-targets:
-  - {{north: 1500.0, east: 1500.0}}
-  - {{north: 600.0, east: 2400.0, false_target: true}}
-fleet: {{vehicles: 3, speed: 20.0, tau: {tau}, altitude: 30.0, altitude_step: 5.0}}
-sensors:
-  - {{name: detection, radius: 1000.0}}
-  - {{name: confirmation, radius: 50.0}}
-policy:
-  kind: mdm
-  levels:
-    - {{distribution: LS, step: 600.0}}
-    - distribution: BS
-      step: 1000.0
-      index: {{gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 150.0}}
-mission: {{duration: 5000.0, ts_cap: 5000.0}}
-"""
+from tests.profile_files import write_profile_with
 
 
 def small_profile(folder: Path, *, tau: float = 0.33) -> str:
     """A 3-vehicle profile on a 3 km square; a huge ``tau`` keeps the vehicles from climbing."""
     path = folder / f"fleet-test-{tau:g}.yaml"
-    path.write_text(SMALL_PROFILE.format(tau=tau))
-    return str(path)
+    return str(write_profile_with(path, "fleet-test", fleet={"vehicles": 3, "tau": tau}))
 
 
 def fleet_command(*args: str) -> list[str]:

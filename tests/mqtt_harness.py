@@ -11,10 +11,11 @@ import signal
 import socket
 import subprocess
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from tests.waiting import wait_until
 
 
 def free_port() -> int:
@@ -23,24 +24,9 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def wait_until(predicate: Callable[[], object], timeout: float, what: str) -> None:
-    """Poll ``predicate`` every 0.1 s until it is true; AssertionError naming ``what`` after
-    ``timeout`` seconds (for tests)."""
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.1)
-
-
-def _wait_port(port: int, timeout: float = 10.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        with socket.socket() as s:
-            if s.connect_ex(("127.0.0.1", port)) == 0:
-                return
-        time.sleep(0.05)
-    raise TimeoutError(f"no broker listening on 127.0.0.1:{port} after {timeout} s")
+def _listening(port: int) -> bool:
+    with socket.socket() as s:
+        return s.connect_ex(("127.0.0.1", port)) == 0
 
 
 class Broker:
@@ -65,7 +51,7 @@ class Broker:
             self._proc = subprocess.Popen(
                 ["mosquitto", "-c", str(self.conf)], stdout=out, stderr=subprocess.STDOUT
             )
-        _wait_port(self.port)
+        wait_until(lambda: _listening(self.port), 10.0, f"a broker on 127.0.0.1:{self.port}")
 
     def stop(self) -> None:
         """Graceful stop (SIGTERM): the broker saves its sessions."""

@@ -36,7 +36,9 @@ class ArduCopter(Autopilot):
     speed_param: ClassVar[tuple[str, float] | None] = ("WPNAV_SPEED", 100.0)
     # FENCE_TYPE bits (libraries/AC_Fence/AC_Fence.h): 1 max altitude, 2 circle around home
     # (FENCE_RADIUS, 300 m by default: it would cut a field area), 4 polygon, 8 min altitude.
-    fence_params: ClassVar[FenceParams | None] = FenceParams("FENCE_ENABLE", "FENCE_TYPE", 4, 2)
+    fence_params: ClassVar[FenceParams | None] = FenceParams(
+        "FENCE_ENABLE", "FENCE_TYPE", 4, 2, "FENCE_ACTION"
+    )
 
     def custom_mode(self, mode: FlightMode) -> int:
         return _MODES[mode]

@@ -34,14 +34,17 @@ class ModeCommand:
 class FenceParams:
     """The parameters that make an autopilot enforce an uploaded inclusion polygon."""
 
-    enable: str
-    """Set to 1 to enforce the fence."""
-    kind: str
-    """Bit mask of the fence types enforced."""
-    polygon_bit: int
+    enable: str | None
+    """Set to 1 to enforce the fence; None: the autopilot enforces a fence as soon as it holds
+    one (PX4), so the companion uploads it only once the vehicle is inside."""
+    kind: str | None = None
+    """Bit mask of the fence types enforced (None: no such parameter)."""
+    polygon_bit: int = 0
     """The bit of ``kind`` that enforces the uploaded polygons."""
-    drop_bits: int
+    drop_bits: int = 0
     """Bits of ``kind`` cleared: fences of their own that would cut the profile's area."""
+    action: str | None = None
+    """The parameter saying what a breach does (read and reported, left as the owner set it)."""
 
 
 class Autopilot(ABC):
@@ -75,6 +78,11 @@ class Autopilot(ABC):
     def is_guided(self, custom_mode: int) -> bool:
         """True when the vehicle reports the mode in which the companion may command it."""
         return custom_mode == self.custom_mode(FlightMode.GUIDED)
+
+    def is_fallback(self, custom_mode: int) -> bool:
+        """True for a mode the autopilot falls back to on its own when the companion's
+        setpoints or link stop (taken back when that is why it was entered)."""
+        return custom_mode == self.custom_mode(FlightMode.HOLD)
 
     def takeoff_params(self, altitude: float) -> tuple[float, ...]:
         """The seven parameters of MAV_CMD_NAV_TAKEOFF for a climb to ``altitude`` m above home."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-from companion.autopilots.base import Autopilot, FlightMode, ModeCommand
+from companion.autopilots.base import Autopilot, FenceParams, FlightMode, ModeCommand
 
 _MAIN_SUB: dict[FlightMode, tuple[int, int]] = {
     FlightMode.GUIDED: (6, 0),
@@ -12,6 +12,7 @@ _MAIN_SUB: dict[FlightMode, tuple[int, int]] = {
     FlightMode.RTL: (4, 5),
     FlightMode.LAND: (4, 6),
 }
+_POSCTL = 3 << 16
 _NAMES: dict[tuple[int, int], str] = {
     (1, 0): "MANUAL",
     (2, 0): "ALTCTL",
@@ -35,6 +36,10 @@ class PX4(Autopilot):
     takeoff_by_command: ClassVar[bool] = False
     guided_needs_stream: ClassVar[bool] = True
     speed_param: ClassVar[tuple[str, float] | None] = ("MPC_XY_VEL_MAX", 1.0)
+    # PX4's geofence (navigator/geofence.cpp) applies whatever polygon it holds, with no enable
+    # parameter: GF_ACTION (stock 2, HOLD) is what a breach does, also before arming
+    # ("outside geofence" refuses the arming).
+    fence_params: ClassVar[FenceParams | None] = FenceParams(None, action="GF_ACTION")
 
     def custom_mode(self, mode: FlightMode) -> int:
         main, sub = _MAIN_SUB[mode]
@@ -43,6 +48,11 @@ class PX4(Autopilot):
     def mode_command(self, mode: FlightMode, *, armed: bool) -> ModeCommand:
         main, sub = _MAIN_SUB[mode]
         return ModeCommand(1.0 + (128.0 if armed else 0.0), float(main), float(sub))
+
+    def is_fallback(self, custom_mode: int) -> bool:
+        # Offboard loss: COM_OBL_RC_ACT 0 (stock) is POSCTL, which PX4 SITL entered when its
+        # companion was killed; 5 is HOLD.
+        return custom_mode in (self.custom_mode(FlightMode.HOLD), _POSCTL)
 
     def mode_name(self, custom_mode: int) -> str:
         key = ((custom_mode >> 16) & 0xFF, (custom_mode >> 24) & 0xFF)

@@ -6,7 +6,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from companion.telemetry.mission_log import read_records
+from companion.telemetry.mission_log import read_log, read_records
 
 NORMAL_ENDS = frozenset({"mission time", "all targets", "operator abort", "operator land"})
 """End reasons of a mission flown as asked: its time, every target, or an operator's MQTT
@@ -55,10 +55,10 @@ def first_error(path: Path) -> str | None:
 def vehicle_end(out: Path, vehicle: int, exit_code: int | None, earlier: str | None) -> ProcessEnd:
     """How vehicle ``vehicle``'s companion ended (``earlier``: it ended in an earlier run)."""
     log = out / f"companion-{vehicle}.log"
-    records = read_records(out / f"mission-{vehicle}.jsonl")
-    reasons = [r.get("reason") for r in records if r.get("event") == "end"]
-    reason = str(reasons[-1]) if reasons else None
-    strays = tuple(f"{r.get('address')} (locked to {r.get('locked')})" for r in records
+    path = out / f"mission-{vehicle}.jsonl"
+    end = read_log(path).end()
+    reason = None if end is None else end.reason
+    strays = tuple(f"{r.get('address')} (locked to {r.get('locked')})" for r in read_records(path)
                    if r.get("event") == "stray")  # fmt: skip
     if exit_code is None:
         how = f"{earlier or reason} (earlier run)"

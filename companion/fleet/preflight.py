@@ -10,7 +10,8 @@ from pathlib import Path
 
 from companion.fleet.options import FleetOptions
 from companion.fleet.ports import PortBlock, check_base_port, free_port_block
-from companion.telemetry.mission_log import read_log, read_records
+from companion.telemetry.events import LogFormatError
+from companion.telemetry.mission_log import read_log
 from mdm_profiles import MissionProfile
 
 MAX_VEHICLES = 254
@@ -105,21 +106,18 @@ def _resume_plan(
             )
     ended: dict[int, str] = {}
     for i in range(n):
-        log = o.out / f"mission-{i}.jsonl"
-        if read_log(log).ended:
-            ended[i] = _end_reason(log)
+        try:
+            end = read_log(o.out / f"mission-{i}.jsonl").end()
+        except LogFormatError as exc:
+            raise FleetInputError(f"--resume: {exc}") from None
+        if end is not None:
+            ended[i] = end.reason
     start = tuple(i for i in range(n) if i not in ended)
     if not start:
         raise FleetInputError(
             f"--resume: every vehicle of {o.out} already ended; nothing to continue"
         )
     return start, ended
-
-
-def _end_reason(log: Path) -> str:
-    return next(
-        (str(r.get("reason")) for r in read_records(log) if r.get("event") == "end"), "ended"
-    )
 
 
 def plan_fleet(o: FleetOptions, profile: MissionProfile) -> FleetPlan:

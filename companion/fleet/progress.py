@@ -8,7 +8,8 @@ from pathlib import Path
 
 from companion.fleet.scoring import EMULATOR_EVENTS
 from companion.mission.phase import Phase
-from companion.telemetry.mission_log import read_records
+from companion.telemetry import events
+from companion.telemetry.mission_log import read_log, read_records
 
 LETTERS = {
     Phase.CONNECT.value: "C",
@@ -49,16 +50,13 @@ def read_progress(log_dir: Path, vehicles: int) -> list[VehicleView]:
     """Latest time, level, phase and own confirmations of every vehicle."""
     views = []
     for i in range(vehicles):
-        v = VehicleView()
-        for rec in read_records(log_dir / f"mission-{i}.jsonl"):
-            v.time = max(v.time, float(rec.get("t", 0.0)))
-            event = rec.get("event")
-            if event == "level":
-                v.level = int(rec["level"])
-            elif event == "phase":
-                v.phase = str(rec["phase"])
-            elif event == "confirmation":
-                v.found += 1
+        logged = read_log(log_dir / f"mission-{i}.jsonl")
+        v = VehicleView(time=logged.last_time, found=len(logged.confirmed))
+        for e in logged.events:
+            if isinstance(e.event, events.Level):
+                v.level = e.event.level
+            elif isinstance(e.event, events.PhaseChange):
+                v.phase = e.event.phase
         views.append(v)
     return views
 

@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 
 from companion.fleet.outcome import ProcessEnd
-from companion.telemetry.mission_log import read_records
+from companion.telemetry import events
+from companion.telemetry.mission_log import read_log, read_records
 from mdm_core.metrics import confirmed_within, team_times, time_to_all
 from mdm_core.world import Scenario
 from mdm_profiles import MissionProfile
@@ -121,6 +122,24 @@ def _match(
     return seen[best].target, gaps[best]
 
 
+def _confirmations(path: Path) -> tuple[list[tuple[float, float, np.ndarray]], str | None]:
+    """One vehicle's confirmations as (mission time, seconds since its search started, where
+    north/east) in log order, and its last end reason (None: it never ended)."""
+    start: float | None = None
+    out: list[tuple[float, float, np.ndarray]] = []
+    reason: str | None = None
+    for logged in read_log(path).events:
+        e = logged.event
+        if isinstance(e, events.PhaseChange) and e.search_start is not None and start is None:
+            start = float(e.search_start)
+        elif isinstance(e, events.End):
+            reason = e.reason
+        elif isinstance(e, events.Confirmation):
+            where = np.array([e.north, e.east], dtype=float)
+            out.append((logged.t, logged.t - (start or 0.0), where))
+    return out, reason
+
+
 def score(
     profile: MissionProfile,
     log_dir: Path,
@@ -140,36 +159,31 @@ def score(
     targets = np.array([[t.north, t.east] for t in profile.targets])
     real = np.array([not t.false_target for t in profile.targets])
     radius = profile.sensors[-1].radius
-    events = log_dir / EMULATOR_EVENTS
+    emulator_log = log_dir / EMULATOR_EVENTS
     motion = profile.target_motion
     if virtual_seed is not None:
         return _score_virtual(profile, log_dir, vehicles, duration, virtual_seed)
-    if motion is not None and not events.exists():
+    if motion is not None and not emulator_log.exists():
         raise FileNotFoundError(
-            f"{events}: moving targets are scored against the emulator's event log, "
+            f"{emulator_log}: moving targets are scored against the emulator's event log, "
             "which is missing"
         )
-    truth = _ground_truth(events, profile.sensors[-1].name) if events.exists() else None
+    truth = _ground_truth(emulator_log, profile.sensors[-1].name) if emulator_log.exists() else None
     drift = 0.0 if motion is None else motion.speed * max(abs(motion.low), abs(motion.high))
     per_vehicle = np.full((1, vehicles, len(targets)), np.inf)
     found: list[Confirmation] = []
     reasons: dict[int, str] = {}
     for i in range(vehicles):
-        start: float | None = None
         mine = None if truth is None else truth.get(i, [])
-        for rec in read_records(log_dir / f"mission-{i}.jsonl"):
-            if rec.get("event") == "phase" and "search_start" in rec and start is None:
-                start = float(rec["search_start"])
-            elif rec.get("event") == "end":
-                reasons[i] = str(rec.get("reason"))
-            elif rec.get("event") == "confirmation":
-                where = np.array([rec["north"], rec["east"]], dtype=float)
-                k, gap = _match(where, float(rec["t"]), targets, mine, drift * np.sqrt(2.0))
-                t = float(rec["t"]) - (start or 0.0)
-                ok = bool(k >= 0 and real[k] and gap <= radius)
-                found.append(Confirmation(i, t, float(where[0]), float(where[1]), k, gap, ok))
-                if ok:
-                    per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
+        confirmed, reason = _confirmations(log_dir / f"mission-{i}.jsonl")
+        if reason is not None:
+            reasons[i] = reason
+        for at, t, where in confirmed:
+            k, gap = _match(where, at, targets, mine, drift * np.sqrt(2.0))
+            ok = bool(k >= 0 and real[k] and gap <= radius)
+            found.append(Confirmation(i, t, float(where[0]), float(where[1]), k, gap, ok))
+            if ok:
+                per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
     return _result(profile, log_dir, vehicles, duration, per_vehicle, real, found, reasons)
 
 
@@ -178,14 +192,10 @@ def flown_times(log_dir: Path, vehicles: int) -> tuple[float, float]:
     less the search start), sim s."""
     sim_time = search_time = 0.0
     for i in range(vehicles):
-        start = end = None
-        last = 0.0
-        for rec in read_records(log_dir / f"mission-{i}.jsonl"):
-            last = max(last, float(rec.get("t", 0.0)))
-            if start is None and "search_start" in rec:
-                start = float(rec["search_start"])
-            elif rec.get("event") == "end":
-                end = float(rec["t"])
+        logged = read_log(log_dir / f"mission-{i}.jsonl")
+        last, start = logged.last_time, logged.search_start
+        ends = [e.t for e in logged.events if isinstance(e.event, events.End)]
+        end = ends[-1] if ends else None
         sim_time = max(sim_time, last)
         if start is not None:
             search_time = max(search_time, (last if end is None else end) - start)
@@ -236,21 +246,15 @@ def _score_virtual(
     found: list[Confirmation] = []
     reasons: dict[int, str] = {}
     for i in range(vehicles):
-        start: float | None = None
-        for rec in read_records(log_dir / f"mission-{i}.jsonl"):
-            if rec.get("event") == "phase" and "search_start" in rec and start is None:
-                start = float(rec["search_start"])
-            elif rec.get("event") == "end":
-                reasons[i] = str(rec.get("reason"))
-            elif rec.get("event") == "confirmation":
-                where = np.array([rec["north"], rec["east"]], dtype=float)
-                at = tracks.positions(run, np.array([float(rec["t"])]))[0]
-                gaps = np.linalg.norm(at - where, axis=1)
-                k = int(np.argmin(gaps))
-                t = float(rec["t"]) - (start or 0.0)
-                ok = bool(real[k] and gaps[k] <= radius)
-                found.append(Confirmation(i, t, float(where[0]), float(where[1]), k,
-                                          float(gaps[k]), ok))  # fmt: skip
-                if ok:
-                    per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
+        confirmed, reason = _confirmations(log_dir / f"mission-{i}.jsonl")
+        if reason is not None:
+            reasons[i] = reason
+        for at, t, where in confirmed:
+            gaps = np.linalg.norm(tracks.positions(run, np.array([at]))[0] - where, axis=1)
+            k = int(np.argmin(gaps))
+            ok = bool(real[k] and gaps[k] <= radius)
+            found.append(Confirmation(i, t, float(where[0]), float(where[1]), k,
+                                      float(gaps[k]), ok))  # fmt: skip
+            if ok:
+                per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
     return _result(profile, log_dir, vehicles, duration, per_vehicle, real, found, reasons)

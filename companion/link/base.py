@@ -9,14 +9,15 @@ import math
 import time
 from abc import ABC, abstractmethod
 from collections import deque
+from collections.abc import Callable
 from typing import Literal
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.autopilots import Autopilot, FlightMode
-from companion.guidance import Setpoint
+from companion.guidance import NedSetpoint
 from companion.link.fence_protocol import FenceTransferError
-from companion.link.geo import LocalFrame
+from companion.link.local_frame import LocalFrame
 from companion.link.messages import GlobalPosition, LinkEvent, LocalPosition
 from companion.link.outcome import CommandResult, Outcome, denied
 from companion.link.streams import StreamNeed, StreamWatch
@@ -56,6 +57,9 @@ class VehicleLink(ABC):
 
     def __init__(self) -> None:
         self.events = asyncio.Queue()
+        self.listener: Callable[[list[LinkEvent]], None] | None = None
+        """Takes the events instead of ``events`` once set (the mission's decision loop): each
+        batch read in one callback, at once, without a queue and a task switch per position."""
         self.autopilot = None
         self.streams = StreamWatch()
         self.heard: set[int] = set()
@@ -64,6 +68,14 @@ class VehicleLink(ABC):
         self._param_known: dict[str, bool] = {}
         self._home: tuple[float, float, float, float, float] | None = None
         """The latest HOME_POSITION (lat, lon, alt, x, y), for :meth:`learn_origin`."""
+
+    def publish(self, batch: list[LinkEvent]) -> None:
+        """Hand received events over, in arrival order: to ``listener``, else onto ``events``."""
+        if self.listener is not None:
+            self.listener(batch)
+            return
+        for event in batch:
+            self.events.put_nowait(event)
 
     @abstractmethod
     def describe(self) -> str:
@@ -92,7 +104,7 @@ class VehicleLink(ABC):
         """One HEARTBEAT of the companion (MAV_TYPE_ONBOARD_CONTROLLER)."""
 
     @abstractmethod
-    def send_setpoint(self, setpoint: Setpoint, kind: SetpointKind) -> None:
+    def send_setpoint(self, setpoint: NedSetpoint, kind: SetpointKind) -> None:
         """A velocity (with altitude-hold vd) or a position setpoint, local NED."""
 
     async def begin_setpoints(self) -> None:
@@ -170,6 +182,11 @@ class VehicleLink(ABC):
         set: a jump of the offset in flight would move every commanded point."""
         if self.alignment is not None and not self.alignment.ready:
             self.alignment.from_global_origin(lat, lon, alt)
+
+    @property
+    def home(self) -> tuple[float, float] | None:
+        """The vehicle's home (lat, lon) from its latest HOME_POSITION, if one came."""
+        return None if self._home is None else self._home[:2]
 
     def _note_home(self, lat: float, lon: float, alt: float, x: float, y: float) -> None:
         self._home = (lat, lon, alt, x, y)

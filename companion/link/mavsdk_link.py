@@ -24,7 +24,7 @@ from mavsdk.plugins.offboard import Offboard, PositionNedYaw, VelocityNedYaw
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.autopilots import FlightMode, UnknownAutopilotError, autopilot_for
-from companion.guidance import Setpoint
+from companion.guidance import NedSetpoint
 from companion.link.address import parse_address
 from companion.link.base import LinkError, SetpointKind, VehicleLink
 from companion.link.messages import (
@@ -161,7 +161,7 @@ class MavsdkLink(VehicleLink):
         if self._tlog is not None:
             self._tlog.write(_repack(message.message_name, fields, self.target_system))
         if event is not None:
-            self.events.put_nowait(event)
+            self.publish([event])
 
     def _translate(
         self, name: str, component: int, f: dict[str, Any], received: float
@@ -225,7 +225,7 @@ class MavsdkLink(VehicleLink):
         except Exception as exc:  # MAVSDK raises its own error types; never crash the loop
             log.debug("heartbeat not sent: %s", exc)
 
-    def send_setpoint(self, setpoint: Setpoint, kind: SetpointKind) -> None:
+    def send_setpoint(self, setpoint: NedSetpoint, kind: SetpointKind) -> None:
         off = self._offboard_sync
         if off is None or (self._ardupilot() and not self._offboard_started):
             # MAVSDK repeats the last setpoint at 20 Hz from the first one set, and a velocity

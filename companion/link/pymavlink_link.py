@@ -15,7 +15,7 @@ from typing import Any, cast
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.autopilots import FlightMode, UnknownAutopilotError, autopilot_for
-from companion.guidance import Setpoint
+from companion.guidance import NedSetpoint
 from companion.link import fast_frames
 from companion.link.address import Address, parse_address
 from companion.link.base import LinkError, SetpointKind, VehicleLink
@@ -58,9 +58,11 @@ class _Protocol(asyncio.DatagramProtocol, asyncio.Protocol):
     def datagram_received(self, data: bytes, addr: tuple[str | Any, int]) -> None:
         self.link._receive(data, addr)
         self.link._drain()
+        self.link._publish_pending()
 
     def data_received(self, data: bytes) -> None:
         self.link._receive(data, None)
+        self.link._publish_pending()
 
     def connection_lost(self, exc: Exception | None) -> None:
         if exc is not None:
@@ -118,6 +120,8 @@ class PymavlinkLink(VehicleLink):
         self._signing = SigningState(signing_key) if signing_key is not None else None
         self.signing_rejected = 0
         self._fence = FenceTransfer(self._mav, self._send, target_system)
+        self._pending: list[LinkEvent] = []
+        """Events of the datagrams read in this callback, published together at its end."""
 
     def describe(self) -> str:
         return self.address.url()
@@ -183,6 +187,12 @@ class PymavlinkLink(VehicleLink):
                 return
             self._receive(data, addr)
 
+    def _publish_pending(self) -> None:
+        batch = self._pending
+        if batch:
+            self._pending = []
+            self.publish(batch)
+
     def _receive(self, data: bytes, addr: tuple[str | Any, int] | None) -> None:
         received = time.perf_counter()
         frames = fast_frames.split(data) if self._signing is None and addr is not None else None
@@ -193,29 +203,54 @@ class PymavlinkLink(VehicleLink):
             if msg_id not in fast_frames.FAST:
                 self._accept(frame, addr, received)
                 continue
+            self.heard.add(system)
             if system != self.target_system or not self._from_vehicle(addr):
                 continue
             if self._tlog is not None:
                 self._tlog.write(frame)
-            event = self._fast_event(msg_id, fast_frames.unpack(msg_id, frame), received)
+            try:
+                event = self._fast_event(msg_id, frame, received)
+            except (UnknownAutopilotError, ValueError) as exc:
+                log.warning("ignored %s: %s", mavlink2.mavlink_map[msg_id].msgname, exc)
+                continue
             if event is not None:
-                self.events.put_nowait(event)
+                self._pending.append(event)
 
-    def _fast_event(
-        self, msg_id: int, f: tuple[int | float | bytes, ...], received: float
-    ) -> LinkEvent | None:
-        """:meth:`_translate` of a fast_frames message (fields in wire order)."""
+    def _fast_event(self, msg_id: int, frame: bytes, received: float) -> LinkEvent | None:
+        """:meth:`_translate` of a fast_frames message."""
+        f = fast_frames.unpack(msg_id, frame)
         if msg_id == fast_frames.LOCAL_POSITION_NED:
             t, x, y, z, vx, vy, vz = cast(tuple[int, float, float, float, float, float, float], f)
             self._time_ms = t
             self.streams.note("LOCAL_POSITION_NED", t / 1000.0)
             return self._local(t / 1000.0, x, y, z, vx, vy, vz, received)
+        if msg_id == fast_frames.NAMED_VALUE_FLOAT:
+            t, value, raw = cast(tuple[int, float, bytes], f)
+            return SensorSignal(t / 1000.0, value) if _text(raw) == "SENS_SIG" else None
         if msg_id == fast_frames.DEBUG_VECT:
             usec, x, y, z, raw = cast(tuple[int, float, float, float, bytes], f)
             name = _text(raw)
             return SensorContact(name, usec / 1e6, x, y, z) if name in ("DET", "CNF") else None
-        t, value, raw = cast(tuple[int, float, bytes], f)  # NAMED_VALUE_FLOAT
-        return SensorSignal(t / 1000.0, value) if _text(raw) == "SENS_SIG" else None
+        if msg_id == fast_frames.HEARTBEAT:
+            custom, kind, autopilot, base, status, _ = cast(tuple[int, ...], f)
+            return self._heartbeat(frame[6], kind, autopilot, base, custom, status)
+        present, _, health, *_, battery, _, _, _ = cast(tuple[int, ...], f)  # SYS_STATUS
+        return self._sys_status(present, health, battery)
+
+    def _heartbeat(self, component: int, kind: int, autopilot: int, base_mode: int,
+                   custom_mode: int, system_status: int) -> Heartbeat | None:  # fmt: skip
+        if component != 1 or kind in _NOT_AUTOPILOT_TYPES:
+            return None
+        if self.autopilot is None or self.autopilot.mav_autopilot != autopilot:
+            self.autopilot = autopilot_for(autopilot)
+            log.info("system %d is %s", self.target_system, self.autopilot.name)
+        self._armed = bool(base_mode & 128)
+        return Heartbeat(autopilot, custom_mode, self._armed, system_status)
+
+    def _sys_status(self, present: int, health: int, battery_remaining: int) -> SystemStatus:
+        self.streams.note("SYS_STATUS")
+        need = present & _HEALTH_BITS
+        return SystemStatus(battery_remaining, (health & need) == need)
 
     def _accept(self, data: bytes, addr: tuple[str | Any, int] | None, received: float) -> None:
         try:
@@ -244,7 +279,7 @@ class PymavlinkLink(VehicleLink):
                 log.warning("ignored %s: %s", msg.get_type(), exc)
                 continue
             if event is not None:
-                self.events.put_nowait(event)
+                self._pending.append(event)
 
     def _from_vehicle(self, addr: tuple[str | Any, int] | None) -> bool:
         """udpin: lock to the first address that speaks for the target system; another
@@ -264,7 +299,7 @@ class PymavlinkLink(VehicleLink):
             locked = f"{self._remote[0]}:{self._remote[1]}"
             log.warning("ignoring another sender of system %d at %s:%d (locked to %s)",
                         self.target_system, *source, locked)  # fmt: skip
-            self.events.put_nowait(StraySource(f"{source[0]}:{source[1]}", locked))
+            self._pending.append(StraySource(f"{source[0]}:{source[1]}", locked))
         return False
 
     def _authentic(self, signing: SigningState, msg: Any) -> bool:
@@ -309,22 +344,15 @@ class PymavlinkLink(VehicleLink):
                 return SensorSignal(msg.time_boot_ms / 1000.0, msg.value)
             return None
         if kind == "HEARTBEAT":
-            if msg.get_srcComponent() != 1 or msg.type in _NOT_AUTOPILOT_TYPES:
-                return None
-            if self.autopilot is None or self.autopilot.mav_autopilot != msg.autopilot:
-                self.autopilot = autopilot_for(msg.autopilot)
-                log.info("system %d is %s", self.target_system, self.autopilot.name)
-            self._armed = bool(msg.base_mode & 128)
-            return Heartbeat(msg.autopilot, msg.custom_mode, self._armed, msg.system_status)
+            return self._heartbeat(msg.get_srcComponent(), msg.type, msg.autopilot,
+                                   msg.base_mode, msg.custom_mode, msg.system_status)  # fmt: skip
         if kind == "STATUSTEXT":
             text = _text(msg.text)
             self._note_text(msg.severity, text)
             return StatusText(msg.severity, text)
         if kind == "SYS_STATUS":
-            self.streams.note(kind)
-            need = msg.onboard_control_sensors_present & _HEALTH_BITS
-            healthy = (msg.onboard_control_sensors_health & need) == need
-            return SystemStatus(msg.battery_remaining, healthy)
+            return self._sys_status(msg.onboard_control_sensors_present,
+                                    msg.onboard_control_sensors_health, msg.battery_remaining)  # fmt: skip
         if kind == "COMMAND_ACK":
             future = self._acks.get(msg.command)
             if (
@@ -345,12 +373,18 @@ class PymavlinkLink(VehicleLink):
     # -- sending ---------------------------------------------------------------------------
 
     def _send(self, msg: Any) -> None:
-        transport = self._transport
-        if transport is None:
+        if self._transport is None:
             return
         buf = msg.pack(self._mav)
         if self._signing is not None:
             buf = self._signing.sign_frame(buf, msg.crc_extra)
+        self._send_frame(buf)
+
+    def _send_frame(self, buf: bytes) -> None:
+        """A packed frame out with the next sequence number's turn taken, and into the .tlog."""
+        transport = self._transport
+        if transport is None:
+            return
         self._mav.seq = (self._mav.seq + 1) % 256
         # (selector datagram transports are not DatagramTransport subclasses: go by scheme)
         if self.address.scheme == "udpin":
@@ -372,10 +406,19 @@ class PymavlinkLink(VehicleLink):
             )
         )  # fmt: skip
 
-    def send_setpoint(self, setpoint: Setpoint, kind: SetpointKind) -> None:
+    def send_setpoint(self, setpoint: NedSetpoint, kind: SetpointKind) -> None:
         mask = VELOCITY_MASK if kind == "velocity" else POSITION_MASK
         sp = setpoint
         north, east = self._vehicle_xy(sp.north, sp.east)
+        if self._signing is None:  # the frame pymavlink would pack, without its objects
+            mav = self._mav
+            payload = fast_frames.SETPOINT.pack(
+                self._time_ms, north, east, sp.down, sp.vn, sp.ve, sp.vd, 0.0, 0.0, 0.0, 0.0, 0.0,
+                mask, self.target_system, 1, mavlink2.MAV_FRAME_LOCAL_NED,
+            )  # fmt: skip
+            self._send_frame(fast_frames.frame(fast_frames.SET_POSITION_TARGET_LOCAL_NED, payload,
+                                               mav.seq, mav.srcSystem, mav.srcComponent))  # fmt: skip
+            return
         self._send(
             self._mav.set_position_target_local_ned_encode(
                 self._time_ms, self.target_system, 1, mavlink2.MAV_FRAME_LOCAL_NED, mask,

@@ -18,7 +18,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass
 
-from companion.link.geo import LocalFrame
+from companion.link.local_frame import LocalFrame
 
 log = logging.getLogger(__name__)
 

@@ -1,9 +1,9 @@
 """Who is in control of the vehicle: the mission's phase and what it knows about the modes, as a
 pure, synchronous state machine. Events in, (next state, actions) out; no I/O, no clock.
 
-``VehicleMission`` feeds it what the link reports and the operator asks, applies the new phase
-(emitting the ``phase`` event) and performs the actions. The lifecycle's own steps (prepare,
-climb, search, return, done) go through :func:`enter`. The transition table is in
+The lifecycle machine (lifecycle.py) composes it: it passes on what the link reports and the
+operator asks, and its own phase changes (prepare, climb, search, return, done) go through
+:func:`enter`; ``VehicleMission`` performs the actions. The transition table is in
 docs/companion.md, "Who is in control"; tests/companion/test_control.py checks it row by row.
 """
 

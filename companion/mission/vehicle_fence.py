@@ -21,6 +21,7 @@ class VehicleFence:
     def __init__(self, link: VehicleLink, polygon: list[tuple[float, float]], vehicle: int,
                  emit: Callable[..., None]) -> None:  # fmt: skip
         self.link = link
+        self.polygon = polygon
         self.vertices = [(round(lat * 1e7), round(lon * 1e7)) for lat, lon in polygon]
         self.vehicle = vehicle
         self.emit = emit
@@ -29,7 +30,8 @@ class VehicleFence:
         self.enabling = False
 
     async def install(self) -> None:
-        """Upload, read back, compare; set the fence type. Says why where it cannot."""
+        """Upload, read back, compare; set the fence type. Says why where it cannot. Where
+        the autopilot enforces any fence it holds (PX4), the upload waits for :meth:`enable`."""
         ap = self.link.autopilot
         params = ap.fence_params if ap is not None else None
         if params is None or not self.link.uploads_fence:
@@ -39,18 +41,21 @@ class VehicleFence:
                      self.vehicle, why)  # fmt: skip
             self.emit("vehicle_fence", state="skipped", reason=why)
             return
-        try:
-            await self.link.upload_fence(self.vertices)
-            back = await self.link.download_fence()
-        except (FenceTransferError, LinkError) as exc:
-            log.warning("vehicle %d: own fence not installed: %s", self.vehicle, exc)
-            self.emit("vehicle_fence", state="failed", reason=str(exc))
+        if params.enable is None:
+            home = self.link.home
+            if home is not None and not _inside(self.polygon, *home):
+                why = (f"home {home[0]:.6f}, {home[1]:.6f} is outside the fence: the "
+                       "autopilot would stop the RTL at the fence")  # fmt: skip
+                log.warning("vehicle %d: own fence not uploaded: %s", self.vehicle, why)
+                self.emit("vehicle_fence", state="skipped", reason=why)
+                return
+            log.info("vehicle %d: own fence uploaded once the vehicle is inside it "
+                     "(the autopilot enforces any fence it holds)", self.vehicle)  # fmt: skip
+            self.installed = True
             return
-        if back != self.vertices:
-            log.error("vehicle %d: fence read back differs: sent %s, vehicle has %s",
-                      self.vehicle, self.vertices, back)  # fmt: skip
-            self.emit("vehicle_fence", state="mismatch", sent=self.vertices, read=back)
+        if not await self._upload():
             return
+        assert params.kind is not None
         kind = await self.link.read_param(params.kind)
         if kind is None:
             self.emit("vehicle_fence", state="failed", reason=f"{params.kind} not readable")
@@ -64,18 +69,47 @@ class VehicleFence:
                           reason=f"{params.kind} {int(kind)} -> {wanted} not confirmed")  # fmt: skip
                 return
         log.info("vehicle %d: own fence uploaded, %d vertices read back equal; %s %d -> %d",
-                 self.vehicle, len(back), params.kind, int(kind), wanted)  # fmt: skip
-        self.emit("vehicle_fence", state="uploaded", vertices=len(back), read_back="equal",
-                  fence_type=[int(kind), wanted])  # fmt: skip
+                 self.vehicle, len(self.vertices), params.kind, int(kind), wanted)  # fmt: skip
+        self.emit("vehicle_fence", state="uploaded", vertices=len(self.vertices),
+                  read_back="equal", fence_type=[int(kind), wanted])  # fmt: skip
         self.installed = True
 
+    async def _upload(self) -> bool:
+        """Upload and read back; False (an event says why) unless the vehicle holds it."""
+        try:
+            await self.link.upload_fence(self.vertices)
+            back = await self.link.download_fence()
+        except (FenceTransferError, LinkError) as exc:
+            log.warning("vehicle %d: own fence not installed: %s", self.vehicle, exc)
+            self.emit("vehicle_fence", state="failed", reason=str(exc))
+            return False
+        if back != self.vertices:
+            log.error("vehicle %d: fence read back differs: sent %s, vehicle has %s",
+                      self.vehicle, self.vertices, back)  # fmt: skip
+            self.emit("vehicle_fence", state="mismatch", sent=self.vertices, read=back)
+            return False
+        return True
+
     async def enable(self) -> None:
-        """Switch the fence on (once; the vehicle is inside it now)."""
+        """Switch the fence on (once; the vehicle is inside it now): its enable parameter, or
+        where there is none (PX4) the upload itself."""
         ap = self.link.autopilot
         if self.enabling or ap is None or ap.fence_params is None:
             return
         self.enabling = True
-        name = ap.fence_params.enable
+        params = ap.fence_params
+        if params.enable is None:
+            if not await self._upload():
+                return
+            action = await self.link.read_param(params.action) if params.action else None
+            shown = "unknown" if action is None else f"{action:g}"
+            log.info("vehicle %d: own fence uploaded inside it, %d vertices read back equal; "
+                     "%s %s", self.vehicle, len(self.vertices), params.action, shown)  # fmt: skip
+            self.emit("vehicle_fence", state="uploaded", vertices=len(self.vertices),
+                      read_back="equal")  # fmt: skip
+            self.emit("vehicle_fence", state="enabled", param=params.action, value=action)
+            return
+        name = params.enable
         echoed = await self.link.set_param(name, 1.0, mavlink2.MAV_PARAM_TYPE_INT8)
         if echoed is None or int(echoed) != 1:
             log.warning("vehicle %d: %s=1 not confirmed (%s)", self.vehicle, name, echoed)
@@ -83,3 +117,13 @@ class VehicleFence:
             return
         log.info("vehicle %d: own fence on (%s=1)", self.vehicle, name)
         self.emit("vehicle_fence", state="enabled", param=name)
+
+
+def _inside(polygon: list[tuple[float, float]], lat: float, lon: float) -> bool:
+    """Ray casting on (lat, lon): plenty for a site a few km across."""
+    inside = False
+    for (a_lat, a_lon), (b_lat, b_lon) in zip(polygon, polygon[1:] + polygon[:1], strict=True):
+        crosses = (a_lon > lon) != (b_lon > lon)
+        if crosses and lat < a_lat + (lon - a_lon) * (b_lat - a_lat) / (b_lon - a_lon):
+            inside = not inside
+    return inside

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from companion.fence_from_profile import fence_for
-from companion.link.geo import LocalFrame
+from companion.link.local_frame import LocalFrame
 from companion.run_map.tracks import Sample, VehicleTrack
 from mdm_profiles import MissionProfile
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
-from companion.telemetry.mission_log import read_records
+from companion.telemetry import events
+from companion.telemetry.mission_log import read_log, read_records
 
 
 @dataclass(frozen=True)
@@ -32,31 +32,25 @@ class VehicleTrack:
     end_reason: str | None = None
 
 
-def _sample(record: dict[str, Any]) -> Sample | None:
-    try:
-        return Sample(float(record["t"]), float(record["north"]), float(record["east"]))
-    except (KeyError, TypeError, ValueError):
-        return None
-
-
 def read_track(path: Path, vehicle: int) -> VehicleTrack:
-    """The track in one mission log; records without a usable position are skipped."""
-    track = VehicleTrack(vehicle)
+    """The track in one mission log; ``tick`` records without a usable position are skipped."""
+    logged = read_log(path)
+    end = logged.end()
+    track = VehicleTrack(vehicle, end_reason=None if end is None else end.reason)
+    for e in logged.events:
+        if isinstance(e.event, events.Detection):
+            where = Sample(e.t, e.event.north, e.event.east)
+            track.detections.append((where, e.event.level))
+        elif isinstance(e.event, events.Confirmation):
+            track.confirmations.append(Sample(e.t, e.event.north, e.event.east))
     for record in read_records(path):
-        event = record.get("event")
-        if event == "end":
-            track.end_reason = str(record.get("reason"))
-        if event not in ("tick", "detection", "confirmation"):
-            continue
-        sample = _sample(record)
-        if sample is None:
-            continue
-        if event == "tick":
-            track.path.append(sample)
-        elif event == "detection":
-            track.detections.append((sample, int(record.get("level", -1))))
-        else:
-            track.confirmations.append(sample)
+        if record.get("event") == "tick":
+            try:
+                track.path.append(
+                    Sample(float(record["t"]), float(record["north"]), float(record["east"]))
+                )
+            except (KeyError, TypeError, ValueError):
+                continue  # a damaged tick costs one point of the path, not the map
     return track
 
 

@@ -7,7 +7,7 @@ import json
 import math
 from dataclasses import dataclass
 
-from companion.link.geo import LocalFrame
+from companion.link.local_frame import LocalFrame
 
 _FIELDS = frozenset({"time", "sensor", "lat", "lon", "north", "east", "confidence"})
 

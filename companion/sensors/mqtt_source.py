@@ -15,7 +15,7 @@ from time import time as wall_time
 
 import numpy as np
 
-from companion.link.geo import LocalFrame
+from companion.link.local_frame import LocalFrame
 from companion.sensors.base import FloatArray, SensorSource
 from companion.sensors.detection_payload import DetectionError, parse_detection
 from companion.telemetry.mqtt.channel import MqttChannel, Received

@@ -3,13 +3,15 @@
 renamed field fails loudly in both instead of silently breaking restart recovery.
 
 A record is ``{"t": ..., "event": NAME, **fields}``; optional fields that are None are left out
-(the log's shape before these classes existed, which other readers still parse as dicts).
+(the log's shape before these classes existed). Every reader (restart recovery, fleet scoring and
+progress, the run map) takes them through :func:`from_record`, which refuses a record whose
+fields do not match its class with :class:`LogFormatError` naming the file, line and field.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
-from typing import Any, ClassVar
+from dataclasses import MISSING, asdict, dataclass, fields
+from typing import Any, ClassVar, get_type_hints
 
 
 @dataclass(frozen=True)
@@ -101,14 +103,67 @@ def to_fields(event: DurableEvent) -> dict[str, Any]:
     return {k: v for k, v in asdict(event).items() if v is not None}
 
 
-def from_record(record: dict[str, Any]) -> DurableEvent | None:
-    """The durable event a record holds; None for other events and for a record that lacks a
-    required field (a torn or foreign line)."""
-    cls = DURABLE.get(str(record.get("event")))
+class LogFormatError(ValueError):
+    """A durable record that does not match its event class (a log written by another version:
+    a field renamed, missing, added or of another type)."""
+
+
+_JSON_TYPES: dict[type, tuple[type, ...]] = {float: (float, int), int: (int,), str: (str,),
+                                             bool: (bool,)}  # fmt: skip
+"""What JSON may hold for a field of each type (a float written as 1.0 may read back as 1)."""
+
+
+def _field_types(cls: type[DurableEvent]) -> dict[str, tuple[tuple[type, ...], bool]]:
+    """Per field: the JSON types it accepts and whether it is required."""
+    hints = get_type_hints(cls)
+    out: dict[str, tuple[tuple[type, ...], bool]] = {}
+    for f in fields(cls):
+        kinds = getattr(hints[f.name], "__args__", (hints[f.name],))
+        accepted = tuple(t for k in kinds if k is not type(None) for t in _JSON_TYPES[k])
+        out[f.name] = (accepted, f.default is MISSING)
+    return out
+
+
+_FIELDS = {name: _field_types(cls) for name, cls in DURABLE.items()}
+
+
+def from_record(record: dict[str, Any], where: str = "record") -> DurableEvent | None:
+    """The durable event a record holds; None for an event that is not durable (``tick`` ...).
+
+    ``where`` (``path:line``) starts the error message. Raises :class:`LogFormatError` when a
+    durable record lacks a required field, has one its class does not know or one of the
+    wrong type: a log of another version, which must not be half-read into a recovery.
+    """
+    name = str(record.get("event"))
+    cls = DURABLE.get(name)
     if cls is None:
         return None
-    known = {f.name for f in fields(cls)}
-    try:
-        return cls(**{k: v for k, v in record.items() if k in known})
-    except TypeError:
-        return None
+    known = _FIELDS[name]
+    values = {k: v for k, v in record.items() if k not in ("t", "event")}
+    for key, value in values.items():
+        if key not in known:
+            raise LogFormatError(
+                f"{where}: {name!r} record has field {key!r}, which {cls.__name__} does not "
+                f"know (its fields: {', '.join(known)})"
+            )
+        accepted = known[key][0]
+        # JSON's true is a Python int too: only a bool field takes it
+        if not isinstance(value, accepted) or (isinstance(value, bool) and bool not in accepted):
+            raise LogFormatError(
+                f"{where}: {name!r} record field {key!r} is {value!r}, not "
+                f"{' or '.join(t.__name__ for t in accepted)}"
+            )
+    for key, (_, required) in known.items():
+        if required and key not in values:
+            raise LogFormatError(f"{where}: {name!r} record lacks field {key!r} ({cls.__name__})")
+    return cls(**values)
+
+
+MQTT_ENVELOPE = ("seq", "vehicle")
+"""What an MQTT event adds to the mission-log record (docs/mqtt.md)."""
+
+
+def from_message(payload: dict[str, Any], where: str = "MQTT event") -> DurableEvent | None:
+    """:func:`from_record` for an event received over MQTT (its envelope ``seq`` and
+    ``vehicle`` set aside): a subscriber reads the same classes as the log's readers."""
+    return from_record({k: v for k, v in payload.items() if k not in MQTT_ENVELOPE}, where)

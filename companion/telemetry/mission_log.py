@@ -2,7 +2,9 @@
 
 Every record has ``t`` (mission time, vehicle seconds), ``event`` and its fields. Decisions
 (levels, detections, confirmations, phases, the end) are fsync'ed; periodic ``tick`` records
-are only flushed. A restarted companion reads it back with :func:`read_log`.
+are only flushed. A restarted companion, the fleet's scoring and progress and the run map read
+the durable events back typed with :func:`read_log`; :func:`read_records` gives the raw records
+of the other events (``tick``, ``stray`` ...).
 """
 
 from __future__ import annotations
@@ -12,13 +14,23 @@ import logging
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol, TextIO
+from typing import Any, Protocol, TextIO, TypeVar
 
-from companion.telemetry.events import DURABLE, Confirmation, End, PhaseChange, Start, from_record
+from companion.telemetry.events import (
+    DURABLE,
+    Confirmation,
+    DurableEvent,
+    End,
+    LogFormatError,
+    PhaseChange,
+    Start,
+    from_record,
+)
 
 log = logging.getLogger(__name__)
 
 DURABLE_EVENTS = frozenset(DURABLE)
+E = TypeVar("E", bound=DurableEvent)
 
 
 class EventSink(Protocol):
@@ -50,19 +62,44 @@ class MissionLog:
             self._file.close()
 
 
+@dataclass(frozen=True)
+class Logged:
+    """A durable event and the mission time (vehicle s) it was logged at."""
+
+    t: float
+    event: DurableEvent
+
+
 @dataclass
 class Recovered:
-    """What a restarted companion takes back from its log."""
+    """What a log holds: what a restarted companion takes back, and every durable event."""
 
     confirmed: list[tuple[float, float]] = field(default_factory=list)
     last_time: float = 0.0
+    """The latest mission time of any record (``tick`` included)."""
     ended: bool = False
     starts: int = 0
     search_start: float | None = None
+    """The first search start logged (a resumed search keeps it)."""
+    events: list[Logged] = field(default_factory=list)
+    """The durable events in log order."""
+
+    def of(self, kind: type[E]) -> list[E]:
+        """The events of one kind, in log order."""
+        return [e.event for e in self.events if isinstance(e.event, kind)]
+
+    def end(self) -> End | None:
+        """The last end logged, if any."""
+        ends = self.of(End)
+        return ends[-1] if ends else None
 
 
 def read_log(path: Path) -> Recovered:
-    """Confirmed positions, last mission time and whether the mission ended; skips torn lines."""
+    """The durable events, the last mission time and what follows from them; skips torn lines.
+
+    Raises :class:`LogFormatError` (path, line and field) for a durable record that does not
+    match its event class: a log written by another version is refused, not half-recovered.
+    """
     out = Recovered()
     if not path.exists():
         return out
@@ -75,8 +112,14 @@ def read_log(path: Path) -> Recovered:
                 continue
             if not isinstance(record, dict):
                 continue
-            out.last_time = max(out.last_time, float(record.get("t", 0.0)))
-            event = from_record(record)
+            t = record.get("t", 0.0)
+            if isinstance(t, bool) or not isinstance(t, int | float):
+                raise LogFormatError(f"{path}:{number}: field 't' is {t!r}, not a number")
+            out.last_time = max(out.last_time, float(t))
+            event = from_record(record, f"{path}:{number}")
+            if event is None:
+                continue
+            out.events.append(Logged(float(t), event))
             if isinstance(event, Confirmation):
                 out.confirmed.append((float(event.north), float(event.east)))
             elif isinstance(event, End):
@@ -93,7 +136,8 @@ def read_log(path: Path) -> Recovered:
 
 
 def read_records(path: Path) -> list[dict[str, Any]]:
-    """Every readable record of a log (for scoring and progress)."""
+    """Every readable record of a log, as raw dicts: for the events that are not durable
+    (durable ones are read typed through :func:`read_log`)."""
     records: list[dict[str, Any]] = []
     if not path.exists():
         return records

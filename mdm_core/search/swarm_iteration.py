@@ -30,6 +30,9 @@ from mdm_core.search.pso import (
     swarm_best,
 )
 
+BestOf = Callable[[Best, Best, BoolArray], tuple[Best, BoolArray]]
+"""swarm_best(own, heard, links), or a faster equivalent for the caller's heard tables."""
+
 
 def explore(policy: SearchPolicy, position: FloatArray, rng: np.random.Generator) -> FloatArray:
     """Fresh level-1 waypoints (k, 2) of the single-sensor search from positions (k, 2)."""
@@ -81,6 +84,7 @@ def choose_move(
     links: BoolArray,
     distance: float,
     rng: np.random.Generator,
+    best_of: BestOf = swarm_best,
 ) -> tuple[FloatArray, BoolArray, BoolArray]:
     """The displacement (..., 2) for the next interval, which particles follow a best, and
     which of them follow a peer's best rather than their own.
@@ -89,7 +93,7 @@ def choose_move(
     particle that followed a best (``guided``) has none left; ``distance``: how far a particle
     flies in one interval (speed x interval).
     """
-    social, own_is_social = swarm_best(own, heard, links)
+    social, own_is_social = best_of(own, heard, links)
     follow = social.fitness > 0
     inertia = arpso_weights(config, previous_best, own, current, heard_current, links)
     swarm_move = next_step(config, step, position, own, social, own_is_social, inertia, rng)
@@ -121,11 +125,12 @@ def refresh_informants(
     links: BoolArray,
     local_fitness: FloatArray,
     draw: Callable[[], BoolArray],
+    best_of: BestOf = swarm_best,
 ) -> tuple[BoolArray, FloatArray]:
     """SPSO adaptive random topology: new informants (``draw()``, the shape of ``links``) where
     the local best did not improve on ``local_fitness``. Returns the links and the local bests'
     fitness to compare with next time."""
-    updated, _ = swarm_best(own, heard, links)
+    updated, _ = best_of(own, heard, links)
     stuck = updated.fitness <= local_fitness
     if stuck.any():
         links = np.where(stuck[..., None], draw(), links)

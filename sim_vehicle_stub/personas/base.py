@@ -30,6 +30,8 @@ class Action(Enum):
 
     NONE = "none"
     HOLD = "hold"
+    POSITION = "position"
+    """Position mode: holds without sticks (PX4's offboard-loss default, COM_OBL_RC_ACT 0)."""
     RTL = "rtl"
     LAND = "land"
 
@@ -124,6 +126,8 @@ class Persona(ABC):
     hold_mode: ClassVar[str]
     rtl_mode: ClassVar[str]
     land_mode: ClassVar[str]
+    position_mode: ClassVar[str | None] = None
+    """The mode of Action.POSITION; None: the hold mode."""
     offboard_needs_setpoints: ClassVar[bool]
     """PX4 refuses OFFBOARD unless setpoints are streaming."""
     position_targets_time_out: ClassVar[bool]
@@ -154,6 +158,7 @@ class Persona(ABC):
     def mode_for(self, action: Action) -> ModeSpec | None:
         names = {
             Action.HOLD: self.hold_mode,
+            Action.POSITION: self.position_mode or self.hold_mode,
             Action.RTL: self.rtl_mode,
             Action.LAND: self.land_mode,
         }

@@ -44,6 +44,7 @@ class Px4Persona(Persona):
     hold_mode = "HOLD"
     rtl_mode = "RTL"
     land_mode = "LAND"
+    position_mode = "POSCTL"
     offboard_needs_setpoints = True
     position_targets_time_out = True
     takeoff_while_disarmed = True
@@ -58,20 +59,22 @@ class Px4Persona(Persona):
         return [
             ParamSpec("MAV_SYS_ID", facts.system_id, i32, 1, 255),
             ParamSpec("COM_OF_LOSS_T", 1.0 * s, low=0.0, doc="offboard setpoint loss, s"),
-            ParamSpec("COM_OBL_RC_ACT", 5, i32, 0, 7, "offboard loss: 3 RTL, 4 land, else hold"),
+            # Stock values read from PX4 SITL (SIH, February 2025) where they matter here.
+            ParamSpec("COM_OBL_RC_ACT", 0, i32, 0, 7, "offboard loss: 0 position, 3 RTL, 4 land"),
             ParamSpec("COM_DL_LOSS_T", round(10 * s), i32, 5, 1e6, "data link loss, s"),
             ParamSpec("NAV_DLL_ACT", 0, i32, 0, 6, "link loss: 0 off, 1 hold, 2 RTL, 3 land"),
             ParamSpec("GF_ACTION", 2, i32, 0, 5, "fence: 0/1 none, 2 hold, 3 RTL, 5 land"),
             ParamSpec("BAT_CRIT_THR", 0.07, low=0.0, high=1.0),
             ParamSpec("COM_LOW_BAT_ACT", 3, i32, 0, 3, "0 warn, 2 land, 3 RTL at critical"),
             ParamSpec("MIS_TAKEOFF_ALT", 2.5, low=0.0, high=1e4),
-            # PX4's range is 0-20 m/s (mc_pos_control params), widened for a faster profile.
-            ParamSpec("MPC_XY_VEL_MAX", facts.speed, low=0.1, high=max(20.0, facts.speed)),
+            # PX4's range is 0-20 m/s (mc_pos_control params), widened for a faster profile;
+            # the profile's speed is the companion's to set (DO_CHANGE_SPEED, this parameter).
+            ParamSpec("MPC_XY_VEL_MAX", 12.0, low=0.1, high=max(20.0, facts.speed)),
             ParamSpec("MPC_Z_VEL_MAX_UP", 3.0, low=0.1, high=100.0),
             ParamSpec("MPC_Z_VEL_MAX_DN", 1.5, low=0.1, high=100.0),
             ParamSpec("MPC_LAND_SPEED", 0.7, low=0.1, high=100.0),
             ParamSpec("MPC_TKO_SPEED", 1.5, low=1.0, high=5.0, doc="takeoff climb rate, m/s"),
-            ParamSpec("RTL_RETURN_ALT", 60.0, low=0.0, high=1e4),
+            ParamSpec("RTL_RETURN_ALT", 30.0, low=0.0, high=1e4),
         ]
 
     def mode_from_command(self, p1: float, p2: float, p3: float) -> ModeSpec | None:
@@ -101,7 +104,8 @@ class Px4Persona(Persona):
 
     def setpoint_loss(self, params: ParamTable) -> tuple[float, Action]:
         act = int(params.get("COM_OBL_RC_ACT"))
-        action = {3: Action.RTL, 4: Action.LAND}.get(act, Action.HOLD)
+        # PX4 SITL without RC, stock 0: POSCTL (measured after a companion was killed).
+        action = {0: Action.POSITION, 3: Action.RTL, 4: Action.LAND}.get(act, Action.HOLD)
         return params.get("COM_OF_LOSS_T"), action
 
     def link_loss(self, params: ParamTable) -> tuple[float, Action]:

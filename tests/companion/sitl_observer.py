@@ -6,9 +6,12 @@ from __future__ import annotations
 
 import math
 import os
+import queue
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil
@@ -53,6 +56,8 @@ class Observer:
         self._lock = threading.Lock()
         self._send_lock = threading.Lock()
         self._stop = threading.Event()
+        self._mission: queue.Queue[Any] = queue.Queue()
+        """Mission-protocol messages of the vehicle, for :meth:`read_fence`."""
         self._conn = mavutil.mavlink_connection(url, source_system=250, source_component=190)
         self._thread = threading.Thread(target=self._run, name="observer", daemon=True)
         self._thread.start()
@@ -77,6 +82,8 @@ class Observer:
             msg = self._conn.recv_match(blocking=True, timeout=0.2)
             if msg is None or msg.get_srcSystem() != self.sysid or msg.get_srcComponent() != 1:
                 continue
+            if msg.get_type() in ("MISSION_COUNT", "MISSION_ITEM_INT"):
+                self._mission.put(msg)
             with self._lock:
                 self._update(msg)
 
@@ -111,22 +118,52 @@ class Observer:
                                              mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
                                              main, sub, 0, 0, 0, 0)  # fmt: skip
 
+    def command(self, command: int, *params: float) -> None:
+        """COMMAND_LONG to the autopilot, as a ground station sends it (no ack awaited)."""
+        full = [*params, *[0.0] * (7 - len(params))]
+        with self._send_lock:
+            self._conn.mav.command_long_send(self.sysid, 1, command, 0, *full)
+
+    def read_fence(self) -> list[tuple[int, int, int]]:
+        """The fence items the vehicle stores, (command, lat, lon) in 1e-7 degrees, downloaded
+        on this link (MISSION_REQUEST_LIST with mission_type FENCE)."""
+        fence = mavlink2.MAV_MISSION_TYPE_FENCE
+
+        def ask(kind: str, send: Callable[[], None], seq: int = -1) -> Any:
+            for _ in range(3):
+                with self._send_lock:
+                    send()
+                deadline = time.monotonic() + 3.0
+                while (left := deadline - time.monotonic()) > 0:
+                    try:
+                        msg = self._mission.get(timeout=left)
+                    except queue.Empty:
+                        break
+                    wanted = msg.get_type() == kind and msg.mission_type == fence
+                    if wanted and (seq < 0 or msg.seq == seq):
+                        return msg
+            raise AssertionError(f"observer: no {kind} {seq if seq >= 0 else ''} for the fence")
+
+        mav = self._conn.mav
+        count = ask("MISSION_COUNT", lambda: mav.mission_request_list_send(self.sysid, 1, fence))
+        items = []
+        for seq in range(count.count):
+
+            def request(seq: int = seq) -> None:
+                mav.mission_request_int_send(self.sysid, 1, seq, fence)
+
+            item = ask("MISSION_ITEM_INT", request, seq)
+            items.append((item.command, item.x, item.y))
+        with self._send_lock:
+            mav.mission_ack_send(self.sysid, 1, mavlink2.MAV_MISSION_ACCEPTED, fence)
+        return items
+
     def snapshot(self) -> Trace:
         with self._lock:
             t = self.trace
             return Trace(t.armed_ever, t.armed, t.mode, list(t.modes), t.max_alt, t.alt,
                          t.distance, t.max_speed, t.landed_state, list(t.texts), t.last_position,
                          list(t.track))  # fmt: skip
-
-    def wait_for(self, what: str, predicate: object, timeout: float) -> Trace:
-        """Poll the trace until ``predicate(trace)`` holds; fails naming ``what`` and the trace."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            snap = self.snapshot()
-            if predicate(snap):  # type: ignore[operator]
-                return snap
-            time.sleep(0.2)
-        raise AssertionError(f"observer: {what} not seen in {timeout} s; trace {self.snapshot()}")
 
     def close(self) -> None:
         self._stop.set()

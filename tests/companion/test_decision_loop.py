@@ -17,7 +17,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.autopilots import FlightMode
-from companion.guidance import Setpoint
+from companion.guidance import NedSetpoint
 from companion.link.base import SetpointKind, VehicleLink
 from companion.link.messages import Heartbeat, LinkEvent, LocalPosition
 from companion.link.outcome import CommandResult, accepted
@@ -42,7 +42,7 @@ class _Link(VehicleLink):
     def __init__(self) -> None:
         super().__init__()
         self.target_system = 1
-        self.setpoints: list[Setpoint] = []
+        self.setpoints: list[NedSetpoint] = []
 
     def describe(self) -> str:
         return "test"
@@ -56,7 +56,7 @@ class _Link(VehicleLink):
     def send_heartbeat(self) -> None:
         return
 
-    def send_setpoint(self, setpoint: Setpoint, kind: SetpointKind) -> None:
+    def send_setpoint(self, setpoint: NedSetpoint, kind: SetpointKind) -> None:
         self.setpoints.append(setpoint)
 
     async def set_mode(self, mode: FlightMode) -> CommandResult:
@@ -89,13 +89,12 @@ def _position(t: float, north: float) -> LocalPosition:
 
 
 def test_of_queued_positions_only_the_newest_is_steered_from(tmp_path: Path) -> None:
-    async def main() -> tuple[list[Setpoint], VehicleMission]:
+    async def main() -> tuple[list[NedSetpoint], VehicleMission]:
         link = _Link()
         config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
         mission = VehicleMission(config, link, _Sink())
-        mission.control = enter(
-            mission.control, Phase.PREPARE
-        )  # a neutral setpoint for every position acted on
+        # a neutral setpoint for every position acted on
+        mission.state = replace(mission.state, control=enter(mission.control, Phase.PREPARE))
         for k in range(5):
             link.events.put_nowait(_position(0.1 * k, 1000.0 + k))
         link.events.put_nowait(Heartbeat(12, 0, False, 3))
@@ -111,11 +110,11 @@ def test_of_queued_positions_only_the_newest_is_steered_from(tmp_path: Path) -> 
 
 
 def test_a_lone_position_is_acted_on(tmp_path: Path) -> None:
-    async def main() -> list[Setpoint]:
+    async def main() -> list[NedSetpoint]:
         link = _Link()
         config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
         mission = VehicleMission(config, link, _Sink())
-        mission.control = enter(mission.control, Phase.PREPARE)
+        mission.state = replace(mission.state, control=enter(mission.control, Phase.PREPARE))
         mission._handle_queued(_position(0.0, 5.0), link.events)
         link.events.put_nowait(_position(0.1, 6.0))
         mission._handle_queued(Heartbeat(12, 0, False, 3), link.events)
@@ -188,11 +187,11 @@ def test_heartbeats_flow_while_the_loop_runs_and_stop_with_it(tmp_path: Path) ->
     async def main() -> tuple[int, int, int]:
         link = _BeatingLink()
         mission = _mission(tmp_path, link)
-        mission.control = enter(mission.control, Phase.PREPARE)
+        mission.state = replace(mission.state, control=enter(mission.control, Phase.PREPARE))
         task = asyncio.create_task(mission._decide())
         await asyncio.sleep(0)
         first = link.beats  # one at once
-        link.events.put_nowait(_position(0.1, 7.0))
+        link.publish([_position(0.1, 7.0)])
         await asyncio.sleep(0.3)
         running = link.beats
         task.cancel()

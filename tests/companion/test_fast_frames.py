@@ -65,6 +65,7 @@ def _run(tmp: Path, data: list[bytes], *, fast: bool) -> tuple[list[LinkEvent], 
         link._tlog = __import__("companion.link.tlog", fromlist=["T"]).TelemetryLog(tmp / "v.tlog")
         for d in data:
             link._receive(d, ("127.0.0.1", 5) if fast else None)
+            link._publish_pending()
         events = []
         while not link.events.empty():
             events.append(link.events.get_nowait())

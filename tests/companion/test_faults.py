@@ -12,36 +12,20 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
-SMALL_PROFILE = """
-name: small-test
-description: three real targets and a false one in a 3 km square, for fault tests
-area: {north: 3000.0, east: 3000.0}
-targets:
-  - {north: 1500.0, east: 1500.0}
-  - {north: 700.0, east: 700.0}
-  - {north: 2300.0, east: 2300.0}
-  - {north: 600.0, east: 2400.0, false_target: true}
-fleet: {vehicles: 2, speed: 20.0, tau: 0.33, altitude: 30.0, altitude_step: 5.0}
-sensors:
-  - {name: detection, radius: 1000.0}
-  - {name: confirmation, radius: 200.0}
-policy:
-  kind: mdm
-  memory_radius: 300.0
-  levels:
-    - {distribution: LS, step: 600.0}
-    - distribution: BS
-      step: 1000.0
-      index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 150.0}
-mission: {duration: 600.0, ts_cap: 5000.0}
-"""
+from companion.telemetry import events, read_log
+from tests.emulator_harness import free_udp_base
+from tests.profile_files import sensors, write_profile_with
+from tests.waiting import wait_until
+
+BIND_OFFSET = 100
+"""The emulator binds vehicle i's port at base + BIND_OFFSET + i (a pilot talks to it there)."""
 
 
 class Procs:
@@ -65,7 +49,7 @@ class Procs:
         return self._start(
             ["-m", "sim_vehicle_stub.cli", "--profile", profile, "-n", str(vehicles),
              "--persona", persona, "--base-port", str(base_port),
-             "--bind-port-base", str(base_port + 100), "--speedup", str(speedup),
+             "--bind-port-base", str(base_port + BIND_OFFSET), "--speedup", str(speedup),
              "--seed", "3", "--events", str(self.out / "emulator-events.jsonl"), *extra],
             "emulator.log",
         )  # fmt: skip
@@ -103,21 +87,10 @@ def records(path: Path) -> list[dict[str, Any]]:
     return out
 
 
-def wait_for(check: Callable[[], bool], timeout: float, what: str) -> None:
-    """Poll ``check`` until true; fails the test naming ``what`` after ``timeout`` wall s."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if check():
-            return
-        time.sleep(0.2)
-    raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
-
-
-def has(path: Path, event: str, **fields: Any) -> bool:
-    return any(
-        r.get("event") == event and all(r.get(k) == v for k, v in fields.items())
-        for r in records(path)
-    )
+def has(tmp: Path, kind: type[events.DurableEvent], **fields: Any) -> bool:
+    """Vehicle 0's mission log holds an event of ``kind`` with these field values."""
+    logged = read_log(_log(tmp)).of(kind)
+    return any(all(getattr(e, k) == v for k, v in fields.items()) for e in logged)
 
 
 @pytest.fixture
@@ -130,9 +103,26 @@ def procs(tmp_path: Path) -> Iterator[Procs]:
 
 
 @pytest.fixture
+def base() -> int:
+    """The emulator's base port, free with the ports it binds (base + BIND_OFFSET)."""
+    return free_udp_base(1, gap=BIND_OFFSET)
+
+
+def _pilot(base: int) -> mavutil.mavfile:
+    """A pilot's ground station talking to vehicle 0's own port."""
+    return mavutil.mavlink_connection(f"udpout:127.0.0.1:{base + BIND_OFFSET}",
+                                      source_system=255, source_component=190)  # fmt: skip
+
+
+@pytest.fixture
 def small_profile(tmp_path: Path) -> str:
-    path = tmp_path / "small-test.yaml"
-    path.write_text(SMALL_PROFILE)
+    """Three real targets and a false one in a 3 km square."""
+    real = [(1500.0, 1500.0), (700.0, 700.0), (2300.0, 2300.0)]
+    targets = [{"north": n, "east": e} for n, e in real]
+    targets.append({"north": 600.0, "east": 2400.0, "false_target": True})
+    path = write_profile_with(tmp_path / "small-test.yaml", "small-test", targets=targets,
+                              sensors=sensors(1000.0, 200.0), policy={"memory_radius": 300.0},
+                              mission={"duration": 600.0})  # fmt: skip
     return str(path)
 
 
@@ -145,48 +135,51 @@ def _log(tmp: Path, i: int = 0) -> Path:
 
 
 def _searching_after(tmp: Path, n: int) -> bool:
-    """True when the last phase record after the first ``n`` records is 'search'."""
-    phases = [r["phase"] for r in records(_log(tmp))[n:] if r.get("event") == "phase"]
+    """True when the last phase change after the first ``n`` durable events is 'search'."""
+    after = read_log(_log(tmp)).events[n:]
+    phases = [e.event.phase for e in after if isinstance(e.event, events.PhaseChange)]
     return bool(phases) and phases[-1] == "search"
 
 
 @pytest.mark.timeout(120)
 def test_killed_companion_restarts_with_its_memory(
-    procs: Procs, small_profile: str, tmp_path: Path
+    procs: Procs, small_profile: str, tmp_path: Path, base: int
 ) -> None:
-    procs.emulator(small_profile, 34700)
-    first = procs.companion(small_profile, 0, 34700, duration=3000)
-    wait_for(lambda: has(_log(tmp_path), "confirmation"), 60, "a first confirmation")
+    procs.emulator(small_profile, base)
+    first = procs.companion(small_profile, 0, base, duration=3000)
+    wait_until(lambda: has(tmp_path, events.Confirmation), 60, "a first confirmation")
     first.kill()  # SIGKILL: no chance to clean up
     first.wait()
-    confirmed = [r for r in records(_log(tmp_path)) if r["event"] == "confirmation"]
-    procs.companion(small_profile, 0, 34700, duration=3000)
-    wait_for(lambda: has(_log(tmp_path), "start", resumed=len(confirmed)), 20, "restart")
-    restarted_at = max(
-        k for k, r in enumerate(records(_log(tmp_path))) if r.get("event") == "start"
-    )
-    wait_for(lambda: _searching_after(tmp_path, restarted_at), 30, "search resumed")
-    time.sleep(8)  # ~160 sim s more of searching around the same target
-    later = [r for r in records(_log(tmp_path))[restarted_at:] if r["event"] == "confirmation"]
+    confirmed = read_log(_log(tmp_path)).of(events.Confirmation)
+    procs.companion(small_profile, 0, base, duration=3000)
+    wait_until(lambda: has(tmp_path, events.Start, resumed=len(confirmed)), 20, "restart")
+    logged = read_log(_log(tmp_path)).events
+    restarted_at = max(k for k, e in enumerate(logged) if isinstance(e.event, events.Start))
+    wait_until(lambda: _searching_after(tmp_path, restarted_at), 30, "search resumed")
+    resumed = read_log(_log(tmp_path)).last_time
+    wait_until(lambda: read_log(_log(tmp_path)).last_time, 30, "160 vehicle s more of searching "
+               "around the same target", until=lambda t: t >= resumed + 160.0)  # fmt: skip
+    after = read_log(_log(tmp_path)).events[restarted_at:]
+    later = [e.event for e in after if isinstance(e.event, events.Confirmation)]
     for r in later:
-        gaps = [np.hypot(r["north"] - c["north"], r["east"] - c["east"]) for c in confirmed]
+        gaps = [np.hypot(r.north - c.north, r.east - c.east) for c in confirmed]
         assert min(gaps) > 300.0, f"re-confirmed a remembered target after restart: {r}"
 
 
 @pytest.mark.timeout(120)
 def test_emulator_restart_mid_mission_is_flown_through(
-    procs: Procs, small_profile: str, tmp_path: Path
+    procs: Procs, small_profile: str, tmp_path: Path, base: int
 ) -> None:
-    emu = procs.emulator(small_profile, 34720)
-    procs.companion(small_profile, 0, 34720, duration=3000)
-    wait_for(lambda: has(_log(tmp_path), "phase", phase="search"), 40, "search")
+    emu = procs.emulator(small_profile, base)
+    procs.companion(small_profile, 0, base, duration=3000)
+    wait_until(lambda: has(tmp_path, events.PhaseChange, phase="search"), 40, "search")
     emu.kill()
     emu.wait()
-    wait_for(lambda: has(_log(tmp_path), "link", state="lost"), 15, "link loss noticed")
-    procs.emulator(small_profile, 34720)
-    wait_for(lambda: has(_log(tmp_path), "link", state="restored"), 30, "link restored")
-    n = len(records(_log(tmp_path)))
-    wait_for(lambda: _searching_after(tmp_path, n), 40, "search after re-arming and take-off")
+    wait_until(lambda: has(tmp_path, events.LinkState, state="lost"), 15, "link loss noticed")
+    procs.emulator(small_profile, base)
+    wait_until(lambda: has(tmp_path, events.LinkState, state="restored"), 30, "link restored")
+    n = len(read_log(_log(tmp_path)).events)
+    wait_until(lambda: _searching_after(tmp_path, n), 40, "search after re-arming and take-off")
     times = [r["t"] for r in records(_log(tmp_path))]
     assert times == sorted(times), "mission time went backwards across the emulator restart"
     armed = [e for e in records(tmp_path / "emulator-events.jsonl") if e["event"] == "armed"]
@@ -230,23 +223,24 @@ class _Relay:
 
 @pytest.mark.timeout(120)
 def test_five_seconds_of_silence_then_the_mission_resumes(
-    procs: Procs, small_profile: str, tmp_path: Path
+    procs: Procs, small_profile: str, tmp_path: Path, base: int
 ) -> None:
-    relay = _Relay(34740, 34750)
+    companion_port = free_udp_base(1)
+    relay = _Relay(base, companion_port)
     try:
-        procs.emulator(small_profile, 34740)
-        procs.companion(small_profile, 0, 34750, duration=3000)
-        wait_for(lambda: has(_log(tmp_path), "phase", phase="search"), 40, "search")
+        procs.emulator(small_profile, base)
+        procs.companion(small_profile, 0, companion_port, duration=3000)
+        wait_until(lambda: has(tmp_path, events.PhaseChange, phase="search"), 40, "search")
         relay.silent = True
-        time.sleep(5.0)
+        time.sleep(5.0)  # the silence under test
         relay.silent = False
-        assert has(_log(tmp_path), "link", state="lost")
-        wait_for(lambda: has(_log(tmp_path), "link", state="restored"), 20, "link restored")
-        # From the restored record on (the search may have resumed, and ticks followed, before
-        # this poll saw it).
-        n = max(k for k, r in enumerate(records(_log(tmp_path)))
-                if r.get("event") == "link" and r.get("state") == "restored")  # fmt: skip
-        wait_for(lambda: _searching_after(tmp_path, n), 30, "search resumed")
+        assert has(tmp_path, events.LinkState, state="lost")
+        wait_until(lambda: has(tmp_path, events.LinkState, state="restored"), 20, "link restored")
+        # From the restored event on (the search may have resumed before this poll saw it).
+        logged = read_log(_log(tmp_path)).events
+        n = max(k for k, e in enumerate(logged)
+                if isinstance(e.event, events.LinkState) and e.event.state == "restored")  # fmt: skip
+        wait_until(lambda: _searching_after(tmp_path, n), 30, "search resumed")
     finally:
         relay.close()
     causes = {e.get("cause") for e in records(tmp_path / "emulator-events.jsonl")
@@ -256,65 +250,69 @@ def test_five_seconds_of_silence_then_the_mission_resumes(
 
 @pytest.mark.timeout(120)
 def test_pilot_takes_over_and_hands_back_mavsdk_ardupilot(
-    procs: Procs, small_profile: str, tmp_path: Path
+    procs: Procs, small_profile: str, tmp_path: Path, base: int
 ) -> None:
-    procs.emulator(small_profile, 34760, persona="ardupilot")
-    procs.companion(small_profile, 0, 34760, backend="mavsdk", duration=3000)
-    wait_for(lambda: has(_log(tmp_path), "phase", phase="search"), 40, "search")
-    pilot = mavutil.mavlink_connection("udpout:127.0.0.1:34860", source_system=255,
-                                       source_component=190)  # fmt: skip
+    procs.emulator(small_profile, base, persona="ardupilot")
+    procs.companion(small_profile, 0, base, backend="mavsdk", duration=3000)
+    wait_until(lambda: has(tmp_path, events.PhaseChange, phase="search"), 40, "search")
+    pilot = _pilot(base)
     try:
         pilot.mav.command_long_send(1, 1, 176, 0, 129, 5, 0, 0, 0, 0, 0)  # LOITER
-        wait_for(lambda: has(_log(tmp_path), "phase", phase="paused"), 10, "companion pauses")
-        time.sleep(3.0)
+        wait_until(
+            lambda: has(tmp_path, events.PhaseChange, phase="paused"), 10, "companion pauses"
+        )
+        time.sleep(3.0)  # what is under test: 3 s in which the companion does not take it back
         modes = [e["mode"] for e in records(tmp_path / "emulator-events.jsonl")
                  if e["event"] == "mode"]  # fmt: skip
         assert modes[-1] == "LOITER", f"companion fought the pilot: modes {modes}"
         pilot.mav.command_long_send(1, 1, 176, 0, 129, 4, 0, 0, 0, 0, 0)  # GUIDED
-        n = len(records(_log(tmp_path)))
-        wait_for(lambda: _searching_after(tmp_path, n), 20, "search after the hand-back")
+        n = len(read_log(_log(tmp_path)).events)
+        wait_until(lambda: _searching_after(tmp_path, n), 20, "search after the hand-back")
     finally:
         pilot.close()
 
 
 @pytest.mark.timeout(120)
 def test_pilot_hold_on_px4_is_not_taken_back(
-    procs: Procs, small_profile: str, tmp_path: Path
+    procs: Procs, small_profile: str, tmp_path: Path, base: int
 ) -> None:
     """HOLD while setpoints flow is a pilot's choice (a setpoint-loss HOLD is taken back)."""
-    procs.emulator(small_profile, 34780, persona="px4")
-    procs.companion(small_profile, 0, 34780, duration=3000)
-    wait_for(lambda: has(_log(tmp_path), "phase", phase="search"), 40, "search")
-    pilot = mavutil.mavlink_connection("udpout:127.0.0.1:34880", source_system=255,
-                                       source_component=190)  # fmt: skip
+    procs.emulator(small_profile, base, persona="px4")
+    procs.companion(small_profile, 0, base, duration=3000)
+    wait_until(lambda: has(tmp_path, events.PhaseChange, phase="search"), 40, "search")
+    pilot = _pilot(base)
     try:
         pilot.mav.command_long_send(1, 1, 176, 0, 129, 4, 3, 0, 0, 0, 0)  # AUTO.LOITER (HOLD)
-        wait_for(lambda: has(_log(tmp_path), "phase", phase="paused"), 10, "companion pauses")
-        time.sleep(3.0)
+        wait_until(
+            lambda: has(tmp_path, events.PhaseChange, phase="paused"), 10, "companion pauses"
+        )
+        time.sleep(3.0)  # what is under test: 3 s in which the companion does not take it back
     finally:
         pilot.close()
     modes = [e["mode"] for e in records(tmp_path / "emulator-events.jsonl") if e["event"] == "mode"]
     assert modes[-1] == "HOLD", f"companion fought the pilot: modes {modes}"
-    phases = [r["phase"] for r in records(_log(tmp_path)) if r.get("event") == "phase"]
+    phases = [e.phase for e in read_log(_log(tmp_path)).of(events.PhaseChange)]
     assert phases[-1] == "paused", phases
 
 
 @pytest.mark.timeout(120)
 def test_fallback_hold_during_the_climb_is_retried_not_ended(
-    procs: Procs, small_profile: str, tmp_path: Path
+    procs: Procs, small_profile: str, tmp_path: Path, base: int
 ) -> None:
     """A companion that stalls mid-climb (SIGSTOP) gets PX4's setpoint-loss HOLD; it climbs again."""
-    procs.emulator(small_profile, 34790, persona="px4", speedup=4.0)
-    companion = procs.companion(small_profile, 0, 34790, duration=3000)
-    wait_for(lambda: has(_log(tmp_path), "phase", phase="climb"), 60, "climb")
+    procs.emulator(small_profile, base, persona="px4", speedup=4.0)
+    companion = procs.companion(small_profile, 0, base, duration=3000)
+    wait_until(lambda: has(tmp_path, events.PhaseChange, phase="climb"), 60, "climb")
     companion.send_signal(signal.SIGSTOP)
-    time.sleep(1.5)  # 6 vehicle s without setpoints: COM_OF_LOSS_T is 1 s
+    time.sleep(1.5)  # the stall under test: 6 vehicle s without setpoints (COM_OF_LOSS_T 1 s)
     companion.send_signal(signal.SIGCONT)
-    wait_for(lambda: has(_log(tmp_path), "phase", phase="search"), 60, "search after the stall")
+    wait_until(
+        lambda: has(tmp_path, events.PhaseChange, phase="search"), 60, "search after the stall"
+    )
     causes = [e.get("cause") for e in records(tmp_path / "emulator-events.jsonl")
               if e["event"] == "failsafe"]  # fmt: skip
     assert causes, "the vehicle saw no failsafe while its companion was stopped"
-    phases = [r["phase"] for r in records(_log(tmp_path)) if r.get("event") == "phase"]
+    phases = [e.phase for e in read_log(_log(tmp_path)).of(events.PhaseChange)]
     climb = phases.index("climb")
     assert "prepare" in phases[climb:], f"no retry after the fall-back HOLD: {phases}"
-    assert not has(_log(tmp_path), "end"), "the mission ended instead of climbing again"
+    assert not has(tmp_path, events.End), "the mission ended instead of climbing again"

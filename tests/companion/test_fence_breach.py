@@ -12,9 +12,11 @@ from pathlib import Path
 from companion.fly import fly
 from companion.link.pymavlink_link import PymavlinkLink
 from companion.mission.phase import Phase
-from companion.telemetry.mission_log import read_records
+from companion.telemetry import events
+from companion.telemetry.mission_log import read_log, read_records
 from mdm_profiles import load_profile
 from tests.emulator_harness import free_udp_base, make_config, running_emulator
+from tests.waiting import wait_until_async
 
 FIELD = load_profile("field-duebendorf")
 
@@ -26,8 +28,8 @@ def test_a_wrong_frame_is_caught_at_the_fence_and_flown_home(tmp_path: Path) -> 
         link = PymavlinkLink(url=f"udpin:127.0.0.1:{base}", target_system=1)
         async with fly(FIELD, 0, link, log_dir=tmp_path, duration=900.0, land_wait=300.0,
                        sensor_source="virtual") as flight:  # fmt: skip
-            while flight.mission.phase is not Phase.SEARCH:
-                await asyncio.sleep(0.05)
+            await wait_until_async(lambda: flight.mission.phase, 120.0, "the search",
+                                   until=lambda phase: phase is Phase.SEARCH)  # fmt: skip
             assert link.alignment is not None
             link.alignment.east -= 2500.0  # the vehicle now believes it is 2.5 km further west
             return await asyncio.wait_for(flight.ended(), 120.0)
@@ -41,7 +43,9 @@ def test_a_wrong_frame_is_caught_at_the_fence_and_flown_home(tmp_path: Path) -> 
     found = re.fullmatch(r"(\d+\.\d) m (east|north-east|south-east) of the fence", breach["where"])
     assert found, breach
     assert float(found.group(1)) < 10.0  # seen at the line (GLOBAL_POSITION_INT at 10 Hz)
-    assert [r["phase"] for r in records if r["event"] == "phase"][-2:] == ["return", "done"]
-    end = next(i for i, r in enumerate(records) if r["event"] == "end")
+    logged = read_log(tmp_path / "mission-0.jsonl")
+    assert [e.phase for e in logged.of(events.PhaseChange)][-2:] == ["return", "done"]
+    end = next(k for k, e in enumerate(logged.events) if isinstance(e.event, events.End))
     # RTL after the end (the PX4 persona, as PX4, then holds once landed and disarmed)
-    assert "RTL" in [r["mode"] for r in records[end:] if r["event"] == "mode"]
+    after = logged.events[end:]
+    assert "RTL" in [e.event.mode for e in after if isinstance(e.event, events.ModeChange)]

@@ -13,7 +13,6 @@ import re
 import signal
 import subprocess
 import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -26,6 +25,7 @@ from companion.telemetry.mission_log import read_records
 from mdm_profiles import load_profile
 from tests import sitl
 from tests.companion.sitl_observer import Observer
+from tests.waiting import wait_until
 
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil
@@ -98,16 +98,6 @@ def _stop(p: subprocess.Popen[bytes]) -> None:
     if p.poll() is None:
         os.killpg(p.pid, signal.SIGKILL)
         p.wait()
-
-
-def _until(
-    what: str, predicate: Callable[[], bool], timeout: float, context: Callable[[], str]
-) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"{what}: not within {timeout} s\n{context()}")
-        time.sleep(0.2)
 
 
 def _vehicle_fence(url: str, sysid: int) -> tuple[list[tuple[int, int]], float]:
@@ -198,7 +188,9 @@ def test_field_profile_flies_in_its_frame_inside_the_fence_on_stock_arducopter(
             t = obs.snapshot()
             return t.landed_state == ON_GROUND and not t.armed and RTL in t.modes[modes_before:]
 
-        _until("confirmed, RTL, landed, disarmed", landed_after_rtl, 600.0, context(out))
+        wait_until(
+            landed_after_rtl, 600.0, "confirmed, RTL, landed, disarmed", context=context(out)
+        )
         assert flights[-1].wait(timeout=60) == 0, context(out)()
         records = read_records(out / f"mission-{inst.index}.jsonl")
 

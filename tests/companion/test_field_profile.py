@@ -9,7 +9,7 @@ import pytest
 
 from companion.cli import main
 from companion.fence_from_profile import fence_for
-from companion.link.geo import LocalFrame
+from companion.link.local_frame import LocalFrame
 from mdm_profiles import load_profile
 
 

@@ -3,6 +3,7 @@ the argument, its value and the limit; nothing is written to the run directory."
 
 from __future__ import annotations
 
+import json
 import socket
 import subprocess
 import sys
@@ -12,6 +13,7 @@ import pytest
 
 from companion.cli import main
 from companion.fleet.ports import free_port_block
+from companion.fleet.preflight import RUN_FILE
 from tests.fleet_cli import small_profile
 
 
@@ -114,3 +116,17 @@ def test_a_base_port_another_emulator_sends_to_is_refused(
         stray.wait(10)
     assert f"--base-port {base}: 127.0.0.1:" in err
     assert "another emulator or vehicle is already talking there" in err
+
+
+def test_resuming_a_run_whose_log_another_version_wrote_is_refused_naming_the_line(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    run = tmp_path / "run"
+    run.mkdir()
+    asked = {"profile": "paper-fixed", "vehicles": 1, "seed": 1, "duration": 300.0}
+    (run / RUN_FILE).write_text(json.dumps(asked))
+    log = run / "mission-0.jsonl"
+    log.write_text('{"t":900.0,"event":"end","why":"mission time","found":0}\n')
+    err = _refused(capsys, "--out", str(run), "--resume", "--vehicles", "1", "--seed", "1",
+                   "--duration", "300")  # fmt: skip
+    assert f"--resume: {log}:1: 'end' record has field 'why', which End does not know" in err

@@ -12,13 +12,13 @@ import pytest
 
 from companion.fleet.options import FleetOptions
 from companion.fleet.runner import run_fleet
-from companion.telemetry import read_records
+from companion.telemetry import read_log
 from tests.fleet_cli import processes_naming, run_fleet_cli, small_profile, start_fleet
-from tests.mqtt_harness import wait_until
+from tests.waiting import wait_until
 
 
 def _search_start(log: Path) -> float | None:
-    return next((float(r["search_start"]) for r in read_records(log) if "search_start" in r), None)
+    return read_log(log).search_start
 
 
 @pytest.mark.timeout(180)
@@ -54,8 +54,7 @@ def test_resume_continues_a_killed_companion_and_counts_its_whole_search(tmp_pat
     assert result.ends[1].how == "mission time"
     assert result.end_reasons == {0: "mission time", 1: "mission time"}
     assert _search_start(log1) == started, "the resumed vehicle restarted its search clock"
-    starts = [r for r in read_records(log1) if r["event"] == "start"]
-    assert len(starts) == 2
+    assert read_log(log1).starts == 2
     assert 200.0 <= result.search_time < 220.0
     run = json.loads((out / "run.json").read_text())
     assert run["resumes"][0]["resumed_vehicles"] == [1]

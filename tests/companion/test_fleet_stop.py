@@ -13,16 +13,14 @@ from typing import Any
 
 import pytest
 
-from companion.telemetry import read_records
+from companion.telemetry import events, read_log, read_records
 from tests.fleet_cli import processes_naming, small_profile, start_fleet
-from tests.mqtt_harness import wait_until
+from tests.waiting import wait_until
 
 
 def _searching(out: Path, vehicles: int) -> bool:
     for i in range(vehicles):
-        phases = [
-            r["phase"] for r in read_records(out / f"mission-{i}.jsonl") if r["event"] == "phase"
-        ]
+        phases = [e.phase for e in read_log(out / f"mission-{i}.jsonl").of(events.PhaseChange)]
         if not phases or phases[-1] != "search":
             return False
     return True
@@ -56,9 +54,9 @@ def test_one_sigint_lands_every_vehicle_then_writes_the_summary(tmp_path: Path) 
     assert result["end_reasons"] == {"0": "operator", "1": "operator", "2": "operator"}
     for i in range(3):
         assert "second signal" not in (out / f"companion-{i}.log").read_text()
-    events = read_records(out / "emulator-events.jsonl")
+    emulator = read_records(out / "emulator-events.jsonl")
     for i in range(3):
-        mine = [r["event"] if r["event"] != "mode" else r["mode"] for r in events
+        mine = [r["event"] if r["event"] != "mode" else r["mode"] for r in emulator
                 if r.get("vehicle") == i and r["event"] in ("mode", "armed", "disarmed")]  # fmt: skip
         # RTL flown to the ground; the PX4 persona, as PX4, then holds once landed and disarmed
         assert mine[-3:] == ["RTL", "disarmed", "HOLD"], f"vehicle {i}: {mine}"

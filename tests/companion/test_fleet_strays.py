@@ -11,13 +11,13 @@ from pathlib import Path
 import pytest
 
 from companion.fleet.ports import free_port_block
-from companion.telemetry import read_records
+from companion.telemetry import events, read_log
 from tests.fleet_cli import small_profile
-from tests.mqtt_harness import wait_until
+from tests.waiting import wait_until
 
 
 def _searching(log: Path) -> bool:
-    return any(r.get("phase") == "search" for r in read_records(log))
+    return any(e.phase == "search" for e in read_log(log).of(events.PhaseChange))
 
 
 @pytest.mark.timeout(120)

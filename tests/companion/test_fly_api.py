@@ -11,12 +11,14 @@ import pytest
 from companion.fly import fly
 from companion.link.pymavlink_link import PymavlinkLink
 from companion.mission.phase import Phase
-from companion.telemetry.mission_log import read_records
+from companion.telemetry import events
+from companion.telemetry.mission_log import read_log
 from tests.emulator_harness import PROFILE, free_udp_base, make_config, running_emulator
+from tests.waiting import wait_until_async
 
 
 def _phases(log: Path) -> list[str]:
-    return [str(r["phase"]) for r in read_records(log) if r["event"] == "phase"]
+    return [e.phase for e in read_log(log).of(events.PhaseChange)]
 
 
 def test_a_script_flies_a_mission_to_its_end(tmp_path: Path) -> None:
@@ -45,19 +47,19 @@ def test_leaving_the_block_early_ends_with_the_end_action_and_waits(tmp_path: Pa
         async with fly(
             PROFILE, 0, link, log_dir=tmp_path, duration=600.0, land_wait=120.0
         ) as flight:
-            while flight.mission.phase is not Phase.SEARCH:
-                await asyncio.sleep(0.05)
+            await wait_until_async(lambda: flight.mission.phase, 120.0, "the search",
+                                   until=lambda phase: phase is Phase.SEARCH)  # fmt: skip
         return await flight.ended()
 
     with running_emulator(make_config(1, base, speedup=20.0)):
         reason = asyncio.run(asyncio.wait_for(main(), 90.0))
     assert reason == "operator"
-    records = read_records(tmp_path / "mission-0.jsonl")
-    assert [r["reason"] for r in records if r["event"] == "end"] == ["operator"]
+    logged = read_log(tmp_path / "mission-0.jsonl").events
+    assert [e.event.reason for e in logged if isinstance(e.event, events.End)] == ["operator"]
     assert _phases(tmp_path / "mission-0.jsonl")[-2:] == ["return", "done"]
-    end = next(i for i, r in enumerate(records) if r["event"] == "end")
+    end = next(k for k, e in enumerate(logged) if isinstance(e.event, events.End))
     # RTL after the end (the PX4 persona, as PX4, then holds once landed and disarmed)
-    assert "RTL" in [r["mode"] for r in records[end:] if r["event"] == "mode"]
+    assert "RTL" in [e.event.mode for e in logged[end:] if isinstance(e.event, events.ModeChange)]
 
 
 def test_a_flight_that_cannot_run_is_refused_before_anything_starts(tmp_path: Path) -> None:

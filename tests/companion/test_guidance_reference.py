@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from companion.geofence import Geofence
-from companion.guidance import GuidanceConfig, Setpoint, pursuit
+from companion.guidance import GuidanceConfig, NedSetpoint, pursuit
 
 CFG = GuidanceConfig(speed=20.0, altitude=40.0, acceptance_radius=5.0)
 FENCES = [
@@ -18,7 +18,7 @@ FENCES = [
 
 def _reference(
     position: np.ndarray, down: float, waypoint: np.ndarray, fence: Geofence, period: float
-) -> Setpoint:
+) -> NedSetpoint:
     """The numpy form pursuit had before (vectors as arrays)."""
     target = fence.clamp(np.asarray(waypoint, dtype=float))
     offset = target - position
@@ -34,7 +34,7 @@ def _reference(
             velocity *= CFG.speed / norm
     target_down = -CFG.altitude
     vd = float(np.clip(CFG.climb_gain * (target_down - down), -CFG.max_climb, CFG.max_climb))
-    return Setpoint(
+    return NedSetpoint(
         float(target[0]), float(target[1]), target_down, float(velocity[0]), float(velocity[1]), vd
     )
 

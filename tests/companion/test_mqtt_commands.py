@@ -15,35 +15,16 @@ from typing import Any
 import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
-from companion.telemetry import read_records
-from tests.mqtt_harness import Subscriber, publish, retained_topics, wait_until
-
-PROFILE = """
-name: mqtt-command-test
-area: {north: 3000.0, east: 3000.0}
-targets:
-  - {north: 1500.0, east: 1500.0}
-  - {north: 600.0, east: 2400.0, false_target: true}
-fleet: {vehicles: 2, speed: 20.0, tau: 0.33, altitude: 30.0, altitude_step: 5.0}
-sensors:
-  - {name: detection, radius: 1000.0}
-  - {name: confirmation, radius: 50.0}
-policy:
-  kind: mdm
-  levels:
-    - {distribution: LS, step: 600.0}
-    - distribution: BS
-      step: 1000.0
-      index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 150.0}
-mission: {duration: 5000.0, ts_cap: 5000.0}
-"""
+from companion.telemetry import events, read_log, read_records
+from tests.mqtt_harness import Subscriber, publish, retained_topics
+from tests.profile_files import write_profile_with
+from tests.waiting import wait_until
 
 
 @pytest.mark.timeout(120)
 def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> None:
     prefix = f"mdm/test-{os.getpid()}-commands"
-    profile = tmp_path / "profile.yaml"
-    profile.write_text(PROFILE)
+    profile = write_profile_with(tmp_path / "profile.yaml", "mqtt-command-test")
     out = tmp_path / "run"
     sub = Subscriber(1883, f"{prefix}/#", tmp_path / "sub.txt")
 
@@ -99,18 +80,21 @@ def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> No
     v1 = read_records(out / "mission-1.jsonl")
     assert [(r["command"], r["id"]) for r in v0 if r["event"] == "command"] == [
         ("pause", "p1"), ("resume", "r1"), ("land", "l1")]  # fmt: skip
-    assert {"event": "phase", "phase": "paused", "by": "operator"}.items() <= next(
-        r for r in v0 if r.get("phase") == "paused").items()  # fmt: skip
-    assert next(r for r in v0 if r["event"] == "end")["reason"] == "operator land"
+    logged = read_log(out / "mission-0.jsonl")
+    assert events.PhaseChange("paused", by="operator") in logged.of(events.PhaseChange)
+    assert [e.reason for e in logged.of(events.End)] == ["operator land"]
     errors = [r["error"] for r in v1 if r["event"] == "error"]
     assert len(errors) == 2, errors
     assert errors[0].startswith("not JSON"), errors
     assert errors[1] == "command 'explode': expected one of pause, resume, abort, land"
     assert [(r["command"], r["id"]) for r in v1 if r["event"] == "command"] == [("abort", "a1")]
-    assert next(r for r in v1 if r["event"] == "end")["reason"] == "operator abort"
+    assert [e.reason for e in read_log(out / "mission-1.jsonl").of(events.End)] == [
+        "operator abort"
+    ]
 
     emulator = [r for r in read_records(out / "emulator-events.jsonl") if r["event"] == "mode"]
     modes = {i: [r["mode"] for r in emulator if r["vehicle"] == i] for i in (0, 1)}
-    assert modes[0][-3:] == ["HOLD", "OFFBOARD", "LAND"], modes[0]
+    # land -> LAND; the PX4 persona, as PX4, holds once landed and disarmed (8a4eb55)
+    assert modes[0][-4:] == ["HOLD", "OFFBOARD", "LAND", "HOLD"], modes[0]
     # abort -> RTL; the PX4 persona, as PX4, holds once landed and disarmed
     assert modes[1][-2:] == ["RTL", "HOLD"], modes[1]

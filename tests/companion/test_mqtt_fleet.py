@@ -12,30 +12,9 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from tests.mqtt_harness import Subscriber, retained_topics, wait_until
-
-PROFILE = """
-name: mqtt-fleet-test
-area: {north: 3000.0, east: 3000.0}
-targets:
-  - {north: 1500.0, east: 1500.0}
-  - {north: 700.0, east: 700.0}
-  - {north: 600.0, east: 2400.0, false_target: true}
-fleet: {vehicles: 2, speed: 20.0, tau: 0.33, altitude: 30.0, altitude_step: 5.0}
-sensors:
-  - {name: detection, radius: 1000.0}
-  - {name: confirmation, radius: 200.0}
-policy:
-  kind: mdm
-  memory_radius: 300.0
-  levels:
-    - {distribution: LS, step: 600.0}
-    - distribution: BS
-      step: 1000.0
-      index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 150.0}
-mission: {duration: 600.0, ts_cap: 5000.0}
-mqtt: {host: 127.0.0.1, port: 1883, topic_prefix: PREFIX, state_rate: 5.0}
-"""
+from tests.mqtt_harness import Subscriber, retained_topics
+from tests.profile_files import sensors, write_profile_with
+from tests.waiting import wait_until
 
 
 def mqtt_events(sub: Subscriber, prefix: str, vehicle: int) -> list[dict[str, Any]]:
@@ -58,8 +37,14 @@ def log_events(path: Path) -> list[dict[str, Any]]:
 @pytest.mark.timeout(120)
 def test_fleet_publishes_every_event_in_order_state_and_status(tmp_path: Path) -> None:
     prefix = f"mdm/test-{os.getpid()}-fleet"
-    profile = tmp_path / "profile.yaml"
-    profile.write_text(PROFILE.replace("PREFIX", prefix))
+    profile = write_profile_with(
+        tmp_path / "profile.yaml", "mqtt-fleet-test",
+        targets=[{"north": 1500.0, "east": 1500.0}, {"north": 700.0, "east": 700.0},
+                 {"north": 600.0, "east": 2400.0, "false_target": True}],
+        sensors=sensors(1000.0, 200.0), policy={"memory_radius": 300.0},
+        mission={"duration": 600.0},
+        mqtt={"host": "127.0.0.1", "port": 1883, "topic_prefix": prefix, "state_rate": 5.0},
+    )  # fmt: skip
     sub = Subscriber(1883, f"{prefix}/#", tmp_path / "sub.txt")
     try:
         sub.ready(1883, f"{prefix}/probe")

@@ -14,40 +14,27 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
-from tests.mqtt_harness import Broker, Subscriber, publish, wait_until
+from tests.mqtt_harness import Broker, Subscriber, publish
+from tests.profile_files import levels, write_profile_with
+from tests.waiting import wait_until
 
 # False targets all over the area: detections, level switches and fallbacks keep coming,
 # and the one real target (50 m confirmation radius, in a corner) is not found in the test.
-PROFILE = """
-name: mqtt-outage-test
-area: {north: 3000.0, east: 3000.0}
-targets:
-  - {north: 2950.0, east: 2950.0}
-  - {north: 800.0, east: 800.0, false_target: true}
-  - {north: 800.0, east: 2200.0, false_target: true}
-  - {north: 2200.0, east: 800.0, false_target: true}
-  - {north: 1500.0, east: 1500.0, false_target: true}
-fleet: {vehicles: 2, speed: 20.0, tau: 0.33, altitude: 30.0, altitude_step: 5.0}
-sensors:
-  - {name: detection, radius: 1000.0}
-  - {name: confirmation, radius: 50.0}
-policy:
-  kind: mdm
-  levels:
-    - {distribution: LS, step: 600.0}
-    - distribution: BS
-      step: 300.0
-      index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 30.0}
-mission: {duration: 5000.0, ts_cap: 5000.0}
-"""
 PREFIX = "mdm/outage"
 OUTAGE = 30.0
 
 
 @pytest.mark.timeout(180)
 def test_events_survive_a_30_s_broker_outage_complete_and_in_order(tmp_path: Path) -> None:
-    profile = tmp_path / "profile.yaml"
-    profile.write_text(PROFILE)
+    # One real target in a corner and four false ones: a long search, many events.
+    real = [{"north": 2950.0, "east": 2950.0}]
+    false = [
+        {"north": n, "east": e, "false_target": True}
+        for n, e in ((800.0, 800.0), (800.0, 2200.0), (2200.0, 800.0), (1500.0, 1500.0))
+    ]
+    profile = write_profile_with(tmp_path / "profile.yaml", "mqtt-outage-test",
+                                 targets=real + false,
+                                 policy={"levels": levels(600.0, 300.0, 30.0)})  # fmt: skip
     out = tmp_path / "run"
     broker = Broker(tmp_path / "broker")
     broker.start()
@@ -72,7 +59,7 @@ def test_events_survive_a_30_s_broker_outage_complete_and_in_order(tmp_path: Pat
               "both vehicles searching, their events delivered")  # fmt: skip
         broker.stop()
         at_stop = [len(logged(i)) for i in (0, 1)]
-        time.sleep(OUTAGE)
+        time.sleep(OUTAGE)  # the outage under test
         at_restart = [len(logged(i)) for i in (0, 1)]
         received_during = [len(set(arrived(i))) for i in (0, 1)]
         broker.start()

@@ -12,28 +12,12 @@ from pathlib import Path
 import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
-from companion.telemetry import read_records
-from tests.mqtt_harness import Broker, Subscriber, publish, wait_until
+from companion.telemetry import events, read_log, read_records
+from tests.mqtt_harness import Broker, Subscriber, publish
+from tests.profile_files import levels, sensors, write_profile_with
+from tests.waiting import wait_until
 
 ACL = Path(__file__).resolve().parents[2] / "docker" / "mosquitto" / "acl"
-PROFILE = """
-name: mqtt-security-test
-area: {north: 3000.0, east: 3000.0}
-targets:
-  - {north: 2950.0, east: 2950.0}
-fleet: {vehicles: 1, speed: 20.0, tau: 0.33, altitude: 30.0, altitude_step: 5.0}
-sensors:
-  - {name: detection, radius: 500.0}
-  - {name: confirmation, radius: 50.0}
-policy:
-  kind: mdm
-  levels:
-    - {distribution: LS, step: 600.0}
-    - distribution: BS
-      step: 300.0
-      index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 30.0}
-mission: {duration: 5000.0, ts_cap: 5000.0}
-"""
 PREFIX = "mdm/secure"
 PASSWORDS = {"operator": "op-secret", "uav0": "uav0-secret", "uav1": "uav1-secret"}
 
@@ -49,8 +33,11 @@ def test_only_the_operator_commands_and_vehicles_publish_only_their_own(tmp_path
     passwd = tmp_path / "passwd"
     _password_file(passwd)
     (tmp_path / "uav0.pw").write_text(PASSWORDS["uav0"] + "\n")
-    profile = tmp_path / "profile.yaml"
-    profile.write_text(PROFILE)
+    profile = write_profile_with(
+        tmp_path / "profile.yaml", "mqtt-security-test",
+        targets=[{"north": 2950.0, "east": 2950.0}], fleet={"vehicles": 1},
+        sensors=sensors(500.0, 50.0), policy={"levels": levels(600.0, 300.0, 30.0)},
+    )  # fmt: skip
     out = tmp_path / "run"
     broker = Broker(tmp_path / "broker", security=f"allow_anonymous false\n"
                     f"password_file {passwd}\nacl_file {ACL}\n")  # fmt: skip
@@ -107,7 +94,9 @@ def test_only_the_operator_commands_and_vehicles_publish_only_their_own(tmp_path
     log = read_records(out / "mission-0.jsonl")
     assert [(r["command"], r["id"]) for r in log if r["event"] == "command"] == [
         ("pause", "operator"), ("abort", None)]  # fmt: skip
-    assert next(r for r in log if r["event"] == "end")["reason"] == "operator abort"
+    assert [e.reason for e in read_log(out / "mission-0.jsonl").of(events.End)] == [
+        "operator abort"
+    ]
     commands = [m.json() for m in sub.messages("cmd") if m.topic != f"{PREFIX}/probe/cmd"]
     assert commands == [{"command": "pause", "id": "operator"}, {"command": "abort"}]
     assert all("forged" not in m.payload for m in sub.messages())

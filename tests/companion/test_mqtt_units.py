@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from companion.telemetry import events
+from companion.telemetry.events import LogFormatError
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_argv, mqtt_spec
 from companion.telemetry.mqtt.commands import Command, CommandError, parse_command
 from companion.telemetry.mqtt.outbox import EventOutbox
@@ -41,6 +43,21 @@ def test_outbox_numbers_events_and_a_restart_resends_only_the_unacknowledged(
         "t": 6.0,
         "event": "end",
     }  # not glued to the torn line
+
+
+def test_a_published_durable_event_reads_back_as_its_class(tmp_path: Path) -> None:
+    box = EventOutbox(tmp_path / "mqtt-outbox-3.jsonl")
+    written = events.PhaseChange("paused", by="operator")
+    box.append({"vehicle": 3, "t": 12.0, "event": written.NAME, **events.to_fields(written)})
+    ((seq, payload),) = box.pending(1)
+    box.close()
+    message = json.loads(payload)
+    assert (seq, message["vehicle"]) == (0, 3)
+    assert events.from_message(message) == written
+    assert events.from_message({"seq": 1, "vehicle": 3, "t": 1.0, "event": "tick"}) is None
+    renamed = {"seq": 2, "vehicle": 3, "t": 1.0, "event": "end", "why": "battery", "found": 0}
+    with pytest.raises(LogFormatError, match=r"^uav3/event: 'end' record has field 'why'"):
+        events.from_message(renamed, "uav3/event")
 
 
 @pytest.mark.parametrize(

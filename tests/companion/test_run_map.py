@@ -21,48 +21,36 @@ from companion.run_map.png import scale_bar_length
 from companion.telemetry import read_records
 from mdm_core.world import Scenario
 from mdm_profiles import load_profile
-from mdm_profiles.loader import parse_profile
 from tests.emulator_harness import free_udp_base
-
-PROFILE = """
-name: run-map-test
-area: {north: 1000.0, east: 1500.0}
-origin: {lat: 47.3960, lon: 8.6380, alt: 440.0}
-targets:
-  - {north: NORTH, east: EAST}
-  - {north: 300.0, east: 300.0, false_target: true}
-fleet: {vehicles: 2, speed: 20.0, tau: 0.33, altitude: 30.0, start: periphery_even}
-sensors:
-  - {name: detection, radius: 400.0}
-  - {name: confirmation, radius: 100.0}
-sensor_source: {kind: virtual}
-policy:
-  kind: mdm
-  levels:
-    - {distribution: LS, step: 400.0}
-    - distribution: BS
-      step: 200.0
-      index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 400.0}
-mission: {duration: 150.0, ts_cap: 150.0}
-site:
-  geofence:
-    - {lat: 47.39636, lon: 8.63853}
-    - {lat: 47.40464, lon: 8.63853}
-    - {lat: 47.40464, lon: 8.65731}
-    - {lat: 47.39636, lon: 8.65731}
-"""
-
+from tests.profile_files import levels, profile_with, sensors, write_profile_with
 
 SEED = 4
 
 
-def _profile_text() -> str:
+def _changes(north: float, east: float) -> dict[str, Any]:
+    """The run-map profile, its real target at (north, east)."""
+    corners = [(47.39636, 8.63853), (47.40464, 8.63853), (47.40464, 8.65731), (47.39636, 8.65731)]
+    return {
+        "area": {"north": 1000.0, "east": 1500.0},
+        "origin": {"lat": 47.3960, "lon": 8.6380, "alt": 440.0},
+        "targets": [{"north": north, "east": east},
+                    {"north": 300.0, "east": 300.0, "false_target": True}],
+        "fleet": {"start": "periphery_even"},
+        "sensors": sensors(400.0, 100.0),
+        "sensor_source": {"kind": "virtual"},
+        "policy": {"levels": levels(400.0, 200.0, 400.0)},
+        "mission": {"duration": 150.0, "ts_cap": 150.0},
+        "site": {"geofence": [{"lat": lat, "lon": lon} for lat, lon in corners]},
+    }  # fmt: skip
+
+
+def _profile(path: Path) -> Path:
     """The profile with its real target where vehicle 0 starts (start points do not depend on
     the targets): a confirmation on the map whatever the search does."""
-    draft = parse_profile(PROFILE.replace("NORTH", "0.0").replace("EAST", "0.0"), "draft")
+    draft = profile_with("run-map-test", **_changes(0.0, 0.0))
     start, _ = Scenario.from_profile(draft).live_run(SEED, 2, draft.fleet.start)
     north, east = (round(float(x), 1) for x in start[0])
-    return PROFILE.replace("NORTH", str(north)).replace("EAST", str(east))
+    return write_profile_with(path, "run-map-test", **_changes(north, east))
 
 
 def _features(doc: dict[str, Any], kind: str) -> list[dict[str, Any]]:
@@ -80,8 +68,7 @@ def _signed_area(ring: list[list[float]]) -> float:
 
 @pytest.mark.timeout(150)
 def test_fleet_writes_a_geojson_that_matches_the_mission_logs_and_a_png(tmp_path: Path) -> None:
-    path = tmp_path / "profile.yaml"
-    path.write_text(_profile_text())
+    path = _profile(tmp_path / "profile.yaml")
     out = tmp_path / "run"
     done = subprocess.run(
         [sys.executable, "-m", "companion.cli", "fleet", "--profile", str(path), "--out", str(out),

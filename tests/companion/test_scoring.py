@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -10,6 +11,8 @@ import numpy as np
 import pytest
 
 from companion.fleet.scoring import EMULATOR_EVENTS, score
+from companion.telemetry import MissionLog, events
+from companion.telemetry.events import LogFormatError
 from mdm_profiles import builtin_profile
 
 
@@ -18,11 +21,14 @@ def _write(path: Path, records: list[dict[str, Any]]) -> None:
 
 
 def _mission(path: Path, confirmations: list[tuple[float, float, float]]) -> None:
-    records: list[dict[str, Any]] = [{"t": 10.0, "event": "phase", "search_start": 10.0}]
-    records += [
-        {"t": t, "event": "confirmation", "north": n, "east": e} for t, n, e in confirmations
+    log = MissionLog(path)
+    logged: list[tuple[float, events.DurableEvent]] = [
+        (10.0, events.PhaseChange("search", search_start=10.0))
     ]
-    _write(path, records)
+    logged += [(t, events.Confirmation(n, e, 1, k)) for k, (t, n, e) in enumerate(confirmations, 1)]
+    for t, event in logged:
+        log.emit(t, event.NAME, **events.to_fields(event))
+    log.close()
 
 
 def test_fixed_targets_without_an_emulator_log_use_the_profile_positions(tmp_path: Path) -> None:
@@ -70,3 +76,14 @@ def test_moving_targets_are_matched_where_the_emulator_saw_them(tmp_path: Path) 
     assert (unseen.vehicle, unseen.target, unseen.real) == (1, -1, False)
     assert (result.tnc, result.false_confirmations) == (1, 1)
     assert result.first_confirmation[0] == pytest.approx(240.5)
+
+
+def test_a_log_of_another_version_is_refused_naming_the_line(tmp_path: Path) -> None:
+    log = tmp_path / "mission-0.jsonl"
+    _mission(log, [])
+    with log.open("a") as f:  # a confirmation logged before ``north`` was renamed
+        f.write('{"t":20.0,"event":"confirmation","n":1.0,"east":2.0,"level":1,"found":1}\n')
+    with pytest.raises(
+        LogFormatError, match="^" + re.escape(f"{log}:2: 'confirmation' record has field 'n'")
+    ):
+        score(builtin_profile("paper-fixed"), tmp_path, vehicles=1, duration=1000.0)

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from companion.link.geo import LocalFrame
+from companion.link.local_frame import LocalFrame
 from companion.sensors.detection_payload import DetectionError, parse_detection
 
 NAMES = ("detection", "confirmation")

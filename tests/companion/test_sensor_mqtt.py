@@ -14,38 +14,24 @@ from typing import Any
 import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
-from companion.link.geo import LocalFrame
-from companion.telemetry import read_records
+from companion.link.local_frame import LocalFrame
+from companion.telemetry import events, read_log, read_records
 from mdm_profiles import load_profile
 from tests.emulator_harness import free_udp_base
-from tests.mqtt_harness import Subscriber, publish, wait_until
-
-PROFILE = """
-name: mqtt-sensor-test
-area: {north: 3000.0, east: 3000.0}
-targets:
-  - {north: 1500.0, east: 1500.0}
-fleet: {vehicles: 1, speed: 20.0, tau: 0.33, altitude: 30.0}
-sensors:
-  - {name: detection, radius: 1000.0}
-  - {name: confirmation, radius: 50.0}
-sensor_source: {kind: mavlink, silence_timeout: 1.0}
-policy:
-  kind: mdm
-  levels:
-    - {distribution: LS, step: 600.0}
-    - distribution: BS
-      step: 300.0
-      index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 5000.0}
-mission: {duration: 5000.0, ts_cap: 5000.0}
-"""
+from tests.mqtt_harness import Subscriber, publish
+from tests.profile_files import levels, write_profile_with
+from tests.waiting import wait_until
 
 
 @pytest.mark.timeout(120)
 def test_mqtt_detections_switch_the_level_and_confirm(tmp_path: Path) -> None:
     prefix = f"mdm/test-{os.getpid()}-detections"
-    path = tmp_path / "profile.yaml"
-    path.write_text(PROFILE)
+    path = write_profile_with(
+        tmp_path / "profile.yaml", "mqtt-sensor-test",
+        targets=[{"north": 1500.0, "east": 1500.0}], fleet={"vehicles": 1},
+        sensor_source={"kind": "mavlink", "silence_timeout": 1.0},
+        policy={"levels": levels(600.0, 300.0, 5000.0)},
+    )  # fmt: skip
     profile = load_profile(path)
     out = tmp_path / "run"
     sub = Subscriber(1883, f"{prefix}/#", tmp_path / "sub.txt")
@@ -70,8 +56,8 @@ def test_mqtt_detections_switch_the_level_and_confirm(tmp_path: Path) -> None:
         sub.ready(1883, f"{prefix}/probe")
         fleet.start()
         wait_until(lambda: state().get("phase") == "search", 60, "vehicle 0 searching")
-        events = out / "mission-0.jsonl"
-        wait_until(lambda: any(r.get("state") == "silent" for r in read_records(events)), 10,
+        mission_log = out / "mission-0.jsonl"
+        wait_until(lambda: any(r.get("state") == "silent" for r in read_records(mission_log)), 10,
                    "the silent detector reported")  # fmt: skip
         assert state()["level"] == 0
         detect("not json")
@@ -92,10 +78,11 @@ def test_mqtt_detections_switch_the_level_and_confirm(tmp_path: Path) -> None:
 
     records = read_records(out / "mission-0.jsonl")
     kinds = [r["event"] for r in records]
-    assert next(r for r in records if r["event"] == "end")["reason"] == "all targets"
-    (confirmation,) = [r for r in records if r["event"] == "confirmation"]
-    assert abs(confirmation["north"] - 1500.0) < 0.01
-    assert abs(confirmation["east"] - 1500.0) < 0.01
+    logged = read_log(out / "mission-0.jsonl")
+    assert [e.reason for e in logged.of(events.End)] == ["all targets"]
+    (confirmation,) = logged.of(events.Confirmation)
+    assert abs(confirmation.north - 1500.0) < 0.01
+    assert abs(confirmation.east - 1500.0) < 0.01
     errors = [r for r in records if r["event"] == "error"]
     assert [(e["source"], e["error"][:8]) for e in errors] == [("detector", "not JSON")]
     detector = [r["state"] for r in records if r["event"] == "detector"]

@@ -17,11 +17,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from companion.link.geo import LocalFrame
+from companion.link.local_frame import LocalFrame
 from companion.telemetry.mission_log import read_records
 from tests import sitl
 from tests.companion.sitl_observer import Observer
 from tests.mqtt_harness import publish
+from tests.profile_files import levels, sensors, write_profile_with
+from tests.waiting import wait_until
 
 SPEEDUP = 5
 HOME = (47.405893, 8.663214, 440.0)  # inside the Duebendorf fence (issue 11)
@@ -31,28 +33,18 @@ ON_GROUND = 1  # MAV_LANDED_STATE_ON_GROUND
 
 def _profile(path: Path, vehicles: int) -> Path:
     lat, lon, alt = HOME
-    path.write_text(f"""
-name: sitl-sensors-{os.getpid()}
-area: {{north: 600.0, east: 600.0}}
-origin: {{lat: {lat}, lon: {lon}, alt: {alt}}}
-targets:
-  - {{north: 220.0, east: 160.0}}
-  - {{north: 60.0, east: 300.0, false_target: true}}
-fleet: {{vehicles: {vehicles}, speed: 10.0, tau: 0.5, altitude: 20.0, altitude_step: 0.0}}
-sensors:
-  - {{name: detection, radius: 400.0}}
-  - {{name: confirmation, radius: 60.0}}
-sensor_source: {{kind: virtual, silence_timeout: 30.0}}
-policy:
-  kind: mdm
-  levels:
-    - {{distribution: LS, step: 200.0}}
-    - distribution: BS
-      step: 80.0
-      index: {{gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 600.0}}
-mission: {{duration: 900.0, ts_cap: 900.0}}
-""")
-    return path
+    return write_profile_with(
+        path, f"sitl-sensors-{os.getpid()}",
+        area={"north": 600.0, "east": 600.0}, origin={"lat": lat, "lon": lon, "alt": alt},
+        targets=[{"north": 220.0, "east": 160.0},
+                 {"north": 60.0, "east": 300.0, "false_target": True}],
+        fleet={"vehicles": vehicles, "speed": 10.0, "tau": 0.5, "altitude": 20.0,
+               "altitude_step": 0.0},
+        sensors=sensors(400.0, 60.0),
+        sensor_source={"kind": "virtual", "silence_timeout": 30.0},
+        policy={"levels": levels(200.0, 80.0, 600.0)},
+        mission={"duration": 900.0, "ts_cap": 900.0},
+    )  # fmt: skip
 
 
 def _run(out: Path, profile: Path, inst: sitl.SitlInstance, *extra: str) -> subprocess.Popen[bytes]:
@@ -65,16 +57,6 @@ def _run(out: Path, profile: Path, inst: sitl.SitlInstance, *extra: str) -> subp
             stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
             env=dict(os.environ, PYTHONUNBUFFERED="1"),
         )  # fmt: skip
-
-
-def _until(
-    what: str, predicate: Callable[[], bool], timeout: float, context: Callable[[], str]
-) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"{what}: not within {timeout} s\n{context()}")
-        time.sleep(0.2)
 
 
 def _stop(p: subprocess.Popen[bytes]) -> None:
@@ -110,8 +92,12 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
         # 1. Virtual sensors: the profile's targets against the vehicle's real position.
         virtual = tmp_path / "virtual"
         flights.append(_run(virtual, profile, inst))
-        _until("virtual: confirmed, RTL, landed, disarmed", landed_after_rtl, 400.0,
-               context(virtual))  # fmt: skip
+        wait_until(
+            landed_after_rtl,
+            400.0,
+            "virtual: confirmed, RTL, landed, disarmed",
+            context=context(virtual),
+        )
         assert flights[-1].wait(timeout=60) == 0, context(virtual)()
         records = events(virtual)
         (confirmation,) = [r for r in records if r["event"] == "confirmation"]
@@ -132,18 +118,28 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
         modes_before = len(obs.snapshot().modes)
         flights.append(_run(mqtt, profile, inst, "--sensor-source", "mqtt", "--mqtt",
                             "127.0.0.1:1883", "--mqtt-prefix", prefix))  # fmt: skip
-        _until("mqtt: searching", lambda: any(r.get("phase") == "search" for r in events(mqtt)),
-               200.0, context(mqtt))  # fmt: skip
+        wait_until(
+            lambda: any(r.get("phase") == "search" for r in events(mqtt)),
+            200.0,
+            "mqtt: searching",
+            context=context(mqtt),
+        )
         frame = LocalFrame(*HOME)
         lat, lon, _ = frame.to_geodetic(400.0, 450.0, 0.0)
         detection = {"time": time.time(), "sensor": "detection", "lat": lat, "lon": lon}
         assert publish(1883, topic, json.dumps(detection)).returncode == 0
-        _until("mqtt: level 1", lambda: any(r["event"] == "level" and r["level"] == 1
-                                            for r in events(mqtt)), 20.0, context(mqtt))  # fmt: skip
+        wait_until(
+            lambda: any(r["event"] == "level" and r["level"] == 1 for r in events(mqtt)),
+            20.0,
+            "mqtt: level 1",
+            context=context(mqtt),
+        )
         confirm = {"time": time.time(), "sensor": "confirmation", "north": 400.0, "east": 450.0,
                    "confidence": 0.9}  # fmt: skip
         assert publish(1883, topic, json.dumps(confirm)).returncode == 0
-        _until("mqtt: confirmed, RTL, landed, disarmed", landed_after_rtl, 300.0, context(mqtt))
+        wait_until(
+            landed_after_rtl, 300.0, "mqtt: confirmed, RTL, landed, disarmed", context=context(mqtt)
+        )
         assert flights[-1].wait(timeout=60) == 0, context(mqtt)()
         records = events(mqtt)
         (confirmation,) = [r for r in records if r["event"] == "confirmation"]

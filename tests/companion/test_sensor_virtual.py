@@ -10,32 +10,12 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.sensors.virtual_source import VirtualSensorSource
-from companion.telemetry import read_records
+from companion.telemetry import events, read_log, read_records
 from mdm_profiles import builtin_profile, load_profile
 from sim_vehicle_stub.config import EmulatorConfig
 from sim_vehicle_stub.emulator import Emulator
 from tests.emulator_harness import free_udp_base
-
-PROFILE = """
-name: virtual-sensor-test
-area: {north: 2000.0, east: 2000.0}
-targets:
-  - {north: 1000.0, east: 1000.0}
-  - {north: 600.0, east: 1400.0, false_target: true}
-fleet: {vehicles: 1, speed: 20.0, tau: 0.33, altitude: 30.0, start: periphery_even}
-sensors:
-  - {name: detection, radius: 1500.0}
-  - {name: confirmation, radius: 60.0}
-sensor_source: {kind: virtual}
-policy:
-  kind: mdm
-  levels:
-    - {distribution: LS, step: 500.0}
-    - distribution: BS
-      step: 300.0
-      index: {gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 400.0}
-mission: {duration: 3000.0, ts_cap: 3000.0}
-"""
+from tests.profile_files import levels, sensors, write_profile_with
 
 
 @pytest.mark.parametrize("name", ["paper-dynamic-false", "paper-popup-false"])
@@ -67,17 +47,24 @@ def test_virtual_confirmation_sees_false_targets_only_with_the_detection_sensor(
 def test_virtual_sensors_confirm_the_real_target_with_the_emulators_sensors_off(
     tmp_path: Path,
 ) -> None:
-    path = tmp_path / "profile.yaml"
-    path.write_text(PROFILE)
+    path = write_profile_with(
+        tmp_path / "profile.yaml", "virtual-sensor-test",
+        area={"north": 2000.0, "east": 2000.0},
+        targets=[{"north": 1000.0, "east": 1000.0},
+                 {"north": 600.0, "east": 1400.0, "false_target": True}],
+        fleet={"vehicles": 1, "start": "periphery_even"}, sensors=sensors(1500.0, 60.0),
+        sensor_source={"kind": "virtual"}, policy={"levels": levels(500.0, 300.0, 400.0)},
+        mission={"duration": 3000.0, "ts_cap": 3000.0},
+    )  # fmt: skip
     out = tmp_path / "run"
     result = run_fleet(FleetOptions(profile=str(path), out=out, speedup=50.0, duration=3000.0,
                                     base_port=free_udp_base(1), seed=3, wall_limit=120))  # fmt: skip
-    records = read_records(out / "mission-0.jsonl")
-    confirmations = [r for r in records if r["event"] == "confirmation"]
+    logged = read_log(out / "mission-0.jsonl")
+    confirmations = logged.of(events.Confirmation)
     assert confirmations, f"no confirmation; ended {result.end_reasons}"
-    assert next(r for r in records if r["event"] == "end")["reason"] == "all targets"
+    assert [e.reason for e in logged.of(events.End)] == ["all targets"]
     target = load_profile(path).targets[0]
-    gap = np.hypot(confirmations[0]["north"] - target.north, confirmations[0]["east"] - target.east)
+    gap = np.hypot(confirmations[0].north - target.north, confirmations[0].east - target.east)
     assert gap < 1e-6, f"confirmed {gap:.1f} m from the real target"
     assert result.tnc == 1
     assert result.false_confirmations == 0

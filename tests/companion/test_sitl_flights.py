@@ -6,6 +6,7 @@ can show (it paused, it says why it waits)."""
 
 from __future__ import annotations
 
+import math
 import os
 import signal
 import subprocess
@@ -20,14 +21,17 @@ import numpy as np
 import pytest
 
 from companion.fence_from_profile import fence_for
-from companion.link.geo import LocalFrame
+from companion.link.local_frame import LocalFrame
 from companion.telemetry.mission_log import read_records
 from mdm_profiles import load_profile
 from tests import sitl
 from tests.companion.sitl_observer import Observer, Trace
+from tests.profile_files import levels, sensors, write_profile_with
+from tests.waiting import wait_until
 
 SPEEDUP = 5  # the field test's; the companion's timers are wall time, the vehicle's not
 ON_GROUND = 1  # MAV_LANDED_STATE_ON_GROUND
+FENCED_HOME = "47.405893,8.663214,440"  # inside the Duebendorf fence, 1.9 km east of its origin
 
 
 @dataclass(frozen=True)
@@ -56,27 +60,13 @@ AUTOPILOTS = [pytest.param(ARDUCOPTER, id="arducopter"), pytest.param(PX4, id="p
 
 def _profile(path: Path, vehicles: int) -> Path:
     """A 3 km square; as many vehicles as the instance index needs (system id = index + 1)."""
-    path.write_text(f"""
-name: sitl-small
-description: a 3 km square for flights against stock SITL
-area: {{north: 3000.0, east: 3000.0}}
-targets:
-  - {{north: 1500.0, east: 1500.0}}
-  - {{north: 2300.0, east: 2300.0}}
-fleet: {{vehicles: {vehicles}, speed: 20.0, tau: 0.33, altitude: 30.0, altitude_step: 5.0}}
-sensors:
-  - {{name: detection, radius: 300.0}}
-  - {{name: confirmation, radius: 100.0}}
-policy:
-  kind: mdm
-  levels:
-    - {{distribution: LS, step: 600.0}}
-    - distribution: BS
-      step: 300.0
-      index: {{gamma: 0.1, index_max: 0.95, index_min: 0.2, kappa: 150.0}}
-mission: {{duration: 600.0, ts_cap: 5000.0}}
-""")
-    return path
+    return write_profile_with(
+        path, "sitl-small",
+        targets=[{"north": 1500.0, "east": 1500.0}, {"north": 2300.0, "east": 2300.0}],
+        fleet={"vehicles": vehicles}, sensors=sensors(300.0, 100.0),
+        policy={"levels": levels(600.0, 300.0, 150.0)},
+        mission={"duration": 600.0},
+    )  # fmt: skip
 
 
 class Companion:
@@ -116,18 +106,15 @@ def _trace_context(obs: Observer, comp: Companion) -> Callable[[], str]:
     return context
 
 
-def _until(
-    what: str, predicate: Callable[[], bool], timeout: float, context: Callable[[], str]
-) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"{what}: not within {timeout} s\n{context()}")
-        time.sleep(0.2)
-
-
 def _phases(events: list[dict[str, Any]]) -> list[str]:
     return [str(e["phase"]) for e in events if e["event"] == "phase"]
+
+
+def _searched(events: list[dict[str, Any]]) -> float:
+    """Vehicle seconds since the search began, as far as the mission log shows (ticks every
+    10 vehicle s)."""
+    begin = next(e["search_start"] for e in events if "search_start" in e)
+    return float(events[-1]["t"]) - float(begin)
 
 
 def _figures(name: str, trace: Trace, started: float) -> None:
@@ -137,27 +124,36 @@ def _figures(name: str, trace: Trace, started: float) -> None:
           f"{time.monotonic() - started:.0f} s wall")  # fmt: skip
 
 
+@pytest.mark.parametrize("backend", ["pymavlink", "mavsdk"])
 @pytest.mark.parametrize("ap", AUTOPILOTS)
-def test_pymavlink_flies_through_takeover_kill_and_restart(
-    ap: Autopilot, request: pytest.FixtureRequest, tmp_path: Path
+def test_flies_through_takeover_kill_and_restart(
+    ap: Autopilot, backend: str, request: pytest.FixtureRequest, tmp_path: Path
 ) -> None:
     """Started before the autopilot, flies a search; a pilot's mode pauses it and the guided
     mode resumes it; killed (ArduCopter holds in GUIDED, PX4's offboard-loss failsafe takes
-    over) and restarted, it takes the vehicle back to the search; one SIGINT brings it home and
-    waits for the landing."""
+    over) and restarted, it takes the vehicle back to the search. The end differs by backend,
+    so both ways home are flown: pymavlink gets one SIGINT (RTL, it waits for the landing);
+    MAVSDK's restarted companion ends at mission time and a SIGINT during that RTL does not cut
+    it short. MAVSDK on ArduPilot takes off before its Offboard stream starts (a setpoint
+    stream cancels an ArduCopter takeoff)."""
     start = request.getfixturevalue(ap.kind)
     started = time.monotonic()
     index = sitl.free_index(ap.kind)
     profile = _profile(tmp_path / "sitl-small.yaml", vehicles=index + 1)
     url = sitl.companion_url(ap.kind, index)
-    comp = Companion(tmp_path, profile, index, url, "pymavlink", duration=600.0)
+    comp = Companion(tmp_path, profile, index, url, backend, duration=600.0)
     obs: Observer | None = None
     try:
-        # Before the autopilot is up: TCP is retried with a line per retry; UDP listens and
-        # says whom it heard.
-        line = "retry 1 in" if ap.kind == "arducopter" else "heard nothing"
-        _until(f"'{line}' before the autopilot starts", lambda: line in comp.output(), 15.0,
-               comp.output)  # fmt: skip
+        if backend == "pymavlink":
+            # Before the autopilot is up: TCP is retried with a line per retry; UDP listens
+            # and says whom it heard. (MAVSDK waits for the first autopilot in its own way.)
+            line = "retry 1 in" if ap.kind == "arducopter" else "heard nothing"
+            wait_until(
+                lambda: line in comp.output(),
+                15.0,
+                f"'{line}' before the autopilot starts",
+                context=comp.output,
+            )
         inst = start(speedup=ap.speedup, index=index)
         obs = Observer(inst.observer_url, inst.sysid)
         ob = obs
@@ -165,127 +161,147 @@ def test_pymavlink_flies_through_takeover_kill_and_restart(
         def context() -> str:
             return f"trace {ob.snapshot()}\ncompanion:\n{comp.output()[-3000:]}"
 
-        _until("armed, guided, >= 20 m, 150 m flown", lambda: (
-            (t := ob.snapshot()).armed and t.mode == ap.guided_custom and t.alt >= 20
-            and t.distance >= 150
-        ), 150.0, context)  # fmt: skip
+        wait_until(
+            lambda: (
+                (t := ob.snapshot()).armed
+                and t.mode == ap.guided_custom
+                and t.alt >= 20
+                and t.distance >= 150
+            ),
+            150.0,
+            "armed, guided, >= 20 m, 150 m flown",
+            context=context,
+        )
         if ap.kind == "arducopter":  # a stock ArduCopter streams no positions until asked
             asked = [s for s in comp.output().splitlines() if "asked system" in s]
             assert any("LOCAL_POSITION_NED" in s for s in asked), comp.output()[-3000:]
 
         # A pilot takes over: the companion stops commanding and leaves the mode alone.
         ob.set_mode(*ap.pilot_mode)
-        _until("paused after the pilot's mode", lambda: "paused" in _phases(comp.events()), 20.0,
-               context)  # fmt: skip
+        wait_until(
+            lambda: "paused" in _phases(comp.events()),
+            20.0,
+            "paused after the pilot's mode",
+            context=context,
+        )
         held = time.monotonic()
         while time.monotonic() - held < 10.0 / ap.speedup:  # 10 vehicle s: nobody takes it back
             assert ob.snapshot().mode == ap.pilot_custom, context()
             time.sleep(0.1)
         before = ob.snapshot().distance
         ob.set_mode(*ap.guided)
-        _until("search resumed after the hand-back", lambda: (
-            _phases(comp.events())[-1] == "search" and ob.snapshot().distance > before + 100
-        ), 40.0, context)  # fmt: skip
+        wait_until(
+            lambda: (
+                _phases(comp.events())[-1] == "search" and ob.snapshot().distance > before + 100
+            ),
+            40.0,
+            "search resumed after the hand-back",
+            context=context,
+        )
 
         # Killed: ArduCopter holds in GUIDED (no companion watch by default); PX4 leaves
         # OFFBOARD on its own (COM_OF_LOSS_T). Restarted, the companion takes it back.
+        searched = _searched(comp.events())
         comp.kill()
         if ap.kind == "px4":
-            _until("PX4's offboard-loss failsafe", lambda: ob.snapshot().mode != ap.guided_custom,
-                   20.0, context)  # fmt: skip
+            wait_until(
+                lambda: ob.snapshot().mode != ap.guided_custom,
+                20.0,
+                "PX4's offboard-loss failsafe",
+                context=context,
+            )
         else:
             time.sleep(5.0 / ap.speedup)  # past GUID_TIMEOUT (3 vehicle s): stopped, still GUIDED
             assert ob.snapshot().mode == ap.guided_custom, context()
         failsafe_mode = ob.snapshot().mode
         before = ob.snapshot().distance
-        comp = Companion(tmp_path, profile, index, url, "pymavlink", duration=600.0)
-        _until("restarted companion searching", lambda: (
-            sum(e["event"] == "start" for e in comp.events()) == 2
-            and _phases(comp.events())[-1] == "search"
-            and ob.snapshot().mode == ap.guided_custom
-            and ob.snapshot().distance > before + 100
-        ), 60.0, context)  # fmt: skip
+        ending = "operator" if backend == "pymavlink" else "mission time"
+        # Mission time is the vehicle's and a restart resumes it: the MAVSDK run's restarted
+        # companion gets what was searched, the restart (< 40 vehicle s) and 40 s more.
+        duration = 600.0 if ending == "operator" else searched + 80.0
+        comp = Companion(tmp_path, profile, index, url, backend, duration=duration)
+        wait_until(
+            lambda: (
+                sum(e["event"] == "start" for e in comp.events()) == 2
+                and _phases(comp.events())[-1] == "search"
+                and ob.snapshot().mode == ap.guided_custom
+                and ob.snapshot().distance > before + 100
+            ),
+            60.0,
+            "restarted companion searching",
+            context=context,
+        )
 
-        # One SIGINT: RTL, and the companion waits for the landing, saying so.
+        if ending == "mission time":
+            wait_until(
+                lambda: ob.snapshot().mode == ap.rtl_custom,
+                90.0,
+                "RTL at mission time",
+                context=context,
+            )
+        # One SIGINT: RTL (or, during the RTL, nothing cut short); the companion waits for
+        # the landing, saying so.
         comp.process.send_signal(signal.SIGINT)
-        _until("landed and disarmed after RTL", lambda: (
-            (t := ob.snapshot()).landed_state == ON_GROUND and not t.armed
-            and ap.rtl_custom in t.modes
-        ), 150.0, context)  # fmt: skip
+        wait_until(
+            lambda: (
+                (t := ob.snapshot()).landed_state == ON_GROUND
+                and not t.armed
+                and ap.rtl_custom in t.modes
+            ),
+            150.0,
+            "landed and disarmed after RTL",
+            context=context,
+        )
         assert comp.process.wait(timeout=30) == 0, context()
         out = comp.output()
-        assert "ending (operator): flying RTL and waiting until it lands and disarms" in out
-        assert "mission ended (operator)" in out
+        assert f"ending ({ending}): flying RTL and waiting until it lands and disarms" in out
+        assert f"mission ended ({ending})" in out
         trace = ob.snapshot()
         assert trace.armed_ever
         assert trace.max_alt >= 20.0
         assert trace.distance >= 500.0, context()
         assert "Traceback" not in out
-        print(f"\n{ap.kind}: mode after the companion was killed: {failsafe_mode}")
-        _figures(f"{ap.kind} pymavlink", trace, started)
+        print(f"\n{ap.kind} {backend}: mode after the companion was killed: {failsafe_mode}")
+        _figures(f"{ap.kind} {backend}", trace, started)
     finally:
         comp.kill()
         if obs is not None:
             obs.close()
 
 
-@pytest.mark.parametrize("ap", AUTOPILOTS)
-def test_mavsdk_flies_a_search_and_a_signal_during_rtl_waits_for_landing(
-    ap: Autopilot, request: pytest.FixtureRequest, tmp_path: Path
-) -> None:
-    """MAVSDK: a full search (on ArduPilot the takeoff comes before Offboard, or the vehicle
-    never leaves the ground), RTL at mission time; a SIGINT during the RTL does not cut it short."""
-    started = time.monotonic()
-    inst = request.getfixturevalue(ap.kind)(speedup=SPEEDUP)
-    profile = _profile(tmp_path / "sitl-small.yaml", vehicles=inst.index + 1)
-    comp = Companion(tmp_path, profile, inst.index, inst.companion_url, "mavsdk", duration=45.0)
-    obs = Observer(inst.observer_url, inst.sysid)
-
-    def context() -> str:
-        return f"trace {obs.snapshot()}\ncompanion:\n{comp.output()[-3000:]}"
-
-    try:
-        _until("RTL at mission time", lambda: obs.snapshot().mode == ap.rtl_custom, 150.0, context)
-        comp.process.send_signal(signal.SIGINT)
-        _until("landed and disarmed", lambda: (
-            (t := obs.snapshot()).landed_state == ON_GROUND and not t.armed
-        ), 150.0, context)  # fmt: skip
-        assert comp.process.wait(timeout=30) == 0, context()
-        out = comp.output()
-        assert "ending (mission time): flying RTL and waiting until it lands and disarms" in out
-        assert "mission ended (mission time)" in out
-        trace = obs.snapshot()
-        assert trace.armed_ever
-        assert trace.max_alt >= 20.0
-        assert trace.distance >= 500.0, context()
-        assert ap.rtl_custom in trace.modes
-        _figures(f"{ap.kind} mavsdk", trace, started)
-    finally:
-        comp.kill()
-        obs.close()
-
-
-def test_field_profile_on_px4_stays_inside_its_fence_with_virtual_sensors(
+def test_field_profile_on_px4_keeps_its_own_fence_and_stays_inside(
     px4: Callable[..., sitl.SitlInstance], tmp_path: Path
 ) -> None:
-    """The Duebendorf field profile on PX4 started at the profile's origin (its EKF origin is
-    then the search box's corner): virtual sensors (no MDM_SENSOR on a stock PX4), every
-    position flown in OFFBOARD after entering the fence stays inside it (a few metres of
-    overshoot allowed), RTL, landed."""
+    """The Duebendorf field profile on PX4 booted inside the site fence, 1.9 km from the
+    profile's origin (flown in the profile's frame from PX4's origin): virtual sensors (no
+    MDM_SENSOR on a stock PX4), every position flown in OFFBOARD stays inside the fence (a few
+    metres of overshoot allowed), RTL, landed. The companion uploads the fence once the vehicle
+    is inside it (PX4 enforces any fence it holds: GF_ACTION), and the observer's own
+    download (MISSION_REQUEST_LIST, mission_type FENCE) finds the profile's polygon. Then a
+    ground station sends the landed vehicle up and across the fence: PX4 keeps it inside
+    (measured: "Reposition is outside geofence", the reposition refused)."""
     started = time.monotonic()
     profile = load_profile("field-duebendorf")
     origin = profile.origin
-    inst = px4(speedup=SPEEDUP, home=f"{origin.lat},{origin.lon},{origin.alt}")
+    inst = px4(speedup=SPEEDUP, home=FENCED_HOME)
     assert inst.index < profile.fleet.vehicles, "instance index beyond the profile's 4 vehicles"
     comp = Companion(tmp_path, "field-duebendorf", inst.index, inst.companion_url, "pymavlink",
                      duration=90.0, extra=("--sensor-source", "virtual"))  # fmt: skip
     obs = Observer(inst.observer_url, inst.sysid)
     context = _trace_context(obs, comp)
     try:
-        _until("RTL at mission time", lambda: obs.snapshot().mode == PX4.rtl_custom, 200.0, context)
-        _until("landed and disarmed", lambda: (
-            (t := obs.snapshot()).landed_state == ON_GROUND and not t.armed
-        ), 150.0, context)  # fmt: skip
+        wait_until(
+            lambda: obs.snapshot().mode == PX4.rtl_custom,
+            200.0,
+            "RTL at mission time",
+            context=context,
+        )
+        wait_until(
+            lambda: (t := obs.snapshot()).landed_state == ON_GROUND and not t.armed,
+            150.0,
+            "landed and disarmed",
+            context=context,
+        )
         assert comp.process.wait(timeout=30) == 0, context()
         trace = obs.snapshot()
         fence = fence_for(profile)
@@ -294,8 +310,7 @@ def test_field_profile_on_px4_stays_inside_its_fence_with_virtual_sensors(
             (frame.to_local(lat, lon, origin.alt)[:2], mode) for lat, lon, _, mode in trace.track
         ]
         offboard = [np.array(p) for p, mode in local if mode == PX4.guided_custom]
-        entered = next(i for i, p in enumerate(offboard) if fence.contains(p))
-        outside = [fence.clamp(p) - p for p in offboard[entered:] if not fence.contains(p)]
+        outside = [fence.clamp(p) - p for p in offboard if not fence.contains(p)]
         worst = max((float(np.hypot(*d)) for d in outside), default=0.0)
         assert worst < 15.0, f"{len(outside)} positions outside the fence, worst {worst:.1f} m"
         assert trace.distance >= 500.0, context()
@@ -303,9 +318,45 @@ def test_field_profile_on_px4_stays_inside_its_fence_with_virtual_sensors(
         out = comp.output()
         assert "sensor source virtual" in out
         assert "MDM_SENSOR" not in out  # virtual sensors never touch the vehicle's parameters
-        print(f"\npx4 field profile: {len(offboard)} OFFBOARD positions, {len(outside)} outside "
-              f"the fence after entering it (worst {worst:.1f} m)")  # fmt: skip
-        _figures("px4 field-duebendorf", trace, started)
+        own = [(e["state"], e.get("read_back")) for e in comp.events()
+               if e["event"] == "vehicle_fence"]  # fmt: skip
+        assert own == [("uploaded", "equal"), ("enabled", None)], own
+        stored = obs.read_fence()
+
+        # PX4 acting on its fence: a ground station takes the landed vehicle up again and sends
+        # it 400 m north (DO_REPOSITION), across the fence's north edge; PX4 keeps it inside.
+        lat, lon, alt = map(float, FENCED_HOME.split(","))
+        target = (lat + 400.0 / 111_200.0, lon)
+        assert not fence.contains(np.array(frame.to_local(*target, alt)[:2]))
+        flown = len(obs.snapshot().track)
+        obs.set_mode(*PX4.pilot_mode)  # HOLD: PX4 reported OFFBOARD again once landed
+        obs.command(22, *[math.nan] * 7)  # takeoff to MIS_TAKEOFF_ALT (selects TAKEOFF)
+        obs.command(400, 1.0)
+        wait_until(lambda: obs.snapshot().alt > 2.0, 60.0, "airborne again", context=context)
+        obs.command(192, -1.0, 1.0, 0.0, math.nan, *target, alt + 10.0)
+        wait_until(
+            lambda: any("geofence" in text.lower() for text in obs.snapshot().texts),
+            60.0,
+            "PX4's geofence action",
+            context=context,
+        )
+        time.sleep(10.0 / SPEEDUP)  # 10 vehicle s more: it stays put
+        after = obs.snapshot()
+        north = [frame.to_local(la, lo, alt)[0] for la, lo, _, _ in after.track[flown:]]
+        beyond = [float(np.hypot(*(fence.clamp(p) - p))) for p in (
+            np.array(frame.to_local(la, lo, alt)[:2]) for la, lo, _, _ in after.track[flown:])]  # fmt: skip
+        texts = [t for t in after.texts if "geofence" in t.lower()]
+        print(f"\npx4 geofence: {texts}, modes {after.modes[-4:]}, {max(north):.0f} m north of "
+              f"the origin, at most {max(beyond):.1f} m outside the fence")  # fmt: skip
+        assert max(beyond) < 15.0, context()
     finally:
         comp.kill()
         obs.close()
+    assert profile.site is not None
+    polygon = [(round(v.lat * 1e7), round(v.lon * 1e7)) for v in profile.site.geofence]
+    vertex = 5001  # MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
+    assert stored == [(vertex, lat, lon) for lat, lon in polygon], stored
+    print(f"\npx4 field profile: {len(offboard)} OFFBOARD positions, {len(outside)} outside "
+          f"the fence (worst {worst:.1f} m); fence read back on the GCS link: {len(stored)} "
+          f"vertices equal")  # fmt: skip
+    _figures("px4 field-duebendorf", trace, started)

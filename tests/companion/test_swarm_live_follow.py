@@ -24,35 +24,27 @@ import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
+from tests.profile_files import sensors, write_profile_with
 
 VEHICLES = 3
 TARGET = (600.0, 1900.0)
 SIGNAL_RADIUS = 900.0
-PROFILE = """
-name: swarm-live-follow-test
-area: {north: 2500.0, east: 2500.0}
-targets:
-  - {north: 600.0, east: 1900.0}
-  - {north: 2200.0, east: 300.0, false_target: true}
-fleet: {vehicles: 3, speed: 20.0, tau: 0.33, altitude: 30.0, altitude_step: 5.0}
-sensors:
-  - {name: detection, radius: 1000.0}
-  - {name: confirmation, radius: 100.0}
-policy:
-  kind: pso
-  levels: [{distribution: US, step: 2500.0}]
-  swarm: {signal_radius: 900.0, update_interval: 2.0, message_drop: DROP}
-mission: {duration: 200.0, ts_cap: 200.0}
-mqtt: {host: 127.0.0.1, port: 1883, topic_prefix: PREFIX}
-"""
-
 Log = list[dict[str, Any]]
 
 
 def _fly(tmp_path: Path, drop: float) -> list[Log]:
-    profile = tmp_path / f"profile-{drop}.yaml"
     prefix = f"mdm/test-{os.getpid()}-swarm-follow-{drop}"
-    profile.write_text(PROFILE.replace("DROP", str(drop)).replace("PREFIX", prefix))
+    swarm = {"signal_radius": SIGNAL_RADIUS, "update_interval": 2.0, "message_drop": drop}
+    profile = write_profile_with(
+        tmp_path / f"profile-{drop}.yaml", "swarm-live-follow-test",
+        area={"north": 2500.0, "east": 2500.0},
+        targets=[{"north": TARGET[0], "east": TARGET[1]},
+                 {"north": 2200.0, "east": 300.0, "false_target": True}],
+        fleet={"vehicles": VEHICLES}, sensors=sensors(1000.0, 100.0),
+        policy={"kind": "pso", "levels": [{"distribution": "US", "step": 2500.0}], "swarm": swarm},
+        mission={"duration": 200.0, "ts_cap": 200.0},
+        mqtt={"host": "127.0.0.1", "port": 1883, "topic_prefix": prefix},
+    )  # fmt: skip
     out = tmp_path / f"run-{drop}"
     run_fleet(FleetOptions(profile=str(profile), out=out, speedup=50.0, duration=200.0,
                            seed=11, wall_limit=60))  # fmt: skip

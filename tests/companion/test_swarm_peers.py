@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -13,17 +12,9 @@ from companion.telemetry.mqtt.settings import MqttSettings
 from companion.telemetry.mqtt.swarm_peers import PeerReport, SwarmPeers
 from mdm_core.search.pso import Best, swarm_best
 from tests.mqtt_harness import Broker, publish
+from tests.waiting import wait_until_async
 
 PREFIX = "mdm/test"
-
-
-async def _wait(condition: Callable[[], bool], timeout: float = 10.0) -> None:
-    loop = asyncio.get_running_loop()
-    deadline = loop.time() + timeout
-    while not condition():
-        if loop.time() > deadline:
-            raise TimeoutError("condition not met")
-        await asyncio.sleep(0.02)
 
 
 def test_a_peer_best_reaches_the_other_vehicle_and_wins_swarm_best(tmp_path: Path) -> None:
@@ -61,11 +52,15 @@ async def _exchange(port: int) -> None:
         # connection arrives after it, so once that is counted the old report was handled.
         await peers[0].publish(PeerReport(5.0, (1.0, 1.0), 0.9, 0.9))
         await channels[0].publish(f"{PREFIX}/swarm/uav0", b"not json")
-        await _wait(lambda: peers[1].rejected == 1)
+        await wait_until_async(
+            lambda: peers[1].rejected, 10.0, "one rejected message", until=lambda n: n == 1
+        )
         assert peers[1].heard(20.0)[0].fitness[0, 0] == 0.8
         # A vehicle outside the fleet is counted and dropped, not raised.
         await asyncio.to_thread(publish, port, f"{PREFIX}/swarm/uav7", report.encode().decode())
-        await _wait(lambda: peers[1].rejected == 2)
+        await wait_until_async(
+            lambda: peers[1].rejected, 10.0, "two rejected messages", until=lambda n: n == 2
+        )
     finally:
         for t in tasks:
             t.cancel()

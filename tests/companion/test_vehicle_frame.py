@@ -11,8 +11,8 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from companion.guidance import Setpoint
-from companion.link.geo import LocalFrame
+from companion.guidance import NedSetpoint
+from companion.link.local_frame import LocalFrame
 from companion.link.messages import GlobalPosition, LocalPosition
 from companion.link.pymavlink_link import PymavlinkLink
 from companion.link.vehicle_frame import FrameAlignment
@@ -100,7 +100,7 @@ async def _fly(global_origin: bool) -> tuple[list[Any], list[Any], _Vehicle, Fra
         after = []
         while not link.events.empty():
             after.append(link.events.get_nowait())
-        link.send_setpoint(Setpoint(ORIGIN_NE[0] + 100.0, ORIGIN_NE[1] - 50.0, -30.0, 0, 0, 0),
+        link.send_setpoint(NedSetpoint(ORIGIN_NE[0] + 100.0, ORIGIN_NE[1] - 50.0, -30.0, 0, 0, 0),
                            "position")  # fmt: skip
         await asyncio.sleep(0.2)
         assert link.alignment is not None

@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from tests.docker.engine import ROOT, docker
-from tests.mqtt_harness import Subscriber, publish, wait_until
+from tests.mqtt_harness import Subscriber, publish
+from tests.waiting import wait_until
 
 BROKER_IMAGE = "mdm-mosquitto:local"
 COMPANION_UID, BROKER_UID = 10001, 1883

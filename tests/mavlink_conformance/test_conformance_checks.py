@@ -26,7 +26,7 @@ EXPECTED = {
     "heartbeat", "mavlink2", "ids", "mode_encoding", "streams", "timestamps_monotonic",
     "cmd_arm_disarm", "cmd_takeoff", "cmd_unknown", "mode_switch",
     "home_position", "autopilot_version", "params_list", "params_read", "params_set",
-    "mission_count", "ftp_nak", "timesync",
+    "mission_count", "fence", "ftp_nak", "timesync",
 }  # fmt: skip
 
 
@@ -61,7 +61,7 @@ def test_emulator_ardupilot_over_tcp_passes_via_the_cli(capsys: pytest.CaptureFi
         code = conformance_main([f"tcp:127.0.0.1:{tcp}", "--timeout", "5"])
     out = capsys.readouterr().out
     assert code == 0, out
-    assert "18/18 checks passed" in out
+    assert "19/19 checks passed" in out
     assert "custom_mode 0x0 = STABILIZE" in out
 
 
@@ -148,3 +148,72 @@ def test_a_closed_tcp_link_stops_the_run_at_once_with_a_clear_error() -> None:
     assert not results[-1].passed
     assert "closed it or died" in results[-1].detail
     assert elapsed < 15.0  # stopped, not every check timing out in turn
+
+
+def _frames(data: bytes) -> Iterator[bytes]:
+    """The MAVLink 2 frames of one datagram (the emulator sends several per datagram)."""
+    at = 0
+    while at + 12 <= len(data) and data[at] == 0xFD:
+        end = at + 12 + data[at + 1] + (13 if data[at + 2] & 1 else 0)
+        yield data[at:end]
+        at = end
+
+
+def _drop_first(frame: bytes, dropped: list[int]) -> bool:
+    """Whether to lose this frame: the first PARAM_VALUE (id 22) of an index ending in 3."""
+    index = int.from_bytes(frame[16:18], "little")  # PARAM_VALUE payload bytes 6-7
+    if int.from_bytes(frame[7:10], "little") != 22 or index % 10 != 3 or index in dropped:
+        return False
+    dropped.append(index)
+    return True
+
+
+@contextmanager
+def param_dropping_relay(vehicle_port: int, checker_port: int) -> Iterator[list[int]]:
+    """A UDP relay that loses the first PARAM_VALUE of every tenth index (3, 13, ...), as a lossy
+    link does; it yields the list of indices it dropped."""
+    dropped: list[int] = []
+    stop = threading.Event()
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sock.bind(("127.0.0.1", vehicle_port))
+    sock.settimeout(0.2)
+
+    def relay() -> None:
+        vehicle = None
+        while not stop.is_set():
+            try:
+                data, addr = sock.recvfrom(65536)
+            except TimeoutError:
+                continue
+            if addr[1] == checker_port:
+                if vehicle is not None:
+                    sock.sendto(data, vehicle)
+                continue
+            vehicle = addr
+            kept = b"".join(f for f in _frames(data) if not _drop_first(f, dropped))
+            if kept:
+                sock.sendto(kept, ("127.0.0.1", checker_port))
+
+    thread = threading.Thread(target=relay, daemon=True)
+    thread.start()
+    try:
+        yield dropped
+    finally:
+        stop.set()
+        thread.join(5)
+        sock.close()
+
+
+@pytest.mark.timeout(90)
+def test_parameters_the_list_stream_lost_are_read_again_by_index() -> None:
+    base = free_udp_base(2)
+    vehicle_port, checker_port = base, base + 1
+    with (
+        param_dropping_relay(vehicle_port, checker_port) as dropped,
+        sim_vehicle("-n", "1", "--base-port", str(vehicle_port), "--bind-port-base", "0"),
+    ):
+        results = run_checks(f"udpin:127.0.0.1:{checker_port}", sysid=1, timeout=3.0)
+    by_name = {r.name: r for r in results}
+    assert len(dropped) >= 2, dropped
+    assert by_name["params_list"].passed, by_name["params_list"].detail
+    assert f"({len(dropped)} re-read by index)" in by_name["params_list"].detail

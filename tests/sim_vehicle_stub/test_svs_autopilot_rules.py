@@ -27,13 +27,6 @@ def _alt(c: Client) -> float:
     return float(msg.relative_alt) / 1000.0
 
 
-def _wait(c: Client, cond: Any, seconds: float, send: Any = None) -> Any:
-    """The first message meeting ``cond`` within ``seconds`` wall s (streaming ``send``)."""
-    if send is None:
-        return c.pump(seconds, cond)
-    return c.stream_until(send, cond, seconds)
-
-
 def _high(alt: float) -> Any:
     return lambda m: m.get_type() == "GLOBAL_POSITION_INT" and m.relative_alt >= alt * 1000
 
@@ -54,7 +47,7 @@ def test_px4_offboard_before_arming_stays_on_the_ground_and_flies_once_armed() -
         assert emu.fleet.alt[0] == 0.0
         assert _alt(c) == 0.0
         assert c.command(COMPONENT_ARM, ARM) == ACCEPTED
-        assert _wait(c, _high(3.0), 10.0, climb) is not None
+        assert c.stream_until(climb, _high(3.0), 10.0) is not None
 
 
 @pytest.mark.timeout(60)
@@ -63,9 +56,9 @@ def test_px4_disarmed_in_the_air_comes_down_and_can_be_armed_again() -> None:
     with running_emulator(make_config(1, base)) as emu, Client(base, 1) as c:
         assert c.command(COMPONENT_ARM, ARM) == ACCEPTED
         assert c.command(TAKEOFF, *[math.nan] * 6, ORIGIN_ALT + 10.0) == ACCEPTED
-        assert _wait(c, _high(5.0), 15.0) is not None
+        assert c.pump(15.0, _high(5.0)) is not None
         assert c.command(COMPONENT_ARM, DISARM, FORCE) == ACCEPTED
-        assert _wait(c, _low(0.05), 20.0) is not None
+        assert c.pump(20.0, _low(0.05)) is not None
         assert not emu.vehicles[0].armed
         assert emu.vehicles[0].landed
         assert c.command(COMPONENT_ARM, ARM) == ACCEPTED
@@ -110,7 +103,7 @@ def test_one_amsl_convention_reported_and_commanded_and_px4_takes_mavproxy_takeo
         # is home's altitude plus relative_alt.
         assert far.command(COMPONENT_ARM, ARM) == ACCEPTED
         assert far.command(TAKEOFF, *[math.nan] * 6, homes[1] + 20.0) == ACCEPTED
-        top = _wait(far, _high(19.7), 20.0)
+        top = far.pump(20.0, _high(19.7))
         assert top is not None
         settled = far.pump(3.0, lambda m: False) or far.last["GLOBAL_POSITION_INT"]
         assert settled.relative_alt / 1000.0 == pytest.approx(20.0, abs=0.3)
@@ -120,7 +113,7 @@ def test_one_amsl_convention_reported_and_commanded_and_px4_takes_mavproxy_takeo
         # MAVProxy's `takeoff 20` sends 20 m, below home AMSL: PX4 climbs to MIS_TAKEOFF_ALT.
         assert near.command(COMPONENT_ARM, ARM) == ACCEPTED
         assert near.command(TAKEOFF, 0, 0, 0, 0, 0, 0, 20.0) == ACCEPTED
-        assert _wait(near, _high(2.2), 15.0) is not None
+        assert near.pump(15.0, _high(2.2)) is not None
 
 
 @pytest.mark.timeout(60)
@@ -149,7 +142,7 @@ def test_do_reposition_flies_to_the_point_as_mavproxy_guided_asks(persona: str, 
         assert c.command(COMPONENT_ARM, ARM) == ACCEPTED
         alt = 12.0 if persona == "ardupilot" else ORIGIN_ALT + 12.0
         assert c.command(TAKEOFF, 0, 0, 0, 0, 0, 0, alt) == ACCEPTED
-        assert _wait(c, _high(11.7), 20.0) is not None
+        assert c.pump(20.0, _high(11.7)) is not None
         lat, lon, _ = emu.geo.to_geodetic(
             *(np.array([x]) for x in (1100.0, 1000.0, 0.0))
         )  # 100 m north
@@ -161,13 +154,11 @@ def test_do_reposition_flies_to_the_point_as_mavproxy_guided_asks(persona: str, 
         assert ack is not None
         assert ack.result == ACCEPTED
         assert v.mode.name == mode
-        there = _wait(
-            c,
-            lambda m: m.get_type() == "LOCAL_POSITION_NED" and abs(m.x - 1100.0) < 1.0,
-            20.0,
+        there = c.pump(
+            20.0, lambda m: m.get_type() == "LOCAL_POSITION_NED" and abs(m.x - 1100.0) < 1.0
         )
         assert there is not None
-        assert _wait(c, _high(14.7), 10.0) is not None
+        assert c.pump(10.0, _high(14.7)) is not None
 
 
 @pytest.mark.timeout(60)
@@ -180,12 +171,14 @@ def test_acceleration_targets_and_yaw_rate_are_followed_not_dropped() -> None:
         assert c.command(DO_SET_MODE, 1, 4, 0) == ACCEPTED
         assert c.command(COMPONENT_ARM, ARM) == ACCEPTED
         assert c.command(TAKEOFF, 0, 0, 0, 0, 0, 0, 10.0) == ACCEPTED
-        assert _wait(c, _high(9.7), 20.0) is not None
+        assert c.pump(20.0, _high(9.7)) is not None
         # type_mask 3135: use afx, afy, afz only (+ ignore yaw, yaw rate); 1 m/s^2 east.
         accel = lambda: c.conn.mav.set_position_target_local_ned_send(  # noqa: E731
             0, 1, 1, 1, 3135, 0, 0, 0, 0, 0, 0, 0.0, 1.0, 0.0, 0, 0
         )
-        fast = _wait(c, lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.vy > 3.0, 15.0, accel)
+        fast = c.stream_until(
+            accel, lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.vy > 3.0, 15.0
+        )
         assert fast is not None
         assert abs(fast.vx) < 0.1
         # type_mask 1479: velocity zero, yaw ignored, yaw rate 0.5 rad/s used.
@@ -210,14 +203,16 @@ def test_attitude_targets_lean_the_vehicle_and_thrust_sets_the_climb() -> None:
         assert c.command(DO_SET_MODE, 1, 4, 0) == ACCEPTED
         assert c.command(COMPONENT_ARM, ARM) == ACCEPTED
         assert c.command(TAKEOFF, 0, 0, 0, 0, 0, 0, 10.0) == ACCEPTED
-        assert _wait(c, _high(9.7), 20.0) is not None
+        assert c.pump(20.0, _high(9.7)) is not None
         half = math.radians(-10.0) / 2  # 10 degrees nose down, heading north
         q = [math.cos(half), 0.0, math.sin(half), 0.0]
 
         def lean() -> None:
             c.conn.mav.set_attitude_target_send(0, 1, 1, 7, q, 0, 0, 0, 0.7)
 
-        fast = _wait(c, lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.vx > 4.0, 15.0, lean)
+        fast = c.stream_until(
+            lean, lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.vx > 4.0, 15.0
+        )
         assert fast is not None
         assert abs(fast.vy) < 0.1
         assert fast.vz < -0.5  # thrust 0.7: climbing
@@ -227,8 +222,8 @@ def test_attitude_targets_lean_the_vehicle_and_thrust_sets_the_climb() -> None:
         def bad_lean() -> None:
             c.conn.mav.set_attitude_target_send(0, 1, 1, 7, bad, 0, 0, 0, 0.7)
 
-        stopped = _wait(
-            c, lambda m: m.get_type() == "LOCAL_POSITION_NED" and abs(m.vx) < 0.05, 15.0, bad_lean
+        stopped = c.stream_until(
+            bad_lean, lambda m: m.get_type() == "LOCAL_POSITION_NED" and abs(m.vx) < 0.05, 15.0
         )
         assert stopped is not None
         assert emu.vehicles[0].mode.name == "GUIDED"

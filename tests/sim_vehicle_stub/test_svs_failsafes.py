@@ -8,9 +8,9 @@ from typing import Any
 
 import pytest
 
-from tests.emulator_harness import Client, make_config, running_emulator
+from tests.emulator_harness import Client, free_udp_base, make_config, running_emulator
 
-PX4_HOLD, PX4_RTL, PX4_OFFBOARD = 0x3040000, 0x5040000, 0x60000
+PX4_HOLD, PX4_RTL, PX4_OFFBOARD, PX4_POSCTL = 0x3040000, 0x5040000, 0x60000, 0x30000
 AP_GUIDED, AP_RTL = 4, 6
 
 
@@ -38,27 +38,38 @@ def _heartbeat_is(mode: int) -> Callable[[Any], bool]:
 
 
 @pytest.mark.timeout(60)
-def test_px4_offboard_setpoint_loss_switches_to_hold_after_com_of_loss_t() -> None:
-    with running_emulator(make_config(1, 24900)) as emu, Client(24900, 1) as c:
+@pytest.mark.parametrize(("action", "mode"), [(0, PX4_POSCTL), (5, PX4_HOLD)])
+def test_px4_offboard_setpoint_loss_switches_mode_after_com_of_loss_t(
+    action: int, mode: int
+) -> None:
+    """Stock COM_OBL_RC_ACT 0: POSCTL, as PX4 SITL did when its companion was killed; 5: HOLD."""
+    base = free_udp_base(1)
+    with running_emulator(make_config(1, base)) as emu, Client(base, 1) as c:
         _px4_airborne(c)
         assert c.set_param("COM_OF_LOSS_T", 5.0) == 5.0  # sim seconds
+        if action != 0:  # 0 is the default
+            assert c.set_param("COM_OBL_RC_ACT", action, int_bytewise=True) is not None
+        assert emu.vehicles[0].params.get("COM_OBL_RC_ACT") == action
         c.stream(lambda: c.velocity(5, 0), 0.3)
         assert c.command(176, 1, 6, 0) == 0
         assert c.stream_until(lambda: c.velocity(5, 0), _heartbeat_is(PX4_OFFBOARD), 5.0)
         c.stream(lambda: c.velocity(5, 0), 0.3)
-        hold = c.pump(5, _heartbeat_is(PX4_HOLD))
-        assert hold is not None
+        # The vehicle's own mode, not the next HEARTBEAT: an early beat may wait half an
+        # interval (sim_vehicle_stub/node.py), which is not the time-out measured here.
+        assert c.pump(5, lambda m: emu.vehicles[0].mode.custom_mode == mode) is not None
         setpoint = emu.vehicles[0].setpoint
         assert setpoint is not None
         lost_after = c.last["LOCAL_POSITION_NED"].time_boot_ms / 1000 - setpoint.t
         assert 5.0 - 0.15 <= lost_after <= 5.0 + 0.25  # the time-out, within a tick or two
+        assert c.pump(2, _heartbeat_is(mode)) is not None  # and the clients are told
         assert c.pump(5, lambda m: m.get_type() == "LOCAL_POSITION_NED" and abs(m.vx) < 0.2)
 
 
 @pytest.mark.timeout(60)
 def test_ardupilot_guided_velocity_timeout_stops_the_vehicle_in_guided() -> None:
-    cfg = make_config(1, 24910, personas=("ardupilot",))
-    with running_emulator(cfg) as emu, Client(24910, 1) as c:
+    base = free_udp_base(1)
+    cfg = make_config(1, base, personas=("ardupilot",))
+    with running_emulator(cfg) as emu, Client(base, 1) as c:
         _ap_guided_airborne(c)
         assert c.set_param("GUID_TIMEOUT", 5.0) == 5.0
         fast = c.stream_until(
@@ -78,7 +89,8 @@ def test_ardupilot_guided_velocity_timeout_stops_the_vehicle_in_guided() -> None
 
 @pytest.mark.timeout(60)
 def test_px4_data_link_loss_runs_nav_dll_act_and_rtl_lands_and_disarms() -> None:
-    with running_emulator(make_config(1, 24920)) as emu, Client(24920, 1) as c:
+    base = free_udp_base(1)
+    with running_emulator(make_config(1, base)) as emu, Client(base, 1) as c:
         _px4_airborne(c, 8.0)
         assert c.set_param("NAV_DLL_ACT", 2, int_bytewise=True) is not None
         assert emu.vehicles[0].params.get("NAV_DLL_ACT") == 2
@@ -95,8 +107,9 @@ def test_px4_data_link_loss_runs_nav_dll_act_and_rtl_lands_and_disarms() -> None
 
 @pytest.mark.timeout(60)
 def test_ardupilot_geofence_breach_runs_fence_action_rtl() -> None:
-    cfg = make_config(1, 24930, personas=("ardupilot",), start_positions=((60.0, 5000.0),))
-    with running_emulator(cfg), Client(24930, 1) as c:
+    base = free_udp_base(1)
+    cfg = make_config(1, base, personas=("ardupilot",), start_positions=((60.0, 5000.0),))
+    with running_emulator(cfg), Client(base, 1) as c:
         _ap_guided_airborne(c)
         assert c.set_param("MDM_FENCE_MARG", 20.0) == 20.0
         c.log.clear()
@@ -109,7 +122,8 @@ def test_ardupilot_geofence_breach_runs_fence_action_rtl() -> None:
 
 @pytest.mark.timeout(60)
 def test_low_battery_triggers_px4_return() -> None:
-    with running_emulator(make_config(1, 24940, battery_endurance=40.0)), Client(24940, 1) as c:
+    base = free_udp_base(1)
+    with running_emulator(make_config(1, base, battery_endurance=40.0)), Client(base, 1) as c:
         _px4_airborne(c)
         first = c.last["BATTERY_STATUS"].battery_remaining
         assert c.pump(15, _heartbeat_is(PX4_RTL)) is not None

@@ -18,10 +18,16 @@ from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from sim_vehicle_stub.framing import FrameDecoder, LinkStats
 from sim_vehicle_stub.fuzz import malformed_corpus
-from tests.emulator_harness import TAU, Client, fitted_tau, make_config, running_emulator
+from tests.emulator_harness import (
+    TAU,
+    Client,
+    fitted_tau,
+    free_udp_base,
+    make_config,
+    running_emulator,
+)
 
 log = logging.getLogger(__name__)
-BASE = 24840
 N_MALFORMED = 12_000
 N_FLOOD = 4_000
 
@@ -39,7 +45,8 @@ def test_corpus_parser_rejects_every_datagram() -> None:
 
 @pytest.mark.timeout(120)
 def test_fuzzing_one_vehicle_does_not_disturb_a_mavsdk_flight_on_another() -> None:
-    cfg = make_config(2, BASE, speedup=10.0, flood_rate=4000.0)
+    base = free_udp_base(2)
+    cfg = make_config(2, base, speedup=10.0, flood_rate=4000.0)
     corpus = malformed_corpus(N_MALFORMED, seed=1, target=2)
     kinds = Counter(kind for kind, _ in corpus)
     samples: list[tuple[float, float]] = []
@@ -69,7 +76,7 @@ def test_fuzzing_one_vehicle_does_not_disturb_a_mavsdk_flight_on_another() -> No
 
         async def fly() -> bool:
             async with Mavsdk(Configuration.create_manual(245, 190, True)) as mavsdk:
-                await mavsdk.add_any_connection(f"udpin://127.0.0.1:{BASE}")
+                await mavsdk.add_any_connection(f"udpin://127.0.0.1:{base}")
                 system = await mavsdk.first_autopilot(timeout_s=20)
                 assert system is not None
                 tel, act, off = TelemetryAsync(system), ActionAsync(system), OffboardAsync(system)
@@ -125,6 +132,6 @@ def test_fuzzing_one_vehicle_does_not_disturb_a_mavsdk_flight_on_another() -> No
         assert min(kinds.values()) > 1000
         assert not emu.vehicles[1].armed
         # ...and it still answers a well-formed client afterwards.
-        with Client(BASE + 1, 2) as c:
+        with Client(base + 1, 2) as c:
             assert c.pump(5, lambda m: m.get_type() == "HEARTBEAT") is not None
             assert c.command(400, 1) == 0

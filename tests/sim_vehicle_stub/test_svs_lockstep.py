@@ -31,6 +31,6 @@ def test_lockstep_holds_sim_time_for_a_streaming_client_only() -> None:
         c.pump(0.6)  # quiet for less than lockstep_wall: the clock waits for the setpoint
         assert emu.clock.now - held <= 0.25
         assert emu.lockstep_waits > 0
-        time.sleep(1.0)
+        time.sleep(1.0)  # the silence under test, with the next line's 1 s
         c.pump(1.0)  # quiet for longer: not waited for any more (10x: ~10 sim s per wall s)
         assert emu.clock.now - held > 3.0

@@ -12,23 +12,22 @@ from mavsdk.asyncio import Configuration, Mavsdk
 from mavsdk.asyncio.plugins.action import ActionAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
-from tests.emulator_harness import make_config, running_emulator
-
-VEHICLE_PORT = 24820
-CLIENT_PORT = 24830
+from tests.emulator_harness import free_udp_base, make_config, running_emulator
 
 
 @pytest.mark.timeout(90)
 def test_mavproxy_routes_a_vehicle_to_mavsdk_which_arms_and_takes_off(tmp_path: Path) -> None:
     mavproxy = Path(sys.executable).parent / "mavproxy.py"
+    vehicle_port = free_udp_base(2)  # the emulator sends to it; MAVProxy forwards to the next
+    client_port = vehicle_port + 1
     cmd = [
-        sys.executable, str(mavproxy), f"--master=udpin:127.0.0.1:{VEHICLE_PORT}", "--daemon",
-        f"--out=udp:127.0.0.1:{CLIENT_PORT}", f"--state-basedir={tmp_path}", "--nowait",
+        sys.executable, str(mavproxy), f"--master=udpin:127.0.0.1:{vehicle_port}", "--daemon",
+        f"--out=udp:127.0.0.1:{client_port}", f"--state-basedir={tmp_path}", "--nowait",
     ]  # fmt: skip
 
     async def client() -> float:
         async with Mavsdk(Configuration.create_manual(245, 190, True)) as mavsdk:
-            await mavsdk.add_any_connection(f"udpin://127.0.0.1:{CLIENT_PORT}")
+            await mavsdk.add_any_connection(f"udpin://127.0.0.1:{client_port}")
             system = await mavsdk.first_autopilot(timeout_s=30)
             assert system is not None
             assert await system.get_system_id() == 1
@@ -44,7 +43,7 @@ def test_mavproxy_routes_a_vehicle_to_mavsdk_which_arms_and_takes_off(tmp_path: 
                     return float(pos.relative_altitude_m)
         return 0.0
 
-    with running_emulator(make_config(1, VEHICLE_PORT, speedup=5.0)) as emu:
+    with running_emulator(make_config(1, vehicle_port, speedup=5.0)) as emu:
         proc = subprocess.Popen(
             cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             cwd=tmp_path,

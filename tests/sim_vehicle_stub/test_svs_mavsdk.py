@@ -16,12 +16,17 @@ from mavsdk.asyncio.plugins.offboard import OffboardAsync, PositionNedYaw, Veloc
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from sim_vehicle_stub.mavlink import dialect
-from tests.emulator_harness import TAU, fitted_tau, make_config, running_emulator, step_samples
+from tests.emulator_harness import (
+    TAU,
+    fitted_tau,
+    free_udp_base,
+    make_config,
+    running_emulator,
+    step_samples,
+)
 
 logger = logging.getLogger(__name__)
 N = 12
-BASE = 24700
-GCS_PORT = 24799
 TAU_TOLERANCE = 0.02
 SETTLE_TOLERANCE = 1.0
 
@@ -90,17 +95,19 @@ async def _fly(sysid: int, system: Any, gcs: GcsListener) -> None:
 
 @pytest.mark.timeout(120)
 def test_mavsdk_connects_to_12_vehicles_and_flies_offboard_velocity_and_position() -> None:
-    cfg = make_config(N, BASE, gcs=True, gcs_port=GCS_PORT)
+    base = free_udp_base(N + 1)
+    gcs_port = base + N  # the emulator's ground-station output
+    cfg = make_config(N, base, gcs=True, gcs_port=gcs_port)
 
     async def main() -> None:
         loop = asyncio.get_running_loop()
         transport, gcs = await loop.create_datagram_endpoint(
-            GcsListener, local_addr=("127.0.0.1", GCS_PORT)
+            GcsListener, local_addr=("127.0.0.1", gcs_port)
         )
         try:
             async with Mavsdk(Configuration.create_manual(245, 190, True)) as mavsdk:
                 for i in range(N):
-                    await mavsdk.add_any_connection(f"udpin://127.0.0.1:{BASE + i}")
+                    await mavsdk.add_any_connection(f"udpin://127.0.0.1:{base + i}")
                 systems = await _systems(mavsdk)
                 await asyncio.wait_for(
                     asyncio.gather(*(_fly(i, s, gcs) for i, s in systems.items())), 90

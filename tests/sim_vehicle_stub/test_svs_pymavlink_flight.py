@@ -13,6 +13,7 @@ from tests.emulator_harness import (
     TAU,
     Client,
     fitted_tau,
+    free_udp_base,
     make_config,
     running_emulator,
     step_samples,
@@ -72,7 +73,8 @@ def _check_position(c: Client, north: float, east: float, alt: float) -> None:
 
 @pytest.mark.timeout(90)
 def test_pymavlink_flies_px4_persona_in_offboard_with_tau_lag_response() -> None:
-    with running_emulator(make_config(2, 24600, personas=("px4",))), Client(24601, 2) as c:
+    base = free_udp_base(2)
+    with running_emulator(make_config(2, base, personas=("px4",))), Client(base + 1, 2) as c:
         assert c.pump(5, lambda m: m.get_type() == "HEARTBEAT") is not None
         c.heartbeat()
         assert c.set_param("MIS_TAKEOFF_ALT", 10.0) == 10.0
@@ -92,7 +94,8 @@ def test_pymavlink_flies_px4_persona_in_offboard_with_tau_lag_response() -> None
 
 @pytest.mark.timeout(90)
 def test_pymavlink_flies_ardupilot_persona_in_guided_with_tau_lag_response() -> None:
-    with running_emulator(make_config(2, 24610, personas=("ardupilot",))), Client(24610, 1) as c:
+    base = free_udp_base(2)
+    with running_emulator(make_config(2, base, personas=("ardupilot",))), Client(base, 1) as c:
         hb = c.pump(5, lambda m: m.get_type() == "HEARTBEAT")
         assert hb.autopilot == 3
         assert hb.custom_mode == 0  # STABILIZE at boot

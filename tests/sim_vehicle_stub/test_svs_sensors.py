@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 
 from mdm_profiles import builtin_profile
-from tests.emulator_harness import Client, make_config, running_emulator
+from tests.emulator_harness import Client, free_udp_base, make_config, running_emulator
 
 PROFILE = builtin_profile("paper-fixed-false")  # T3 (index 2) is false
 R_DET, R_CNF = 2000.0, 400.0
@@ -40,11 +40,12 @@ def _readings(c: Client, seconds: float) -> tuple[list[float], list[Any]]:
 @pytest.mark.timeout(60)
 def test_only_the_selected_sensor_reports_and_false_targets_never_confirm(tmp_path: Path) -> None:
     events = tmp_path / "events.jsonl"
+    base = free_udp_base(2)
     cfg = make_config(
-        2, 24950, profile=PROFILE, events=events,
+        2, base, profile=PROFILE, events=events,
         start_positions=((2000.0, 1700.0), (10000.0, 9700.0)),
     )  # fmt: skip
-    with running_emulator(cfg), Client(24950, 1) as real:
+    with running_emulator(cfg), Client(base, 1) as real:
         types: set[str] = set()
         assert real.pump(2, lambda m: m.get_type() == "HEARTBEAT") is not None
         sig, vec = _readings(real, 1.0)
@@ -76,7 +77,7 @@ def test_only_the_selected_sensor_reports_and_false_targets_never_confirm(tmp_pa
         types |= set(real.last)
 
         # Vehicle 2 sits 300 m from false target T3: detection fires, confirmation never does.
-        with Client(24951, 2) as false:
+        with Client(base + 1, 2) as false:
             assert false.pump(2, lambda m: m.get_type() == "HEARTBEAT") is not None
             assert false.set_param("MDM_SENSOR", 0, int_bytewise=True) is not None
             sig, vec = _readings(false, 1.0)

@@ -14,7 +14,7 @@ from sim_vehicle_stub.emulator import Emulator
 from sim_vehicle_stub.encoder import Encoder
 from sim_vehicle_stub.fast_streams import ATT, CRC_EXTRA, GPI, LPN
 from sim_vehicle_stub.framing import FrameDecoder, LinkStats
-from sim_vehicle_stub.geo import GeoFrame
+from sim_vehicle_stub.geo_frame import GeoFrame
 from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.params import bytewise_to_float, float_to_bytewise
 from sim_vehicle_stub.personas import ProfileFacts, create_persona, persona_names
@@ -72,7 +72,7 @@ def test_px4_integers_travel_bytewise_and_ardupilot_as_floats() -> None:
 def test_failsafe_parameters_select_the_real_actions() -> None:
     px4 = create_persona("px4")
     table = px4.param_table(FACTS)
-    assert px4.setpoint_loss(table) == (1.0, Action.HOLD)
+    assert px4.setpoint_loss(table) == (1.0, Action.POSITION)  # stock COM_OBL_RC_ACT 0
     assert px4.link_loss(table) == (10.0, Action.NONE)
     table.set("NAV_DLL_ACT", 2)
     assert px4.link_loss(table)[1] is Action.RTL

@@ -1,0 +1,355 @@
+"""The I/O of the lifecycle's steps: what ``VehicleMission`` does for each :class:`Do` the
+lifecycle machine (lifecycle.py) asks for, and the outcome it feeds back. Every decision is the
+machine's; here are only the waits, the commands and what they are told to say."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import time
+from collections.abc import Awaitable, Callable
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from companion import guidance
+from companion.autopilots import FlightMode
+from companion.link.streams import needs
+from companion.mission.lifecycle_events import (
+    Began,
+    Climbed,
+    ClimbStopped,
+    Connected,
+    ControlBack,
+    Do,
+    Ending,
+    EndRecorded,
+    Landed,
+    Located,
+    Outcome,
+    Prepared,
+    Retried,
+    SearchBegun,
+    SearchLeft,
+    SetpointsBegun,
+    TakeoffSent,
+    TransitEnded,
+)
+from companion.mission.phase import Phase
+from companion.telemetry import events
+
+if TYPE_CHECKING:
+    from companion.mission.vehicle_mission import VehicleMission
+
+log = logging.getLogger(__name__)
+
+
+class LifecycleSteps:
+    """Drives one mission's lifecycle: feeds outcomes to the machine, performs its steps."""
+
+    def __init__(self, mission: VehicleMission) -> None:
+        self.m = mission
+        self.config = mission.config
+        self.link = mission.link
+        self._speed_report: str | None = None
+        """What setting the profile's speed on the vehicle gave (once per process)."""
+        self._transit_t0 = 0.0
+        self._steps: dict[Do, Callable[[], Awaitable[Outcome | None]]] = {
+            Do.CONNECT: self._connect, Do.INSTALL_FENCE: self._install_fence,
+            Do.LOCATE: self._locate, Do.AWAIT_CONTROL: self._await_control,
+            Do.PREPARE: self._prepare, Do.TAKEOFF: self._takeoff,
+            Do.AWAIT_CLIMB_STOP: self._await_climb_stop, Do.BEGIN_SETPOINTS: self._begin_setpoints,
+            Do.CLIMB: self._climb, Do.RETRY: self._retry, Do.FLY: self._fly,
+            Do.TRANSIT: self._transit, Do.SAY_TRANSIT_DONE: self._say_transit_done,
+            Do.START_SEARCH: self._start_search, Do.ANNOUNCE_LEVEL: self._announce_level,
+            Do.AWAIT_SEARCH_END: self._await_search_end, Do.FINISH: self._finish,
+            Do.RECORD_END: self._record_end, Do.FLY_END_ACTION: self._fly_end_action,
+        }  # fmt: skip
+        """The I/O of each step the machine asks the lifecycle for; its outcome, if any."""
+
+    async def run(self) -> None:
+        """From the start to ``done`` (or to nothing: a restart after the end)."""
+        event: Outcome | None = Began(self.m.recovered.ended)
+        while event is not None:
+            steps, event = self.m.feed(event), None
+            for do in steps:  # at most one of a transition's steps has an outcome
+                outcome = await self._steps[do]()
+                if outcome is not None:
+                    event = outcome
+
+    # -- connect -----------------------------------------------------------------------------
+
+    async def _connect(self) -> Connected:
+        await self._await_vehicle()
+        if self.config.dedicated_link:
+            await self.link.configure_streams()
+        await self._ensure_streams()
+        await self._learn_origin()
+        await self._check_start()
+        return Connected()
+
+    async def _install_fence(self) -> None:
+        if self.m.vehicle_fence is not None:
+            self.m.chore(self.m.vehicle_fence.install())
+
+    async def _locate(self) -> Located:
+        m = self.m
+        await m.until(lambda: m.heartbeat is not None and m.position is not None)
+        return Located(self._airborne_guided())
+
+    async def _await_control(self) -> ControlBack:
+        await self.m.until(lambda: self.m.phase not in (Phase.PAUSED, Phase.LINK_LOST))
+        return ControlBack()
+
+    async def _retry(self) -> Retried:
+        await self.m.sleep_vehicle(1.0)
+        return Retried()
+
+    async def _await_vehicle(self) -> None:
+        """Wait for the vehicle's HEARTBEAT, saying every few seconds what is heard instead."""
+        m, period = self.m, self.config.waiting_line_period
+        next_line = time.monotonic() + period
+        while m.heartbeat is None and m.end_reason is None:
+            await m.wait_changed(max(next_line - time.monotonic(), 0.0))
+            if m.heartbeat is not None or time.monotonic() < next_line:
+                continue  # other messages of the vehicle woke us: not yet time for a line
+            next_line = time.monotonic() + period
+            heard = sorted(self.link.heard)
+            log.warning("vehicle %d: waiting on %s for system %d; heard %s%s",
+                        self.config.vehicle, self.link.describe(), self.config.system_id,
+                        f"systems {heard}" if heard else "nothing",
+                        " (no autopilot HEARTBEAT from it yet)"
+                        if self.config.system_id in heard else "")  # fmt: skip
+
+    async def _ensure_streams(self) -> None:
+        """Ask for every message the mission reads; while one is missing, say which and what
+        was tried, and ask again (a vehicle still booting may not answer the first time)."""
+        while self.m.end_reason is None:
+            problems = await self.link.request_streams(
+                needs(global_position=self.link.global_position)
+            )
+            if not problems:
+                return
+            for line in problems:
+                log.warning("vehicle %d: missing %s", self.config.vehicle, line)
+            self.m.emit("streams", missing=problems)
+            await asyncio.sleep(5.0)
+
+    async def _learn_origin(self) -> None:
+        """Geo-referenced profiles: where the vehicle's local frame starts (the link shifts
+        positions into the profile's frame from then on); asked again until known."""
+        if self.link.alignment is None:
+            return
+        while self.m.end_reason is None:
+            missing = await self.link.learn_origin()
+            origin = self.link.alignment.origin
+            if missing is None and origin is not None:
+                a = self.link.alignment
+                self.m.emit("frame", source=origin.source, lat=round(origin.lat, 7),
+                            lon=round(origin.lon, 7), north=round(a.north, 2),
+                            east=round(a.east, 2))  # fmt: skip
+                return
+            log.warning("vehicle %d: origin of its local frame unknown: %s; asking again",
+                        self.config.vehicle, missing)  # fmt: skip
+            await asyncio.sleep(2.0)
+
+    async def _check_start(self) -> None:
+        """Refuse to start a vehicle (GPS position) too far outside the search area."""
+        m = self.m
+        if m.watch is None:
+            return
+        m.gps = None  # one taken after the origin is known: the GPS has a fix by then
+        await m.until(lambda: m.gps is not None)
+        gps = m.gps
+        if gps is None:
+            return
+        why = m.watch.start_refusal(gps.north, gps.east)
+        if why is None:
+            return
+        refusal = (f"vehicle {self.config.vehicle} (system {self.config.system_id}) at "
+                   f"{gps.lat:.6f}, {gps.lon:.6f} is {why} of profile "
+                   f"{self.config.profile.name}: not starting")  # fmt: skip
+        log.error("%s", refusal)
+        m.emit("refused", command="start", reason=refusal)
+        m.request_end(f"refused: {refusal}")
+
+    # -- prepare and climb -------------------------------------------------------------------
+
+    def _airborne_guided(self) -> bool:
+        hb, pos, ap = self.m.heartbeat, self.m.position, self.link.autopilot
+        if hb is None or pos is None or ap is None:
+            return False
+        near = -pos.down > 0.8 * self.config.altitude
+        return hb.armed and ap.is_guided(hb.custom_mode) and near
+
+    async def _prepare(self) -> Prepared:
+        """Stream setpoints, switch to the guided mode, arm."""
+        m = self.m
+        await m.until(lambda: m.status is None or m.status.healthy, 30.0)
+        await m.sleep_vehicle(1.0)  # setpoints flowing before the mode switch (PX4)
+        ap = self.link.autopilot
+        if ap is None or m.phase is not Phase.PREPARE or not await self._ensure_guided():
+            return Prepared(ok=False, takeoff=False)
+        hb = m.heartbeat
+        if hb is not None and not hb.armed:
+            result = await self.link.arm()
+            if not result:
+                log.warning("vehicle %d refused to arm: %s", self.config.vehicle, result.describe())
+                m.emit("refused", command="arm", outcome=result.outcome.value,
+                       reason=result.reason)  # fmt: skip
+                return Prepared(ok=False, takeoff=False)
+        await m.until(lambda: m.heartbeat is not None and m.heartbeat.armed, 10.0)
+        pos = m.position
+        on_ground = pos is not None and -pos.down < 0.5 * self.config.altitude
+        return Prepared(ok=True, takeoff=ap.takeoff_by_command and on_ground)
+
+    async def _ensure_guided(self) -> bool:
+        m, ap = self.m, self.link.autopilot
+        assert ap is not None
+        for _ in range(3):
+            hb = m.heartbeat
+            if hb is not None and ap.is_guided(hb.custom_mode):
+                return True
+            result = await self.link.set_mode(FlightMode.GUIDED)
+            if not result:
+                log.warning("vehicle %d: guided mode %s", self.config.vehicle, result.describe())
+                m.emit("refused", command="guided", outcome=result.outcome.value,
+                       reason=result.reason)  # fmt: skip
+                continue
+            if await m.until(
+                lambda: m.heartbeat is not None and ap.is_guided(m.heartbeat.custom_mode), 5.0
+            ):
+                return True
+        return False
+
+    async def _takeoff(self) -> TakeoffSent:
+        result = await self.link.takeoff(self.config.altitude)
+        if not result:
+            log.warning("vehicle %d: takeoff %s", self.config.vehicle, result.describe())
+            self.m.emit("refused", command="takeoff", outcome=result.outcome.value,
+                        reason=result.reason)  # fmt: skip
+        return TakeoffSent(bool(result))
+
+    async def _await_climb_stop(self) -> ClimbStopped:
+        # If the autopilot's takeoff stops short (its own takeoff altitude), setpoints
+        # finish the climb: wait for the altitude or for the climb to stall airborne.
+        m = self.m
+        await m.until(lambda: self._climb_done_or_stalled() or m.phase is not Phase.CLIMB,
+                      self.config.climb_timeout)  # fmt: skip
+        return ClimbStopped()
+
+    async def _begin_setpoints(self) -> None:
+        await self.link.begin_setpoints()
+
+    async def _climb(self) -> Climbed:
+        m = self.m
+        return Climbed(await m.until(lambda: m.phase is not Phase.CLIMB or (
+            m.position is not None and -m.position.down > 0.95 * self.config.altitude),
+            self.config.climb_timeout))  # fmt: skip
+
+    def _climb_done_or_stalled(self) -> bool:
+        pos = self.m.position
+        if pos is None:
+            return False
+        alt = -pos.down
+        return alt > 0.95 * self.config.altitude or (alt > 1.0 and abs(pos.vd) < 0.05)
+
+    # -- fly, transit, search ----------------------------------------------------------------
+
+    async def _fly(self) -> SetpointsBegun:
+        await self.link.begin_setpoints()
+        if self._speed_report is None:
+            self._speed_report = await self.link.set_speed(self.config.profile.fleet.speed)
+            log.info("vehicle %d speed: %s", self.config.vehicle, self._speed_report)
+            self.m.emit("speed", report=self._speed_report)
+        return SetpointsBegun(self.m.search_start is not None, self.m.start is not None)
+
+    async def _transit(self) -> TransitEnded:
+        """Fly at the search altitude to the start point; the search clock starts there."""
+        m, pos, start = self.m, self.m.position, self.m.start
+        assert pos is not None
+        assert start is not None
+        distance = math.hypot(start[0] - pos.north, start[1] - pos.east)
+        self._transit_t0 = m.clock.now
+        m.emit("transit", state="begin", north=round(pos.north, 1), east=round(pos.east, 1),
+               to_north=round(start[0], 1), to_east=round(start[1], 1),
+               distance=round(distance, 1))  # fmt: skip
+        log.info("vehicle %d: transit %.0f m to its start point (%.0f, %.0f)",
+                 self.config.vehicle, distance, *start)  # fmt: skip
+        limit = 60.0 + 3.0 * distance / self.config.profile.fleet.speed
+        arrived = await m.until(
+            lambda: m.phase is not Phase.TRANSIT or (
+                m.position is not None and guidance.reached(
+                    np.array([m.position.north, m.position.east]), np.array(start),
+                    m.guide.acceptance_radius)),
+            limit,
+        )  # fmt: skip
+        return TransitEnded(arrived, limit)
+
+    async def _say_transit_done(self) -> None:
+        self.m.emit("transit", state="done", seconds=round(self.m.clock.now - self._transit_t0, 1))
+
+    async def _start_search(self) -> SearchBegun:
+        m, pos = self.m, self.m.position
+        assert pos is not None
+        t = m.clock.now
+        if m.search_start is None:
+            m.search_start = t
+        if not m.core.started:
+            m.core.start(np.array([pos.north, pos.east]), t, m.recovered.confirmed)
+        return SearchBegun()
+
+    async def _announce_level(self) -> None:
+        m = self.m
+        m.record(events.Level(m.core.level, m.core.sensor()))
+        m.sensors.select(m.core.sensor(), m.clock.now)
+
+    async def _await_search_end(self) -> SearchLeft:
+        await self.m.until(lambda: self.m.phase is not Phase.SEARCH)
+        return SearchLeft()
+
+    # -- the end -----------------------------------------------------------------------------
+
+    async def _finish(self) -> Ending:
+        hb = self.m.heartbeat
+        return Ending(hb is not None and hb.armed)
+
+    async def _record_end(self) -> EndRecorded:
+        m = self.m
+        m.record(events.End(str(m.end_reason), m.core.confirmed_count))
+        self._report_speed()
+        m.sensors.select(-1, m.clock.now)
+        return EndRecorded()
+
+    async def _fly_end_action(self) -> Landed:
+        m, action = self.m, self.m.state.end_action
+        result = await self.link.set_mode(action)
+        if not result:
+            log.error("vehicle %d refused %s: %s", self.config.vehicle, action.value,
+                      result.describe())  # fmt: skip
+        if self.config.land_wait <= 0:
+            return Landed()
+        log.info("vehicle %d: %s; waiting up to %g vehicle s until it lands and disarms",
+                 self.config.vehicle, action.value.upper(), self.config.land_wait)  # fmt: skip
+        if await m.until(lambda: m.heartbeat is not None and not m.heartbeat.armed,
+                         self.config.land_wait):  # fmt: skip
+            log.info("vehicle %d: landed and disarmed", self.config.vehicle)
+        else:
+            log.error("vehicle %d: still armed %g vehicle s after %s", self.config.vehicle,
+                      self.config.land_wait, action.value.upper())  # fmt: skip
+        return Landed()
+
+    def _report_speed(self) -> None:
+        """A vehicle that kept below the profile's speed says so: an autopilot limit the
+        companion could not raise, or the airframe (ArduCopter SITL: about 11 m/s at its default
+        30-degree lean limit, ANGLE_MAX, with WPNAV_SPEED at 20 m/s)."""
+        m = self.m
+        if not m.core.started:
+            return
+        asked = self.config.profile.fleet.speed
+        m.emit("speed", max_search=round(m.max_search_speed, 2), asked=asked)
+        if m.max_search_speed < 0.9 * asked:
+            log.warning("vehicle %d flew at most %.1f m/s while searching; the profile asks "
+                        "%g m/s: the vehicle caps it (%s)", self.config.vehicle,
+                        m.max_search_speed, asked, self._speed_report)  # fmt: skip
