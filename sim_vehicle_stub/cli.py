@@ -35,13 +35,23 @@ def _speedup(text: str) -> float | None:
     return value
 
 
+def _personas(text: str) -> tuple[str, ...]:
+    names = tuple(s.strip() for s in text.split(",") if s.strip())
+    unknown = [n for n in names if n not in persona_names()]
+    if not names or unknown:
+        what = f"unknown persona {unknown[0]!r}" if unknown else "no persona given"
+        raise argparse.ArgumentTypeError(f"{what}; known: {', '.join(persona_names())}")
+    return names
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="sim-vehicle", description=__doc__)
     p.add_argument("--profile", default="paper-fixed", help="built-in name or YAML path")
     p.add_argument("-n", "--vehicles", type=int, help="fleet size (default: the profile's)")
     p.add_argument(
         "--persona",
-        default="px4",
+        type=_personas,
+        default=("px4",),
         help=f"persona per vehicle, comma-separated and cycled ({', '.join(persona_names())})",
     )
     p.add_argument("--host", default="127.0.0.1", help="address the vehicles send first to")
@@ -88,7 +98,7 @@ def config_from_args(args: argparse.Namespace) -> EmulatorConfig:
     return EmulatorConfig(
         profile=_profile(args.profile),
         vehicles=args.vehicles,
-        personas=tuple(s.strip() for s in args.persona.split(",") if s.strip()),
+        personas=args.persona,
         host=args.host,
         base_port=args.base_port,
         bind_host=args.bind_host,
@@ -130,8 +140,6 @@ def main(argv: list[str] | None = None) -> int:
     )
     try:
         config = config_from_args(args)
-        for i in range(config.fleet_size):
-            config.persona_of(i)
     except (ProfileError, ValueError, OSError) as exc:
         print(f"sim-vehicle: {exc}", file=sys.stderr)
         return 2

@@ -1,11 +1,16 @@
 """The fleet's child processes: each in its own process group, so a terminal's Ctrl-C (sent to
-the foreground process group) reaches only the fleet, which decides what each child gets."""
+the foreground process group) reaches only the fleet, which decides what each child gets. On
+Linux each child is also sent SIGTERM when the fleet dies without stopping it (SIGKILL, OOM
+killer): the emulator exits and a companion ends its mission as on any SIGTERM, instead of
+flying on as an orphan."""
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
 import subprocess
+import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -13,14 +18,29 @@ from contextlib import contextmanager, suppress
 from pathlib import Path
 from types import FrameType
 
+_PR_SET_PDEATHSIG = 1
+_prctl = ctypes.CDLL(None, use_errno=True).prctl if sys.platform == "linux" else None
+"""Looked up before any fork: after it, in the child, only the call itself runs."""
+
+
+def _terminate_with_parent() -> None:
+    if _prctl is not None:
+        _prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+
 
 def start(
     command: list[str], log: Path, env: dict[str, str], *, append: bool
 ) -> subprocess.Popen[bytes]:
-    """``command`` in a new session (its own process group), output to ``log``."""
+    """``command`` in a new session (its own process group), output to ``log``; SIGTERM to it
+    when the thread that started it ends (Linux: the fleet's main thread, so the fleet)."""
     with log.open("ab" if append else "wb") as f:
         return subprocess.Popen(
-            command, stdout=f, stderr=subprocess.STDOUT, env=env, start_new_session=True
+            command,
+            stdout=f,
+            stderr=subprocess.STDOUT,
+            env=env,
+            start_new_session=True,
+            preexec_fn=_terminate_with_parent,  # noqa: PLW1509 - resolved before the fork
         )
 
 

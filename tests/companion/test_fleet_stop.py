@@ -8,6 +8,7 @@ import json
 import os
 import signal
 import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -76,3 +77,19 @@ def test_a_second_sigint_stops_at_once_and_still_writes_results(tmp_path: Path) 
     assert result["stopped_by"] == "SIGINT"
     assert len(result["ends"]) == 4
     assert not processes_naming(str(out))
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="PR_SET_PDEATHSIG is Linux only")
+@pytest.mark.timeout(120)
+def test_a_killed_fleet_leaves_no_process_behind(tmp_path: Path) -> None:
+    fleet, out, _ = _start_searching(tmp_path)
+    children = set(processes_naming(str(out))) - {fleet.pid}
+    assert len(children) == 4, children  # the emulator and three companions
+    fleet.kill()  # SIGKILL: the fleet cannot stop its children itself
+    fleet.wait(10)
+    try:
+        wait_until(lambda: processes_naming(str(out)), 30, "the fleet's children gone",
+                   until=lambda left: not left)  # fmt: skip
+    finally:
+        for pid in processes_naming(str(out)):
+            os.kill(pid, signal.SIGKILL)

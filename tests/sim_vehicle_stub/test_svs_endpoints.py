@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from sim_vehicle_stub.cli import main as sim_vehicle_main
 from tests.emulator_harness import Client, make_config, mavutil, running_emulator
 
 
@@ -116,3 +117,18 @@ def test_sim_vehicle_cli_runs_vehicles_and_writes_events_and_stats(tmp_path: Pat
     assert {"event": "armed", "vehicle": 1} in [
         {k: e[k] for k in ("event", "vehicle")} for e in log if "vehicle" in e
     ]
+
+
+@pytest.mark.parametrize(
+    ("persona", "named"),
+    [("px4,foo", "unknown persona 'foo'"), (" , ", "no persona given")],
+)
+def test_sim_vehicle_cli_names_a_bad_persona_without_a_traceback(
+    persona: str, named: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as stop:
+        sim_vehicle_main(["--persona", persona, "-n", "2"])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2
+    assert f"argument --persona: {named}; known: ardupilot, px4" in err
+    assert "Traceback" not in err
