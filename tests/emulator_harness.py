@@ -211,8 +211,12 @@ def step_samples(log: list[Any], axis: str, target: float) -> list[tuple[float, 
     return pts[start:]
 
 
-def free_udp_base(count: int, gap: int = 200) -> int:
-    """A base port with base..base+count-1 and base+gap.. free for UDP (emulator and companions)."""
+def free_udp_base(count: int, gap: int | None = None) -> int:
+    """A base port with base..base+count-1 and base+gap..base+gap+count-1 free for UDP (the
+    vehicles' send and own ports); ``gap`` defaults to 200, or ``count`` when that is larger."""
+    gap = max(200, count) if gap is None else gap
+    if gap < count:
+        raise ValueError(f"free_udp_base: gap {gap} < count {count}: the two ranges overlap")
     for _ in range(50):
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
             probe.bind(("127.0.0.1", 0))
