@@ -16,8 +16,10 @@ def test_system_ids_repeat_per_block_of_254() -> None:
 @pytest.mark.timeout(90)
 def test_vehicle_255_is_system_1_on_its_own_port_and_obeys_there_only() -> None:
     n = 300
-    base = free_udp_base(n)
-    cfg = make_config(n, base, speedup=1.0, start_positions=None)
+    base = free_udp_base(n, gap=n)
+    # The vehicles' own ports in the range checked free: 300 ephemeral ones (bind_port_base 0)
+    # can land on base + 254 before the client binds it (seen once in CI: errno 98).
+    cfg = make_config(n, base, bind_port_base=base + n, speedup=1.0, start_positions=None)
     with running_emulator(cfg) as emu, Client(base + 254, sysid=1) as client:
         client.heartbeat()
         hb = client.pump(5.0, lambda m: m.get_type() == "HEARTBEAT")
