@@ -7,8 +7,10 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 
+import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from companion.geofence import Geofence
 from companion.link.base import LinkError, VehicleLink
 from companion.link.fence_protocol import FenceTransferError
 
@@ -43,7 +45,8 @@ class VehicleFence:
             return
         if params.enable is None:
             home = self.link.home
-            if home is not None and not _inside(self.polygon, *home):
+            # Containment is the same ray casting on (lat, lon) degrees as on metres.
+            if home is not None and not Geofence(np.array(self.polygon)).contains(home):
                 why = (f"home {home[0]:.6f}, {home[1]:.6f} is outside the fence: the "
                        "autopilot would stop the RTL at the fence")  # fmt: skip
                 log.warning("vehicle %d: own fence not uploaded: %s", self.vehicle, why)
@@ -117,13 +120,3 @@ class VehicleFence:
             return
         log.info("vehicle %d: own fence on (%s=1)", self.vehicle, name)
         self.emit("vehicle_fence", state="enabled", param=name)
-
-
-def _inside(polygon: list[tuple[float, float]], lat: float, lon: float) -> bool:
-    """Ray casting on (lat, lon): plenty for a site a few km across."""
-    inside = False
-    for (a_lat, a_lon), (b_lat, b_lon) in zip(polygon, polygon[1:] + polygon[:1], strict=True):
-        crosses = (a_lon > lon) != (b_lon > lon)
-        if crosses and lat < a_lat + (lon - a_lon) * (b_lat - a_lat) / (b_lon - a_lon):
-            inside = not inside
-    return inside
