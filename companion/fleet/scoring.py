@@ -125,19 +125,12 @@ def _match(
 def _confirmations(path: Path) -> tuple[list[tuple[float, float, np.ndarray]], str | None]:
     """One vehicle's confirmations as (mission time, seconds since its search started, where
     north/east) in log order, and its last end reason (None: it never ended)."""
-    start: float | None = None
-    out: list[tuple[float, float, np.ndarray]] = []
-    reason: str | None = None
-    for logged in read_log(path).events:
-        e = logged.event
-        if isinstance(e, events.PhaseChange) and e.search_start is not None and start is None:
-            start = float(e.search_start)
-        elif isinstance(e, events.End):
-            reason = e.reason
-        elif isinstance(e, events.Confirmation):
-            where = np.array([e.north, e.east], dtype=float)
-            out.append((logged.t, logged.t - (start or 0.0), where))
-    return out, reason
+    logged = read_log(path)
+    start = logged.search_start or 0.0
+    out = [(e.t, e.t - start, np.array([e.event.north, e.event.east], dtype=float))
+           for e in logged.events if isinstance(e.event, events.Confirmation)]  # fmt: skip
+    end = logged.end()
+    return out, None if end is None else end.reason
 
 
 def score(
