@@ -57,7 +57,6 @@ from companion.mission.lifecycle_events import (
 from companion.mission.phase import Phase
 
 ControlEvent = ModeReport | OperatorPause | OperatorResume | LinkRestored
-_CONTROL_EVENTS = (ModeReport, OperatorPause, OperatorResume, LinkRestored)
 
 
 @dataclass(frozen=True)
@@ -232,7 +231,7 @@ _ROWS: dict[type, tuple[Row, ...]] = {
 def step(state: Mission, event: Event) -> Step | Refused:
     """The next state and the steps for ``event``; :class:`Refused` for a request that does
     not apply. Who-is-in-control events go to control.py's machine."""
-    if isinstance(event, _CONTROL_EVENTS):
+    if isinstance(event, ControlEvent):
         result = control.step(state.control, event)
         if isinstance(result, Refused):
             return result

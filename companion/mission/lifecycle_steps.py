@@ -15,6 +15,7 @@ import numpy as np
 
 from companion import guidance
 from companion.autopilots import FlightMode
+from companion.link.outcome import CommandResult
 from companion.link.streams import needs
 from companion.mission.lifecycle_events import (
     Began,
@@ -195,9 +196,7 @@ class LifecycleSteps:
         if hb is not None and not hb.armed:
             result = await self.link.arm()
             if not result:
-                log.warning("vehicle %d refused to arm: %s", self.config.vehicle, result.describe())
-                m.emit("refused", command="arm", outcome=result.outcome.value,
-                       reason=result.reason)  # fmt: skip
+                self._refused("arm", result, "vehicle %d refused to arm: %s")
                 return Prepared(ok=False, takeoff=False)
         await m.until(lambda: m.heartbeat is not None and m.heartbeat.armed, 10.0)
         pos = m.position
@@ -213,9 +212,7 @@ class LifecycleSteps:
                 return True
             result = await self.link.set_mode(FlightMode.GUIDED)
             if not result:
-                log.warning("vehicle %d: guided mode %s", self.config.vehicle, result.describe())
-                m.emit("refused", command="guided", outcome=result.outcome.value,
-                       reason=result.reason)  # fmt: skip
+                self._refused("guided", result, "vehicle %d: guided mode %s")
                 continue
             if await m.until(
                 lambda: m.heartbeat is not None and ap.is_guided(m.heartbeat.custom_mode), 5.0
@@ -226,10 +223,13 @@ class LifecycleSteps:
     async def _takeoff(self) -> TakeoffSent:
         result = await self.link.takeoff(self.config.altitude)
         if not result:
-            log.warning("vehicle %d: takeoff %s", self.config.vehicle, result.describe())
-            self.m.emit("refused", command="takeoff", outcome=result.outcome.value,
-                        reason=result.reason)  # fmt: skip
+            self._refused("takeoff", result, "vehicle %d: takeoff %s")
         return TakeoffSent(bool(result))
+
+    def _refused(self, command: str, result: CommandResult, line: str) -> None:
+        """A command the vehicle refused: ``line`` (vehicle, result) logged, a ``refused`` event."""
+        log.warning(line, self.config.vehicle, result.describe())
+        self.m.emit("refused", command=command, outcome=result.outcome.value, reason=result.reason)
 
     async def _await_climb_stop(self) -> ClimbStopped:
         # If the autopilot's takeoff stops short (its own takeoff altitude), setpoints
