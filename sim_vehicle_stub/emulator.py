@@ -220,9 +220,8 @@ class Emulator:
                 log.exception("vehicle %d: error handling %s", node.vehicle.index, msg.get_type())
         if node.vehicle.setpoint is not before:
             self._setpoint_wall[node.vehicle.index] = time.monotonic()
-            held = self._held
-            if held is not None and not held.done() and not self._behind():
-                held.set_result(None)  # the last answer the held tick waited for
+            if self._held is not None and not self._behind():
+                _resolve(self._held)  # the last answer the held tick waited for
         self._flush_state(node)
 
     def _flush_state(self, node: VehicleNode) -> None:
