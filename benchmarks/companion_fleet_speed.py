@@ -25,12 +25,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import threading
 import time
 from pathlib import Path
 
 import numpy as np
+from code_commit import commit_of
 from pymavlink import mavutil
 
 import companion
@@ -122,15 +122,6 @@ def setpoint_rate(tlog: Path, search_start: float) -> tuple[float, float]:
     return float((len(t) - 1) / np.ptp(t)), float(np.diff(t).max())
 
 
-def code_commit() -> str:
-    """The commit of the checkout ``companion`` was imported from (a PYTHONPATH run of an older
-    commit says so in its output)."""
-    where = Path(companion.__file__).resolve().parent.parent
-    done = subprocess.run(["git", "-C", str(where), "rev-parse", "--short", "HEAD"],
-                          capture_output=True, text=True, check=False)  # fmt: skip
-    return done.stdout.strip() or f"unknown ({where})"
-
-
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__)
     p.add_argument("--profile", default="paper-fixed")
@@ -194,7 +185,7 @@ def main() -> None:
             "bound_emulator_core": round(1.0 / emu, 1) if emu > 0 else None,
         }  # fmt: skip
     out = {
-        "code": code_commit(), "vehicles": args.vehicles, "backend": args.backend, "speedup_requested": args.speedup,
+        "code": commit_of(Path(companion.__file__).resolve().parent.parent), "vehicles": args.vehicles, "backend": args.backend, "speedup_requested": args.speedup,
         "lockstep": args.lockstep or args.speedup <= 0,
         "sim_wall_ratio_search": round(ratio, 1), "wall_total_s": round(wall_total, 1),
         **usage,

@@ -21,6 +21,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from code_commit import commit_of
+
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -63,13 +65,7 @@ def main() -> int:
 def _commit() -> str:
     """The commit of the code that ran: PYTHONPATH's worktree if set, else this one's."""
     where = os.environ.get("PYTHONPATH", "").split(os.pathsep)[0] or str(Path(__file__).parent)
-    done = subprocess.run(
-        ["git", "-C", where, "log", "-1", "--format=%h %s"],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-    return done.stdout.strip()[:72] or f"unknown ({where})"
+    return commit_of(where, "%h %s")[:72]
 
 
 if __name__ == "__main__":
