@@ -27,7 +27,8 @@ from numpy.typing import NDArray
 from mdm_core.search import Observation, SearchPolicy
 from mdm_core.search.from_profile import policy_config
 from mdm_core.search.planar import length
-from mdm_core.world import Scenario, TargetTracks, first_entry_time
+from mdm_core.world import Scenario
+from mdm_montecarlo.entry_kernel import Leg, entry_times
 from mdm_montecarlo.remembered import RememberedTargets
 from mdm_profiles import MissionProfile
 
@@ -102,7 +103,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         deadline = policy.deadline(state)[idx] - t
         horizon = np.maximum(np.minimum.reduce([leg, deadline, stop[runs] - t]), 0.0)
 
-        target_pos, target_vel = tracks.motion(runs, t)
+        target_pos, _ = tracks.motion(runs, t)
         confirms = policy.uses_confirmation_sensor(state)[idx]
         eligible = np.ones((idx.size, m), dtype=bool)
         exact = np.flatnonzero(policy.checks_exactly(state, idx))
@@ -110,12 +111,11 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         # The same test the policy's step makes, so no contact is reported that it would drop.
         eligible[policy.ignores_detections(state, idx, x, t)] = False
         eligible &= ~(confirms[:, None] & targets.false_mask[None, :])
-        entry = _entry_along_path(
+        entry = entry_times(
             tracks,
             runs,
             t,
             Leg(x, unit * speed, horizon),
-            (target_pos, target_vel),
             policy.sensor_radius(state)[idx],
             eligible,
             appear,
@@ -162,67 +162,6 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
 
     per_vehicle = first.reshape(n_runs, n_vehicles, m)
     return BlockResult(block, per_vehicle, events, float(time.sum()))
-
-
-@dataclass(frozen=True)
-class Leg:
-    """Straight flight of each lane from the current event: start, velocity, seconds."""
-
-    start: FloatArray
-    velocity: FloatArray
-    duration: FloatArray
-
-
-def _entry_along_path(
-    tracks: TargetTracks,
-    runs: IntArray,
-    t: FloatArray,
-    leg: Leg,
-    motion_now: tuple[FloatArray, FloatArray],
-    radius: FloatArray,
-    eligible: BoolArray,
-    appear: FloatArray,
-) -> FloatArray:
-    """(n, m) seconds after t at which each lane first enters each target's sensor disc.
-
-    Moving targets go straight between the nodes of their path grid, so a leg that crosses
-    nodes is solved piece by piece, stopping at the first piece with a contact (only the
-    earliest contacts count). ``motion_now``: the targets' positions and velocities at t.
-    """
-    position, velocity = motion_now
-    end = np.minimum(tracks.next_node_time(t) - t, leg.duration)
-    out = first_entry_time(
-        leg.start,
-        leg.velocity,
-        end,
-        position,
-        velocity,
-        radius,
-        eligible,
-        appear - t[:, None],
-        tracks.max_speed,
-    )
-    rows = np.flatnonzero(~np.isfinite(out).any(axis=1) & (end < leg.duration))
-    while rows.size:
-        # The rest of the leg from the node just passed, with the targets' next segment.
-        begin = end[rows]
-        now = t[rows] + begin
-        position, velocity = tracks.motion(runs[rows], now)
-        end[rows] = np.minimum(tracks.next_node_time(now) - t[rows], leg.duration[rows])
-        piece = first_entry_time(
-            leg.start[rows] + leg.velocity[rows] * begin[:, None],
-            leg.velocity[rows],
-            end[rows] - begin,
-            position,
-            velocity,
-            radius[rows],
-            eligible[rows],
-            appear - now[:, None],
-            tracks.max_speed,
-        )
-        out[rows] = piece + begin[:, None]
-        rows = rows[~np.isfinite(piece).any(axis=1) & (end[rows] < leg.duration[rows])]
-    return out
 
 
 def _stop_times(

@@ -17,7 +17,7 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 THRESHOLD = float(np.exp(-1.0))
-_REACH_SLACK = 1e-6
+REACH_SLACK = 1e-6
 """Metres added to the reach bound so rounding never drops a pair the exact test keeps."""
 
 
@@ -91,7 +91,7 @@ def first_entry_time(
     vehicle_speed = np.sqrt(velocity[:, 0] ** 2 + velocity[:, 1] ** 2)
     if target_speed is None:
         target_speed = float(np.sqrt(np.max(target_velocity**2, initial=0.0) * 2.0))
-    reach = radius + (vehicle_speed + target_speed) * duration + _REACH_SLACK
+    reach = radius + (vehicle_speed + target_speed) * duration + REACH_SLACK
     reach = reach[:, None]
     candidate = eligible & (dist2 <= reach * reach) & (lo <= duration[:, None])
     out = np.full(dist2.shape, np.inf)

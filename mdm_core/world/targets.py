@@ -146,10 +146,26 @@ class TargetTracks:
             return np.broadcast_to(self.spec.positions, shape), np.broadcast_to(0.0, shape)
         return self._interpolate(run, t)
 
+    def segments(self, until: float) -> tuple[FloatArray, FloatArray]:
+        """Every run's path as (runs, segments, m, 2) node positions and segment velocities,
+        drawn at least up to the segment that holds time ``until``: the target at t is
+        ``velocity[run, k] * (t - k * grid_dt) + start[run, k]`` with k as in ``motion``.
+        Fixed targets: one segment, zero velocity, shared by every run (shape (1, 1, m, 2)).
+        """
+        if self.walk is None:
+            start = self.spec.positions.reshape(1, 1, self.spec.count, 2).astype(float)
+            return start, np.zeros_like(start)
+        self._grow_to(int(np.floor(until / self.grid_dt + 1e-9)))
+        return self._starts, self._velocity
+
+    def _grow_to(self, k: int) -> None:
+        """Draw segments until segment k exists (the walk's draws come in the same order)."""
+        while self._filled <= k:
+            self._grow()
+
     def _interpolate(self, run: IntArray, t: FloatArray) -> tuple[FloatArray, FloatArray]:
         k = np.floor(t / self.grid_dt + 1e-9).astype(np.intp)
-        while self._filled <= int(k.max(initial=0)):
-            self._grow()
+        self._grow_to(int(k.max(initial=0)))
         # Whole rows of the flattened (run, segment) axis: a plain take, no strided gather.
         row = run * self._starts.shape[1] + k
         width = self.spec.count * 2
