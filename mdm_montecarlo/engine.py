@@ -103,11 +103,10 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         deadline = policy.deadline(state)[idx] - t
         horizon = np.maximum(np.minimum.reduce([leg, deadline, stop[runs] - t]), 0.0)
 
-        target_pos, _ = tracks.motion(runs, t)
         confirms = policy.uses_confirmation_sensor(state)[idx]
         eligible = np.ones((idx.size, m), dtype=bool)
         exact = np.flatnonzero(policy.checks_exactly(state, idx))
-        eligible[exact] = ~remembered.known(state, idx[exact], t[exact], target_pos[exact])
+        eligible[exact] = ~remembered.known(state, idx[exact], runs[exact], t[exact])
         # The same test the policy's step makes, so no contact is reported that it would drop.
         eligible[policy.ignores_detections(state, idx, x, t)] = False
         eligible &= ~(confirms[:, None] & targets.false_mask[None, :])
@@ -134,9 +133,13 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         )
         reached = ~hit & (horizon >= leg)
         contacts = hit[:, None] & (entry <= soonest[:, None] + _EPS)
-        if tracks.moving and hit.any():
-            # Where the contacted targets are when they come into the sensor.
+        # Where the targets are when they come into the sensor; only lanes with a contact read
+        # them (NaN elsewhere, so a read of another lane would show).
+        if tracks.moving:
+            target_pos = np.full((idx.size, m, 2), np.nan)
             target_pos[hit] = tracks.positions(runs[hit], new_t[hit])
+        else:
+            target_pos, _ = tracks.motion(runs, new_t)
 
         obs = Observation(
             time=new_t,

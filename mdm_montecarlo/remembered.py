@@ -33,9 +33,11 @@ class RememberedTargets:
         self._speed = tracks.max_speed
 
     def known(
-        self, state: PolicyState, lanes: IntArray, t: FloatArray, target_pos: FloatArray
+        self, state: PolicyState, lanes: IntArray, runs: IntArray, t: FloatArray
     ) -> BoolArray:
-        """(len(lanes), m) known targets of the lanes at their times t (target_pos at t)."""
+        """(len(lanes), m) known targets of the lanes (of the given runs) at their times t.
+
+        The targets' positions are looked up only for the lanes whose answer is stale."""
         if self._tracks.max_speed > self._speed:
             self._speed = self._tracks.max_speed
             self._until[:] = -np.inf
@@ -43,7 +45,9 @@ class RememberedTargets:
         if stale.size:
             radius = self._policy.config.memory_radius
             due = lanes[stale]
-            d2 = self._policy.memory_distance2(state, due, target_pos[stale])
+            d2 = self._policy.memory_distance2(
+                state, due, self._tracks.positions(runs[stale], t[stale])
+            )
             self._known[due] = d2 <= radius * radius
             if self._speed > 0:
                 margin = np.abs(np.sqrt(d2) - radius).min(axis=1)

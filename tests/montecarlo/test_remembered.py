@@ -33,7 +33,7 @@ def test_cached_answer_equals_the_policy_memory_check_as_targets_drift() -> None
             policy.remember(state, lanes, positions[lanes, target])
             cache.forget(lanes)
         expected = policy.known(state, lanes, positions)
-        got = cache.known(state, lanes, now, positions)
+        got = cache.known(state, lanes, lanes, now)
         np.testing.assert_array_equal(got, expected)
         if previous is not None:
             changes += int((expected != previous).sum())
