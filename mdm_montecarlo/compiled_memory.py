@@ -13,17 +13,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
 from mdm_core.search import SearchPolicy
 from mdm_core.search.policy import PolicyState
+from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _memory_distance2(
     memory: FloatArray, counts: IntArray, lanes: IntArray, positions: FloatArray
 ) -> FloatArray:

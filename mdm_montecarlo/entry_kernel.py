@@ -14,11 +14,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
 from mdm_core.world import TargetTracks
 from mdm_core.world.sensors import REACH_SLACK
+from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
 
@@ -36,7 +36,7 @@ _NODE_EPS = 1e-9
 """The tolerance of ``TargetTracks.next_node_time`` on t / grid_dt."""
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _entry_times(
     start: FloatArray,
     velocity: FloatArray,

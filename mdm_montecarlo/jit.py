@@ -1,0 +1,23 @@
+"""numba's compiler for the engine's kernels: cached on disk where a cache can be written.
+
+``njit(cache=True)`` raises at import when no cache folder is writable (a read-only install
+with a read-only home, say); the kernels are then compiled once per process instead (under
+a second each) rather than the engine failing to import.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, TypeVar, cast
+
+from numba import njit
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def compiled(fn: F) -> F:
+    """``fn`` compiled in nopython mode, with the GIL released, cached on disk if possible."""
+    try:
+        return cast(F, njit(cache=True, nogil=True)(fn))
+    except RuntimeError:  # "cannot cache function ...: no locator available"
+        return cast(F, njit(nogil=True)(fn))
