@@ -75,3 +75,13 @@ def airborne(log_dir: Path) -> list[int]:
         if rec.get("event") in ("armed", "disarmed"):
             armed[int(rec["vehicle"])] = rec["event"] == "armed"
     return sorted(i for i, up in armed.items() if up)
+
+
+def operator_ended(log_dir: Path, vehicles: int) -> list[int]:
+    """Vehicles whose mission an operator's command ended (MQTT land or abort)."""
+    out = []
+    for i in range(vehicles):
+        end = read_log(log_dir / f"mission-{i}.jsonl").end()
+        if end is not None and end.reason.startswith("operator "):
+            out.append(i)
+    return out

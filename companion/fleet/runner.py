@@ -17,7 +17,14 @@ from companion.fleet.options import FleetOptions
 from companion.fleet.outcome import emulator_end, vehicle_end
 from companion.fleet.preflight import RUN_FILE, FleetPlan, plan_fleet
 from companion.fleet.processes import StopRequests
-from companion.fleet.progress import LEGEND, VehicleView, airborne, progress_line, read_progress
+from companion.fleet.progress import (
+    LEGEND,
+    VehicleView,
+    airborne,
+    operator_ended,
+    progress_line,
+    read_progress,
+)
 from companion.fleet.scoring import EMULATOR_EVENTS, FleetResult, score
 from companion.link.factory import check_signing_support
 from companion.mission.phase import Phase
@@ -153,7 +160,8 @@ def _watch(
     emulator: subprocess.Popen[bytes],
     requests: StopRequests,
 ) -> _Stopped:
-    """Until every companion has ended (and, after a stop, every vehicle has landed)."""
+    """Until every companion has ended (and, after a stop or an operator's land or abort,
+    every vehicle has landed)."""
     started = time.monotonic()
     stopped = _Stopped()
     stop_at = land_by = None
@@ -201,8 +209,10 @@ def _watch(
                         print(line, flush=True)
                         last_print, last_line = now, line
             continue
-        if stop_at is None:
+        if stop_at is None and not operator_ended(o.out, plan.vehicles):
+            # Ended on their own (mission time): the search is over, the emulator may stop.
             return stopped
+        # After a stop, or an operator's land or abort: the landing asked for is flown out.
         flying = airborne(o.out)
         if not flying:
             _say("fleet: every vehicle has landed")
