@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from mdm_core.world import TargetTracks
 from mdm_core.world.sensors import REACH_SLACK
+from mdm_core.world.targets import NODE_EPS
 from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
@@ -30,10 +31,6 @@ class Leg:
     start: FloatArray
     velocity: FloatArray
     duration: FloatArray
-
-
-_NODE_EPS = 1e-9
-"""The tolerance of ``TargetTracks.next_node_time`` on t / grid_dt."""
 
 
 @compiled
@@ -65,14 +62,13 @@ def _entry_times(
         row = runs[i] if moving else 0
         while True:
             if moving:
-                k = math.floor(now / grid_dt + _NODE_EPS)
+                k = math.floor(now / grid_dt + NODE_EPS)
                 end = min((k + 1.0) * grid_dt - t[i], leg)
                 offset = now - k * grid_dt
-                segment = k
             else:
+                k = 0
                 end = leg
                 offset = 0.0
-                segment = 0
             span = end - begin
             sx = start[i, 0] + vx * begin
             sy = start[i, 1] + vy * begin
@@ -81,10 +77,10 @@ def _entry_times(
             for j in range(m):
                 if not eligible[i, j]:
                     continue
-                tvx = seg_velocity[row, segment, j, 0]
-                tvy = seg_velocity[row, segment, j, 1]
-                px = tvx * offset + seg_start[row, segment, j, 0]
-                py = tvy * offset + seg_start[row, segment, j, 1]
+                tvx = seg_velocity[row, k, j, 0]
+                tvy = seg_velocity[row, k, j, 1]
+                px = tvx * offset + seg_start[row, k, j, 0]
+                py = tvy * offset + seg_start[row, k, j, 1]
                 north = sx - px
                 east = sy - py
                 dist2 = north * north + east * east

@@ -22,6 +22,8 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 WalkBoundary = Literal["reflect", "clamp", "bounce", "free"]
 _CHUNK_NODES = 32
+NODE_EPS = 1e-9
+"""Slack on t / grid_dt when finding the segment that holds t (a time on a node is in the next)."""
 """Path nodes drawn at a time (the random stream does not depend on how far runs go)."""
 
 
@@ -127,7 +129,7 @@ class TargetTracks:
         """The first grid node strictly after t (inf for fixed targets)."""
         if self.walk is None:
             return np.full_like(t, np.inf)
-        return (np.floor(t / self.grid_dt + 1e-9) + 1.0) * self.grid_dt
+        return (np.floor(t / self.grid_dt + NODE_EPS) + 1.0) * self.grid_dt
 
     def positions(self, run: IntArray, t: FloatArray) -> FloatArray:
         """Target positions (n, m, 2) for lanes of the given runs at times t (n,)."""
@@ -155,7 +157,7 @@ class TargetTracks:
         if self.walk is None:
             start = self.spec.positions.reshape(1, 1, self.spec.count, 2).astype(float)
             return start, np.zeros_like(start)
-        self._grow_to(int(np.floor(until / self.grid_dt + 1e-9)))
+        self._grow_to(int(np.floor(until / self.grid_dt + NODE_EPS)))
         return self._starts, self._velocity
 
     def _grow_to(self, k: int) -> None:
@@ -164,7 +166,7 @@ class TargetTracks:
             self._grow()
 
     def _interpolate(self, run: IntArray, t: FloatArray) -> tuple[FloatArray, FloatArray]:
-        k = np.floor(t / self.grid_dt + 1e-9).astype(np.intp)
+        k = np.floor(t / self.grid_dt + NODE_EPS).astype(np.intp)
         self._grow_to(int(k.max(initial=0)))
         # Whole rows of the flattened (run, segment) axis: a plain take, no strided gather.
         row = run * self._starts.shape[1] + k
