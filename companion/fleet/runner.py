@@ -165,6 +165,8 @@ def _watch(
     started = time.monotonic()
     stopped = _Stopped()
     stop_at = land_by = None
+    # Once every companion has ended: whether an operator's land or abort ended a mission.
+    operator_landing: bool | None = None
     done_at: dict[int, float] = {}
     real = sum(not t.false_target for t in profile.targets)
     last_look, last_print, last_line = 0.0, 0.0, ""
@@ -209,7 +211,10 @@ def _watch(
                         print(line, flush=True)
                         last_print, last_line = now, line
             continue
-        if stop_at is None and not operator_ended(o.out, plan.vehicles):
+        if stop_at is None and operator_landing is None:
+            # Read once: no mission log changes after its companion has ended.
+            operator_landing = bool(operator_ended(o.out, plan.vehicles))
+        if stop_at is None and not operator_landing:
             # Ended on their own (mission time): the search is over, the emulator may stop.
             return stopped
         # After a stop, or an operator's land or abort: the landing asked for is flown out.
