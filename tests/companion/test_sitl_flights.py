@@ -184,6 +184,15 @@ def test_flies_through_takeover_kill_and_restart(
             "paused after the pilot's mode",
             context=context,
         )
+        # The observer's link hears the autopilot's next HEARTBEAT up to a second after the
+        # companion's did (CI at cb9ff3b: the companion paused on HOLD, the observer still
+        # showed OFFBOARD); from then on the pilot's mode must hold.
+        wait_until(
+            lambda: ob.snapshot().mode == ap.pilot_custom,
+            5.0,
+            "the observer sees the pilot's mode",
+            context=context,
+        )
         held = time.monotonic()
         while time.monotonic() - held < 10.0 / ap.speedup:  # 10 vehicle s: nobody takes it back
             assert ob.snapshot().mode == ap.pilot_custom, context()
