@@ -28,7 +28,7 @@ from mdm_core.search import Observation
 from mdm_core.search.from_profile import policy_config
 from mdm_core.search.planar import length
 from mdm_core.world import Scenario
-from mdm_montecarlo.compiled_memory import CompiledMemoryPolicy
+from mdm_montecarlo.compiled_step import CompiledPolicy
 from mdm_montecarlo.entry_kernel import Leg, entry_times
 from mdm_montecarlo.remembered import RememberedTargets
 from mdm_profiles import MissionProfile
@@ -65,7 +65,7 @@ def block_rngs(seed: int, block: int) -> tuple[np.random.Generator, ...]:
 def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
     """Simulate ``n_runs`` missions of the profile; block index ``block`` fixes the random streams."""
     scenario = Scenario.from_profile(profile)
-    policy = CompiledMemoryPolicy(policy_config(profile))
+    policy = CompiledPolicy(policy_config(profile))
     rng_targets, rng_start, rng_policy = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
     speed = profile.fleet.speed

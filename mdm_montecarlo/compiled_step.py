@@ -1,0 +1,180 @@
+"""The batch engine's policy step, compiled (numba), bit-identical to ``SearchPolicy.step``.
+
+``SearchPolicy.step`` is some forty numpy calls on (lanes,) and (lanes, targets) arrays per
+event: the memory checks of the contacts, the level changes, the decaying index, the blind
+period, the anchor. Here one loop per lane makes the same comparisons and the same sums in the
+same order; the waypoints are then drawn by the compiled draws of ``compiled_waypoints`` and the
+confirmed targets remembered by the numpy code, as in ``step``. The companion keeps the numpy
+policy (tests/montecarlo/test_compiled_policy.py compares the two on random states).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mdm_core.search.levels import PolicyConfig
+from mdm_core.search.policy import Observation, PolicyState, StepOutcome
+from mdm_montecarlo.compiled_waypoints import CompiledWaypoints
+from mdm_montecarlo.jit import compiled
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+IntArray = NDArray[np.intp]
+
+DISC, EXACT, NONE = 0, 1, 2
+_MEMORY = {"disc": DISC, "exact": EXACT, "none": NONE}
+# Columns of the flags the kernel returns per lane.
+DETECTED, CONFIRMED, EXPIRED, REDRAW = range(4)
+
+
+@compiled
+def _nearest2(memory: FloatArray, count: int, lane: int, x: float, y: float) -> float:
+    """Squared distance from (x, y) to the nearest remembered target (memory_distance2)."""
+    best = np.inf
+    for slot in range(count):
+        north = x - memory[lane, slot, 0]
+        east = y - memory[lane, slot, 1]
+        d2 = north * north + east * east
+        if math.isnan(d2):
+            return float(d2)
+        best = min(best, d2)
+    return float(best)
+
+
+@compiled
+def _step(
+    level: IntArray,
+    entered: FloatArray,
+    blind_until: FloatArray,
+    anchor: FloatArray,
+    memory: FloatArray,
+    memory_count: IntArray,
+    lanes: IntArray,
+    time: FloatArray,
+    position: FloatArray,
+    reached: BoolArray,
+    contacts: BoolArray,
+    contact_positions: FloatArray,
+    lifetimes: FloatArray,
+    radii: FloatArray,
+    memory_radius: float,
+    detection_memory: int,
+    blind_time: float,
+) -> tuple[BoolArray, BoolArray]:
+    """SearchPolicy.step without the memory update and the waypoint draws, lanes distinct.
+
+    Updates level, entered, blind_until and anchor in place; returns the new contacts (n, m)
+    and the flags (n, 4) DETECTED, CONFIRMED, EXPIRED, REDRAW."""
+    n, m = contacts.shape
+    last = radii.shape[0] - 1
+    new = contacts.copy()
+    flags = np.zeros((n, 4), dtype=np.bool_)
+    known2 = memory_radius**2
+    for i in range(n):
+        lane = lanes[i]
+        lvl = level[lane]
+        seen = False
+        for j in range(m):
+            seen = seen or new[i, j]
+        if seen:
+            count = memory_count[lane]
+            if detection_memory == EXACT or lvl == last:
+                for j in range(m):
+                    if new[i, j]:
+                        d2 = _nearest2(
+                            memory,
+                            count,
+                            lane,
+                            contact_positions[i, j, 0],
+                            contact_positions[i, j, 1],
+                        )
+                        if d2 <= known2:
+                            new[i, j] = False
+            detecting = lvl < last
+            ignored = detecting and time[i] < blind_until[lane]
+            if detection_memory == DISC:
+                near = _nearest2(memory, count, lane, position[i, 0], position[i, 1])
+                ignored = ignored or (detecting and near < radii[lvl] ** 2)
+            if ignored:
+                new[i, :] = False
+        has = False
+        for j in range(m):
+            has = has or new[i, j]
+        detected = has and lvl < last
+        confirmed = has and lvl == last
+        next_level = lvl + 1 if detected else lvl
+        if confirmed:
+            next_level = 0
+        deadline = entered[lane] + lifetimes[lvl]
+        expired = next_level == lvl and lvl > 0 and time[i] >= deadline
+        if expired:
+            next_level = 0
+        changed = next_level != lvl
+        blind = blind_until[lane]
+        if time[i] >= blind:
+            blind = -np.inf
+        if blind_time > 0 and expired:
+            blind = time[i] + blind_time
+        blind_until[lane] = blind
+        level[lane] = next_level
+        if changed:
+            entered[lane] = time[i]
+        if detected:
+            anchor[lane, 0] = position[i, 0]
+            anchor[lane, 1] = position[i, 1]
+        flags[i, DETECTED] = detected
+        flags[i, CONFIRMED] = confirmed
+        flags[i, EXPIRED] = expired
+        flags[i, REDRAW] = changed or reached[i]
+    return new, flags
+
+
+class CompiledPolicy(CompiledWaypoints):
+    """The engine's policy: step, memory check and waypoint draws compiled (numba)."""
+
+    def __init__(self, config: PolicyConfig) -> None:
+        super().__init__(config)
+        self._memory_rule = _MEMORY[config.detection_memory]
+
+    def step(
+        self,
+        state: PolicyState,
+        lanes: IntArray,
+        obs: Observation,
+        rng: np.random.Generator,
+    ) -> StepOutcome:
+        """SearchPolicy.step for distinct ``lanes`` (as the engine steps them)."""
+        new, flags = _step(
+            state.level,
+            state.entered,
+            state.blind_until,
+            state.anchor,
+            state.memory,
+            state.memory_count,
+            lanes,
+            obs.time,
+            obs.position,
+            obs.reached,
+            obs.contacts,
+            obs.contact_positions,
+            self._lifetimes,
+            self._radii,
+            float(self.config.memory_radius),
+            self._memory_rule,
+            float(self.config.fallback_blind_time),
+        )
+        confirmed = flags[:, CONFIRMED]
+        new_confirmations = new & confirmed[:, None]
+        rows, cols = np.nonzero(new_confirmations)
+        if rows.size:
+            self.remember(state, lanes[rows], obs.contact_positions[rows, cols])
+        redraw = flags[:, REDRAW]
+        chosen = lanes[redraw]
+        if chosen.size:
+            state.waypoint[chosen] = self._next_waypoints(state, chosen, obs.position[redraw], rng)
+        return StepOutcome(
+            flags[:, DETECTED], confirmed, new_confirmations, flags[:, EXPIRED], redraw
+        )
