@@ -31,7 +31,7 @@ DETECTED, CONFIRMED, EXPIRED, REDRAW = range(4)
 
 
 @compiled
-def _nearest2(memory: FloatArray, count: int, lane: int, x: float, y: float) -> float:
+def nearest2(memory: FloatArray, count: int, lane: int, x: float, y: float) -> float:
     """Squared distance from (x, y) to the nearest remembered target (memory_distance2)."""
     best = np.inf
     for slot in range(count):
@@ -84,7 +84,7 @@ def _step(
             if detection_memory == EXACT or lvl == last:
                 for j in range(m):
                     if new[i, j]:
-                        d2 = _nearest2(
+                        d2 = nearest2(
                             memory,
                             count,
                             lane,
@@ -96,7 +96,7 @@ def _step(
             detecting = lvl < last
             ignored = detecting and time[i] < blind_until[lane]
             if detection_memory == DISC:
-                near = _nearest2(memory, count, lane, position[i, 0], position[i, 1])
+                near = nearest2(memory, count, lane, position[i, 0], position[i, 1])
                 ignored = ignored or (detecting and near < radii[lvl] ** 2)
             if ignored:
                 new[i, :] = False
@@ -138,6 +138,21 @@ class CompiledPolicy(CompiledWaypoints):
     def __init__(self, config: PolicyConfig) -> None:
         super().__init__(config)
         self._memory_rule = _MEMORY[config.detection_memory]
+
+    @property
+    def lifetimes(self) -> FloatArray:
+        """Seconds each level lasts before its decaying index ends it (inf on level 1)."""
+        return self._lifetimes
+
+    @property
+    def radii(self) -> FloatArray:
+        """Sensor radius of each level, metres."""
+        return self._radii
+
+    @property
+    def memory_rule(self) -> int:
+        """detection_memory as the kernels read it (DISC, EXACT or NONE)."""
+        return self._memory_rule
 
     def step(
         self,

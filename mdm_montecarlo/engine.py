@@ -26,11 +26,10 @@ from numpy.typing import NDArray
 
 from mdm_core.search import Observation
 from mdm_core.search.from_profile import policy_config
-from mdm_core.search.planar import length
 from mdm_core.world import Scenario
 from mdm_montecarlo.compiled_step import CompiledPolicy
-from mdm_montecarlo.entry_kernel import Leg, entry_times
 from mdm_montecarlo.remembered import RememberedTargets
+from mdm_montecarlo.round_kernels import advance, legs
 from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]
@@ -89,58 +88,61 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     events = 0
     appear = targets.appear_times
     remembered = RememberedTargets(policy, tracks, n, m)
+    lifetimes, radii, memory_rule = policy.lifetimes, policy.radii, policy.memory_rule
 
     while True:
         idx = np.flatnonzero(active)
         if idx.size == 0:
             break
         runs = run_of[idx]
-        x = position[idx]
         t = time[idx]
-        offset = state.waypoint[idx] - x
-        dist = length(offset)
-        unit = np.where(dist[:, None] > 0, offset / np.where(dist > 0, dist, 1.0)[:, None], 0.0)
-        leg = dist / speed
-        deadline = policy.deadline(state)[idx] - t
-        horizon = np.maximum(np.minimum.reduce([leg, deadline, stop[runs] - t]), 0.0)
-
-        confirms = policy.uses_confirmation_sensor(state)[idx]
+        unit, leg, left, horizon, until = legs(
+            state.waypoint,
+            position,
+            time,
+            state.level,
+            state.entered,
+            state.blind_until,
+            lifetimes,
+            stop,
+            idx,
+            runs,
+            speed,
+        )
         eligible = np.ones((idx.size, m), dtype=bool)
         exact = np.flatnonzero(policy.checks_exactly(state, idx))
         eligible[exact] = ~remembered.known(state, idx[exact], runs[exact], t[exact])
-        # The same test the policy's step makes, so no contact is reported that it would drop.
-        eligible[policy.ignores_detections(state, idx, x, t)] = False
-        eligible &= ~(confirms[:, None] & targets.false_mask[None, :])
-        entry = entry_times(
-            tracks,
+        seg_start, seg_velocity = tracks.segments(until)
+        # position and time move to the event; the same ignore rules as the policy's step,
+        # so no contact is reported that it would drop.
+        reached, contacts, target_pos = advance(
+            state.level,
+            state.blind_until,
+            state.memory,
+            state.memory_count,
+            position,
+            time,
+            state.waypoint,
+            idx,
             runs,
-            t,
-            Leg(x, unit * speed, horizon),
-            policy.sensor_radius(state)[idx],
+            unit,
+            leg,
+            left,
+            horizon,
             eligible,
+            radii,
+            memory_rule,
+            targets.false_mask,
             appear,
+            seg_start,
+            seg_velocity,
+            tracks.grid_dt,
+            tracks.max_speed,
+            tracks.moving,
+            speed,
         )
-        soonest = entry.min(axis=1)
-        hit = soonest <= horizon
-        step = np.where(hit, soonest, horizon)
-        new_t = t + step
-        # Land exactly on a deadline so the policy sees the index run out (no float creep).
-        on_deadline = ~hit & (horizon == deadline)
-        new_t = np.where(on_deadline, t + deadline, new_t)
-        new_x = np.where(
-            (~hit & (horizon >= leg))[:, None],
-            state.waypoint[idx],
-            x + unit * speed * step[:, None],
-        )
-        reached = ~hit & (horizon >= leg)
-        contacts = hit[:, None] & (entry <= soonest[:, None] + _EPS)
-        # Where the targets are when they come into the sensor; only lanes with a contact read
-        # them (NaN elsewhere, so a read of another lane would show).
-        if tracks.moving:
-            target_pos = np.full((idx.size, m, 2), np.nan)
-            target_pos[hit] = tracks.positions(runs[hit], new_t[hit])
-        else:
-            target_pos, _ = tracks.motion(runs, new_t)
+        new_t = time[idx]
+        new_x = position[idx]
 
         obs = Observation(
             time=new_t,
@@ -152,8 +154,6 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         outcome = policy.step(state, idx, obs, rng_policy)
         remembered.forget(idx[outcome.confirmed])
         events += 1
-        position[idx] = new_x
-        time[idx] = new_t
 
         confirmed = outcome.new_confirmations & real[None, :]
         if confirmed.any():

@@ -11,12 +11,10 @@ bit-identical (tests/montecarlo/test_entry_kernel.py compares the two on random 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_core.world import TargetTracks
 from mdm_core.world.sensors import REACH_SLACK
 from mdm_core.world.targets import NODE_EPS
 from mdm_montecarlo.jit import compiled
@@ -24,17 +22,8 @@ from mdm_montecarlo.jit import compiled
 FloatArray = NDArray[np.float64]
 
 
-@dataclass(frozen=True)
-class Leg:
-    """Straight flight of each lane from the current event: start, velocity, seconds."""
-
-    start: FloatArray
-    velocity: FloatArray
-    duration: FloatArray
-
-
 @compiled
-def _entry_times(
+def entry_times_of(
     start: FloatArray,
     velocity: FloatArray,
     duration: FloatArray,
@@ -49,6 +38,15 @@ def _entry_times(
     target_speed: float,
     moving: bool,
 ) -> FloatArray:
+    """(n, m) seconds after t at which each lane, flying from ``start`` at ``velocity`` for
+    ``duration`` seconds, first enters each target's sensor disc of ``radius`` (inf: not within
+    the leg, or not eligible). ``seg_start`` and ``seg_velocity`` are ``TargetTracks.segments``
+    drawn up to the latest leg end (row 0 for fixed targets).
+
+    Moving targets go straight between the nodes of their path grid, so a leg that crosses
+    nodes is solved piece by piece, stopping at the first piece with a contact (only the
+    earliest contacts count).
+    """
     n, m = eligible.shape
     out = np.full((n, m), np.inf)
     for i in range(n):
@@ -111,40 +109,3 @@ def _entry_times(
             begin = end
             now = t[i] + begin
     return out
-
-
-def entry_times(
-    tracks: TargetTracks,
-    runs: NDArray[np.intp],
-    t: FloatArray,
-    leg: Leg,
-    radius: FloatArray,
-    eligible: NDArray[np.bool_],
-    appear: FloatArray,
-) -> FloatArray:
-    """(n, m) seconds after t at which each lane first enters each target's sensor disc along
-    its leg (inf: not within the leg, or not eligible).
-
-    Moving targets go straight between the nodes of their path grid, so a leg that crosses
-    nodes is solved piece by piece, stopping at the first piece with a contact (only the
-    earliest contacts count).
-    """
-    until = float(np.max(t + leg.duration, initial=0.0))
-    seg_start, seg_velocity = tracks.segments(until)
-    return np.asarray(
-        _entry_times(
-            leg.start,
-            leg.velocity,
-            leg.duration,
-            t,
-            runs,
-            radius,
-            eligible,
-            appear,
-            seg_start,
-            seg_velocity,
-            tracks.grid_dt,
-            tracks.max_speed,
-            tracks.moving,
-        )
-    )

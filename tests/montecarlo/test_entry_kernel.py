@@ -2,15 +2,26 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pytest
 
 from mdm_core.world import Scenario, TargetTracks, first_entry_time
-from mdm_montecarlo.entry_kernel import Leg, entry_times
+from mdm_montecarlo.entry_kernel import entry_times_of
 from mdm_profiles import builtin_profile
 
 RUNS = 200
 LANES = 3000
+
+
+@dataclass(frozen=True)
+class Leg:
+    """Straight flight of each lane: start, velocity, seconds."""
+
+    start: np.ndarray
+    velocity: np.ndarray
+    duration: np.ndarray
 
 
 def _piecewise(
@@ -69,7 +80,22 @@ def test_kernel_equals_the_numpy_closed_form_on_random_legs(profile_name: str) -
     eligible = rng.random((LANES, m)) < 0.8
     appear = scenario.targets.appear_times
 
-    got = entry_times(tracks, runs, t, leg, radius, eligible, appear)
+    seg_start, seg_velocity = tracks.segments(float(np.max(t + leg.duration)))
+    got = entry_times_of(
+        leg.start,
+        leg.velocity,
+        leg.duration,
+        t,
+        runs,
+        radius,
+        eligible,
+        appear,
+        seg_start,
+        seg_velocity,
+        tracks.grid_dt,
+        tracks.max_speed,
+        tracks.moving,
+    )
     expected = _piecewise(tracks, runs, t, leg, radius, eligible, appear)
 
     np.testing.assert_array_equal(got, expected)
