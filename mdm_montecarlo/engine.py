@@ -13,6 +13,10 @@ targets a vehicle remembers confirming (its memory) is checked at the start of e
 Vehicles do not communicate, so lanes of one run only share the targets; the team's result is
 the minimum over its vehicles of each target's first confirmation time.
 
+Speed: a round's loops over the lanes are compiled with numba (``round_kernels``), and so is
+the policy (``compiled_step.CompiledPolicy``: the numpy ``SearchPolicy``'s step and waypoint
+draws, bit for bit, from the same random stream); the companion flies the numpy policy.
+
 Randomness: runs are cut into blocks of ``block_runs``; block b draws from
 SeedSequence([seed, b]) alone, so results are identical for any number of workers.
 """
@@ -29,14 +33,11 @@ from mdm_core.search.from_profile import policy_config
 from mdm_core.world import Scenario
 from mdm_montecarlo.compiled_step import CompiledPolicy
 from mdm_montecarlo.remembered import RememberedTargets
-from mdm_montecarlo.round_kernels import advance, legs
+from mdm_montecarlo.round_kernels import advance, legs, record
 from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
-IntArray = NDArray[np.intp]
 BLOCK_RUNS = 1000
-_EPS = 1e-9
 
 
 @dataclass(frozen=True)
@@ -155,28 +156,19 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         remembered.forget(idx[outcome.confirmed])
         events += 1
 
-        confirmed = outcome.new_confirmations & real[None, :]
-        if confirmed.any():
-            rows, cols = np.nonzero(confirmed)
-            lanes = idx[rows]
-            first[lanes, cols] = np.minimum(first[lanes, cols], new_t[rows])
-            changed = np.unique(run_of[lanes])
-            stop[changed] = _stop_times(first, changed, n_vehicles, real, duration, cap)
-        active[idx] = new_t < stop[runs] - _EPS
+        record(
+            first,
+            stop,
+            active,
+            outcome.new_confirmations,
+            idx,
+            runs,
+            time,
+            real,
+            n_vehicles,
+            duration,
+            cap,
+        )
 
     per_vehicle = first.reshape(n_runs, n_vehicles, m)
     return BlockResult(block, per_vehicle, events, float(time.sum()))
-
-
-def _stop_times(
-    first: FloatArray,
-    runs: IntArray,
-    n_vehicles: int,
-    real: BoolArray,
-    duration: float,
-    cap: float,
-) -> FloatArray:
-    """Latest time each given run still needs: past it no confirmation can change T_nc or T_S."""
-    team = first.reshape(-1, n_vehicles, first.shape[1])[runs].min(axis=1)[:, real]
-    bound = team.max(axis=1)
-    return np.asarray(np.clip(bound, duration, cap), dtype=np.float64)

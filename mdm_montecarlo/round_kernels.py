@@ -10,8 +10,10 @@ two loops over the lanes do the same arithmetic in the same order:
   remembered disc, false targets for the confirmation sensor), the entry times, the event it
   reaches first, its new time and position, the contacts and where the contacted targets are.
 
+- ``record``: the first confirmation times, the runs' stop times and which lanes go on.
+
 What stays in numpy: the remembered-targets cache (it reads the tracks' positions), the growth
-of the tracks, the memory update and the bookkeeping of first confirmations per run.
+of the tracks and the memory update.
 Results are bit-identical to the numpy round (tests/montecarlo/test_determinism.py and the
 reproduce comparison in docs/model.md).
 """
@@ -34,6 +36,8 @@ IntArray = NDArray[np.intp]
 
 CONTACT_EPS = 1e-9
 """Seconds: targets entered within this of the earliest entry are sensed in the same event."""
+STOP_EPS = 1e-9
+"""Seconds: a lane this close to its run's stop time is done."""
 
 
 @compiled
@@ -180,3 +184,42 @@ def advance(
             where[i, j, 0] = seg_velocity[row, k, j, 0] * offset + seg_start[row, k, j, 0]
             where[i, j, 1] = seg_velocity[row, k, j, 1] * offset + seg_start[row, k, j, 1]
     return reached, contacts, where
+
+
+@compiled
+def record(
+    first: FloatArray,
+    stop: FloatArray,
+    active: BoolArray,
+    confirmations: BoolArray,
+    lanes: IntArray,
+    runs: IntArray,
+    time: FloatArray,
+    real: BoolArray,
+    n_vehicles: int,
+    duration: float,
+    cap: float,
+) -> None:
+    """Keep each lane's first confirmation time of each real target, move the stop time of the
+    runs that confirmed (the latest time a confirmation can still change T_nc or T_S: the
+    team's last first confirmation, within [duration, cap]) and retire the lanes past it."""
+    m = first.shape[1]
+    changed = np.zeros(stop.shape[0], dtype=np.bool_)
+    for i in range(lanes.shape[0]):
+        lane = lanes[i]
+        for j in range(m):
+            if confirmations[i, j] and real[j]:
+                first[lane, j] = min(first[lane, j], time[lane])
+                changed[runs[i]] = True
+    for run in np.flatnonzero(changed):
+        bound = -np.inf
+        for j in range(m):
+            if not real[j]:
+                continue
+            team = np.inf
+            for v in range(n_vehicles):
+                team = min(team, first[run * n_vehicles + v, j])
+            bound = max(bound, team)
+        stop[run] = min(max(bound, duration), cap)
+    for i in range(lanes.shape[0]):
+        active[lanes[i]] = time[lanes[i]] < stop[runs[i]] - STOP_EPS
