@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from mdm_core.search.levels import PolicyConfig
 from mdm_core.search.policy import Observation, PolicyState, StepOutcome
-from mdm_montecarlo.compiled_waypoints import CompiledWaypoints
+from mdm_montecarlo.compiled_waypoints import RULES, CompiledWaypoints, next_waypoints
 from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
@@ -63,11 +63,18 @@ def _step(
     memory_radius: float,
     detection_memory: int,
     blind_time: float,
+    waypoint: FloatArray,
+    table: FloatArray,
+    area: FloatArray,
+    rule: int,
+    from_anchor: bool,
+    confine: bool,
+    rng: np.random.Generator,
 ) -> tuple[BoolArray, BoolArray]:
-    """SearchPolicy.step without the memory update and the waypoint draws, lanes distinct.
+    """SearchPolicy.step without the memory update, lanes distinct.
 
-    Updates level, entered, blind_until and anchor in place; returns the new contacts (n, m)
-    and the flags (n, 4) DETECTED, CONFIRMED, EXPIRED, REDRAW."""
+    Updates level, entered, blind_until, anchor and waypoint in place; returns the new
+    confirmations (n, m) and the flags (n, 4) DETECTED, CONFIRMED, EXPIRED, REDRAW."""
     n, m = contacts.shape
     last = radii.shape[0] - 1
     new = contacts.copy()
@@ -129,6 +136,24 @@ def _step(
         flags[i, CONFIRMED] = confirmed
         flags[i, EXPIRED] = expired
         flags[i, REDRAW] = changed or reached[i]
+        if not confirmed:
+            new[i, :] = False
+    chosen = lanes[flags[:, REDRAW]]
+    if chosen.size:
+        points = next_waypoints(
+            table,
+            level[chosen],
+            anchor[chosen],
+            position[flags[:, REDRAW]],
+            area,
+            rule,
+            from_anchor,
+            confine,
+            rng,
+        )
+        for c in range(chosen.size):
+            waypoint[chosen[c], 0] = points[c, 0]
+            waypoint[chosen[c], 1] = points[c, 1]
     return new, flags
 
 
@@ -162,7 +187,9 @@ class CompiledPolicy(CompiledWaypoints):
         rng: np.random.Generator,
     ) -> StepOutcome:
         """SearchPolicy.step for distinct ``lanes`` (as the engine steps them)."""
-        new, flags = _step(
+        if self._table is None:
+            return super().step(state, lanes, obs, rng)
+        new_confirmations, flags = _step(
             state.level,
             state.entered,
             state.blind_until,
@@ -180,16 +207,18 @@ class CompiledPolicy(CompiledWaypoints):
             float(self.config.memory_radius),
             self._memory_rule,
             float(self.config.fallback_blind_time),
+            state.waypoint,
+            self._table,
+            self._area,
+            RULES[self.config.out_of_area],
+            self.config.waypoint_origin == "anchor",
+            self.config.confine_to_detection,
+            rng,
         )
         confirmed = flags[:, CONFIRMED]
-        new_confirmations = new & confirmed[:, None]
-        rows, cols = np.nonzero(new_confirmations)
-        if rows.size:
+        if confirmed.any():
+            rows, cols = np.nonzero(new_confirmations)
             self.remember(state, lanes[rows], obs.contact_positions[rows, cols])
-        redraw = flags[:, REDRAW]
-        chosen = lanes[redraw]
-        if chosen.size:
-            state.waypoint[chosen] = self._next_waypoints(state, chosen, obs.position[redraw], rng)
         return StepOutcome(
-            flags[:, DETECTED], confirmed, new_confirmations, flags[:, EXPIRED], redraw
+            flags[:, DETECTED], confirmed, new_confirmations, flags[:, EXPIRED], flags[:, REDRAW]
         )

@@ -28,7 +28,7 @@ IntArray = NDArray[np.intp]
 
 LEVY, BROWNIAN, UNIFORM = 0, 1, 2
 REFLECT, CLIP, REDRAW = 0, 1, 2
-_RULES = {"reflect": REFLECT, "clip": CLIP, "redraw": REDRAW}
+RULES = {"reflect": REFLECT, "clip": CLIP, "redraw": REDRAW}
 # Columns of the per-level table handed to the kernel.
 (
     _SAMPLER,
@@ -209,7 +209,7 @@ def _draw(
 
 
 @compiled
-def _next_waypoints(
+def next_waypoints(
     table: FloatArray,
     level: IntArray,
     anchor: FloatArray,
@@ -272,13 +272,13 @@ class CompiledWaypoints(CompiledMemoryPolicy):
         if self._table is None:
             return super()._next_waypoints(state, lanes, position, rng)
         return np.asarray(
-            _next_waypoints(
+            next_waypoints(
                 self._table,
                 state.level[lanes],
                 state.anchor[lanes],
                 np.ascontiguousarray(position, dtype=np.float64),
                 self._area,
-                _RULES[self.config.out_of_area],
+                RULES[self.config.out_of_area],
                 self.config.waypoint_origin == "anchor",
                 self.config.confine_to_detection,
                 rng,
