@@ -1,8 +1,9 @@
 """numba's compiler for the engine's kernels: cached on disk where a cache can be written.
 
 ``njit(cache=True)`` raises at import when no cache folder is writable (a read-only install
-with a read-only home, say); the kernels are then compiled once per process instead (under
-a second each) rather than the engine failing to import.
+with a read-only home, say); the kernels are then compiled once per process instead (about
+15 s for all of them on the project's machine, most of it the policy's random draws) rather
+than the engine failing to import.
 """
 
 from __future__ import annotations
