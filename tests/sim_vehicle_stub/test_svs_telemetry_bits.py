@@ -1,8 +1,9 @@
 """A seeded emulator run's telemetry, byte for byte, is what it was before the sim loop was made
 faster (issue 15): 12 vehicles of both personas flying position, velocity, acceleration and
 yaw-rate setpoints with their sensors on, a changed stream rate, an RTL, a LAND and a mode change
-mid-run; 90 sim s at 10 Hz. The digests are those of commit b12c0e8 (before the change); a
-change of telemetry that is meant must say so here and replace them."""
+mid-run; 90 sim s at 10 Hz. The digests are those of commit b12c0e8 (before the change), one
+set per kind of CPU numpy computes differently on; a change of telemetry that is meant must say
+so here and replace them."""
 
 from __future__ import annotations
 
@@ -29,7 +30,21 @@ B12C0E8 = [
     "f0d9c596143081d38f27e41e37f19b2be41c2dc866c9c84485ead996272aa042",
     "dec7fa1a8c42c441f886d882631cc372168692cc0fa230a7b6101db6d7234b49",
 ]
-"""sha256 of each vehicle's datagrams, in order, at commit b12c0e8."""
+"""sha256 of each vehicle's datagrams, in order, at commit b12c0e8 (on the machine of sessions
+1-7, whose numpy dispatched float64 ufuncs to AVX-512 code)."""
+AVX2_ONLY = [
+    *B12C0E8[:1],
+    "37a2e2f8a222458daa1ed647138945b79fc5f873213e9553a121c5dac58f76a2",
+    *B12C0E8[2:5],
+    "e2d0cbd34f09c7d204ddea6d6e01dd8052397a0a59c510a6e0cdd9ce4fcf8c87",
+    *B12C0E8[6:9],
+    "b203e55fd2e3507d79121a1642007a470896c2bfc53ecdb8a0ed62dabfd51662",
+    *B12C0E8[10:],
+]
+"""The same run on a CPU without AVX-512 (AMD EPYC, numpy 2.4.6 finds X86_V3 only): the three
+vehicles flying a velocity setpoint differ in the last bits of their float arithmetic. Taken
+at 30cb7e5, whose emulator gave the B12C0E8 bytes on the earlier machine (CI of stop 21); the
+emulator is unchanged since."""
 
 
 def telemetry_digests() -> tuple[list[str], int]:
@@ -82,4 +97,5 @@ def telemetry_digests() -> tuple[list[str], int]:
 def test_seeded_run_sends_the_same_bytes_as_before() -> None:
     digests, events = telemetry_digests()
     assert events == 38  # the sensors saw what they saw before (targets entered, confirmed)
-    assert digests == B12C0E8
+    # numpy's float64 ufuncs round differently in the last bit with and without AVX-512.
+    assert digests in (B12C0E8, AVX2_ONLY)
