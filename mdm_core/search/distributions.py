@@ -13,6 +13,7 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from mdm_core import libm
 from mdm_core.search.planar import length
 
 FloatArray = NDArray[np.float64]
@@ -39,18 +40,19 @@ def symmetric_stable(
 
     Chambers-Mallows-Stuck: V ~ U(-pi/2, pi/2), W ~ Exp(1). Index 1 is Cauchy, index 2 is normal
     with variance 2 scale^2 (note: the paper's integral uses scale alpha directly in the exponent).
+    The transcendental functions are the C library's (mdm_core.libm), the same on every machine.
     """
     if not 0 < index <= 2:
         raise ValueError(f"stable index lambda must be in (0, 2], got {index}")
     v = rng.uniform(-np.pi / 2, np.pi / 2, size=size)
     w = rng.exponential(1.0, size=size)
     if abs(index - 1.0) < 1e-12:
-        x = np.tan(v)
+        x = libm.tan(v)
     else:
         x = (
-            np.sin(index * v)
-            / np.cos(v) ** (1.0 / index)
-            * (np.cos(v - index * v) / w) ** ((1.0 - index) / index)
+            libm.sin(index * v)
+            / libm.power(libm.cos(v), 1.0 / index)
+            * libm.power(libm.cos(v - index * v) / w, (1.0 - index) / index)
         )
     # The paper's density exp(-alpha m^lambda) has scale alpha^(1/lambda) in the usual sense.
     return np.asarray(x * scale ** (1.0 / index), dtype=np.float64)
