@@ -24,14 +24,18 @@ both use them: the closed form is solved only for the pairs close enough to meet
 step, strengths only for the pairs within the signal radius. A delivery touches only the runs
 whose message or losses changed since the last one (a few per cent of them per iteration).
 All of this gives bit-for-bit the results of solving every pair and delivering everywhere.
+The per-particle passes (sensing, swarm bests, the PSO rules, flight, personal bests, SPSO's
+informants) are compiled loops (mdm_montecarlo.swarm_kernels) doing the arithmetic and the
+random draws of the numpy rules of mdm_core.search.pso and swarm_iteration in their order: the
+same results bit for bit, without a (runs, vehicles, ...) temporary per operation.
 
 When every message arrives at once and none is lost (message_delay 0, message_drop 0, the
 paper's setting), what receiver i heard from sender j is sender j's own best and reading as
 they stand (both are dropped by the same ``forget``: after a delivery every vehicle of a run
 knows the same confirmed targets). The (runs, receivers, senders) inbox is then not kept: the
-heard tables are views of the own bests, the best of all peers is found from the two best of
-each run, and the losses' draw is skipped by advancing the generator. Same results bit for bit
-as the inbox (tests/montecarlo/test_pso_engine.py compares the two).
+heard tables are views of the own bests and the losses' draw is skipped by advancing the
+generator. Same results bit for bit as the inbox (tests/montecarlo/test_pso_engine.py compares
+the two).
 
 Randomness: SeedSequence([seed, block]) as in engine.py, drawn in a fixed order over the whole
 block, so results are identical for any number of workers.
@@ -42,7 +46,6 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
-from functools import partial
 from typing import Any
 
 import numpy as np
@@ -50,17 +53,10 @@ from numpy.typing import NDArray
 
 from mdm_core.search import SearchPolicy
 from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
-from mdm_core.search.planar import length
-from mdm_core.search.pso import Best, forget, random_informants, signal_fitness, swarm_best
-from mdm_core.search.swarm_iteration import (
-    BestOf,
-    choose_move,
-    explore,
-    read_into_best,
-    refresh_informants,
-)
+from mdm_core.search.pso import Best, SwarmConfig, forget
+from mdm_core.search.swarm_iteration import explore, refresh_informants
 from mdm_core.world import Scenario, TargetTracks, first_entry_time
-from mdm_core.world.sensors import THRESHOLD
+from mdm_montecarlo import swarm_kernels as kernels
 from mdm_montecarlo.engine import BlockResult, block_rngs
 from mdm_profiles import MissionProfile
 
@@ -99,16 +95,20 @@ class _Sensors:
     dt: float
     """Update interval, s."""
 
-    def squared_gaps(self, position: FloatArray, t: float) -> FloatArray:
-        """Squared distances (runs, vehicles, targets) from ``position`` (runs, vehicles, 2) to
-        the targets at time t, rounded as mdm_core.world.contacts rounds them."""
+    def sense(
+        self, position: FloatArray, t: float, known: BoolArray
+    ) -> tuple[FloatArray, FloatArray, IntArray]:
+        """The squared distances (runs, vehicles, targets) from ``position`` (runs, vehicles, 2)
+        to the targets at time t, rounded as mdm_core.world.contacts rounds them, and every
+        vehicle's fitness and its source (mdm_core.search.pso.signal_fitness): the signal
+        sensor's strongest exp(-d / R) of a present target within R that the vehicle does not
+        know to be confirmed (as mdm_core.world.contacts reads it). Strengths are computed only
+        for the pairs nearer than R (a superset from the squared distances)."""
         target = self.tracks.positions(self.runs, np.full(len(self.runs), t))
-        dx = target[:, None, :, 0] - position[:, :, None, 0]
-        dy = target[:, None, :, 1] - position[:, :, None, 1]
-        dx *= dx
-        dy *= dy
-        dx += dy
-        return np.asarray(dx)
+        radius = self.signal_radius
+        return kernels.sense(
+            target, position, self.appear, t, radius, radius * radius * _NEAR, known
+        )
 
     def confirm(
         self,
@@ -121,7 +121,7 @@ class _Sensors:
     ) -> None:
         """Confirm the real targets whose disc the segments ``position`` -> ``position + step``
         (runs, vehicles, 2), flown from t to t + dt, enter: ``first`` and ``known`` (runs,
-        vehicles, targets) are updated in place. ``gaps``: squared_gaps(position, t).
+        vehicles, targets) are updated in place. ``gaps``: from sense(position, t, known).
 
         The closed form (mdm_core.world.first_entry_time) is solved only for the
         vehicle x target pairs that can meet in the interval: those no farther apart than
@@ -131,9 +131,7 @@ class _Sensors:
         travel = _length_bound(step) + self.dt * _length_bound(velocity)
         # The slack covers the rounding of the closed form; it only adds pairs to solve.
         reach = self.confirm_radius + travel + _SLACK
-        run, lane, index = _nonzero(gaps <= reach * reach)
-        open_pair = self.real[index] & ~known[run, lane, index]
-        run, lane, index = run[open_pair], lane[open_pair], index[open_pair]
+        run, lane, index = kernels.open_pairs(gaps, reach * reach, self.real, known)
         pairs = len(run)
         entry = first_entry_time(
             position[run, lane],
@@ -149,26 +147,6 @@ class _Sensors:
         run, lane, index = run[hit], lane[hit], index[hit]
         first[run, lane, index] = np.minimum(first[run, lane, index], t + entry[hit])
         known[run, lane, index] = True
-
-    def fitness(self, gaps: FloatArray, t: float, known: BoolArray) -> tuple[FloatArray, IntArray]:
-        """Every vehicle's fitness and its source (mdm_core.search.pso.signal_fitness) at time
-        t, ``gaps`` = squared_gaps(position, t): the signal sensor's strongest exp(-d / R) of a
-        present target within R that the vehicle does not know to be confirmed (as
-        mdm_core.world.contacts reads it). Strengths are computed only for the pairs
-        nearer than R (a superset from the squared distances)."""
-        radius = self.signal_radius
-        run, lane, index = _nonzero(gaps < radius * radius * _NEAR)
-        distance = np.sqrt(gaps[run, lane, index])
-        strength = np.exp(-distance / radius)
-        usable = (
-            (distance < radius)
-            & (strength > THRESHOLD)
-            & (self.appear[index] <= t)
-            & ~known[run, lane, index]
-        )
-        table = np.zeros(gaps.shape)
-        table[run[usable], lane[usable], index[usable]] = strength[usable]
-        return signal_fitness(table, table > 0)
 
 
 @dataclass
@@ -296,7 +274,7 @@ def run_swarm_block(
     )
     position = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
     m = targets.count
-    area = scenario.area.size
+    area = np.asarray(scenario.area.size, dtype=float)
 
     first = np.full((*shape, m), np.inf)
     known = np.zeros((*shape, m), dtype=bool)
@@ -307,18 +285,13 @@ def run_swarm_block(
     others = ~np.eye(n_vehicles, dtype=bool)
     links = np.broadcast_to(others, (*shape, n_vehicles)).copy()
     if config.variant == "spso":
-        links = random_informants(rng, (n_runs,), n_vehicles, spec.informants)
+        links = _random_informants(rng, n_runs, n_vehicles, spec.informants)
     delay = round(spec.message_delay / dt)
     outbox: deque[Message] = deque(maxlen=delay + 1)
     broadcast = delay == 0 and spec.message_drop == 0.0 and not keep_inbox
-    best_of: BestOf = swarm_best
-    if broadcast:
-        best_of = _best_of_all_peers
-        if config.variant == "spso":
-            best_of = partial(_best_of_informants, informants=min(spec.informants, n_vehicles - 1))
 
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
-    gaps = sensors.squared_gaps(position, 0.0)
+    gaps, _, _ = sensors.sense(position, 0.0, known)
     step = np.zeros((*shape, 2))
     guided = np.zeros(shape, dtype=bool)
     social_fitness = np.zeros(shape)
@@ -332,27 +305,31 @@ def run_swarm_block(
         heard, heard_current = inbox.heard, inbox.current
         if broadcast:
             heard, heard_current = _heard_from_own(own), _to_every_receiver(current)
-        move, follow, from_peer = choose_move(
-            config,
-            explorer,
-            position=position,
-            step=step,
-            waypoint=waypoint,
-            guided=guided,
-            own=own,
-            heard=heard,
-            heard_current=heard_current,
-            current=current,
-            previous_best=previous_best,
-            links=links,
-            distance=speed * dt,
-            rng=rng,
-            best_of=best_of,
+        # mdm_core.search.swarm_iteration.choose_move, then the flight clipped to the area.
+        social, own_is_social = _swarm_best(own, heard, links)
+        follow = social.fitness > 0
+        inertia = np.full(shape, config.inertia)
+        if config.variant == "arpso":
+            inertia = kernels.arpso_inertia(
+                previous_best,
+                own.fitness,
+                current,
+                heard_current,
+                links,
+                config.arpso_initial_inertia,
+                config.arpso_speed_weight,
+                config.arpso_aggregation_weight,
+            )
+        swarm_move = _next_step(config, step, position, own, social, own_is_social, inertia, rng)
+        # Particles that lost their best go back to exploring from where they are.
+        lost = guided & ~follow
+        if lost.any():
+            waypoint[lost] = explore(explorer, position[lost], rng)
+        new_position, step, reached = kernels.fly(
+            position, swarm_move, follow, waypoint, speed * dt, area
         )
-        new_position = np.clip(position + move, 0.0, area)
-        step = new_position - position
         guided = follow
-        followed += int(np.count_nonzero(from_peer))
+        followed += int(np.count_nonzero(follow & ~own_is_social))
 
         # Confirmations along the straight segment flown in this iteration.
         sensors.confirm(position, step, gaps, t, first, known)
@@ -360,26 +337,26 @@ def run_swarm_block(
         t += dt
         steps += 1
 
-        reached = ~follow & (length(waypoint - position) <= 1e-6)
         if reached.any():
             waypoint[reached] = explore(explorer, position[reached], rng)
 
         # Fitness: the signal sensor, targets known to be confirmed left out.
-        gaps = sensors.squared_gaps(position, t)
-        current, source = sensors.fitness(gaps, t, known)
-        own, previous_best = read_into_best(own, known, position, current, source)
+        gaps, current, source = sensors.sense(position, t, known)
+        previous_best = kernels.read_into_best(
+            own.position, own.fitness, own.source, known, position, current, source
+        )
 
         if broadcast:
             # The losses are drawn every iteration, so the random stream does not depend on
             # delay or drop; with drop 0 none is lost and the numbers are not needed.
             _skip_uniforms(rng, n * n_vehicles)
-            known |= known.any(axis=1, keepdims=True)
+            kernels.share_known(known)
         else:
             outbox.append(Message(own.copy(), current.copy(), known.astype(np.float32)))
             got = (rng.random((*shape, n_vehicles)) >= spec.message_drop) & others
             if len(outbox) > delay:
                 inbox.deliver(outbox[0], got, known)
-        own = forget(own, known)
+        kernels.forget_known(own.fitness, own.source, known)
         if not broadcast:
             inbox.forget(known)
         if config.variant == "spso":
@@ -388,8 +365,8 @@ def run_swarm_block(
                 _heard_from_own(own) if broadcast else inbox.heard,
                 links,
                 social_fitness,
-                lambda: random_informants(rng, (n_runs,), n_vehicles, spec.informants),
-                best_of,
+                lambda: _random_informants(rng, n_runs, n_vehicles, spec.informants),
+                _swarm_best,
             )
         if t >= duration and _all_confirmed(first, real):
             break
@@ -424,53 +401,62 @@ def _heard_from_own(own: Best) -> Best:
     )
 
 
-def _best_of_all_peers(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArray]:
-    """swarm_best(own, heard, links) for heard = _heard_from_own(own) and links = every other
-    vehicle (PSO, ARPSO): every receiver compares its own best with the run's first best. For
-    the vehicle holding it, that is its own best, which wins the tie, as it wins against the
-    others' best in swarm_best; for the others it is the first best of their peers."""
-    fitness = own.fitness
-    first = np.argmax(fitness, axis=1)
-    top = fitness[np.arange(len(fitness)), first]
-    slot = np.broadcast_to(first[:, None], fitness.shape)
-    return _own_or_peer(own, slot, np.broadcast_to(top[:, None], fitness.shape))
-
-
-def _best_of_informants(
-    own: Best, heard: Best, links: BoolArray, informants: int
-) -> tuple[Best, BoolArray]:
-    """swarm_best(own, heard, links) for heard = _heard_from_own(own) and SPSO's links from
-    random_informants, which gives every particle exactly ``informants`` (<= vehicles - 1):
-    only those are compared, in the order of their index (argmax's tie order kept)."""
-    runs, n = own.fitness.shape
-    if informants == 0:
-        return _own_or_peer(own, np.zeros((runs, n), dtype=np.intp), np.full((runs, n), -np.inf))
-    # Each (run, particle) row of links holds its informants in increasing index order.
-    cell = np.flatnonzero(links).reshape(runs, n, informants)
-    peer = cell % n
-    heard_fitness = own.fitness.reshape(-1)[cell // (n * n) * n + peer]
-    pick = np.argmax(heard_fitness, axis=-1)[..., None]
-    slot = np.take_along_axis(peer, pick, axis=-1)[..., 0]
-    other = np.take_along_axis(heard_fitness, pick, axis=-1)[..., 0]
-    return _own_or_peer(own, slot, other)
-
-
-def _own_or_peer(own: Best, slot: IntArray, other: FloatArray) -> tuple[Best, BoolArray]:
-    """The end of swarm_best: peer ``slot`` of the same run (fitness ``other``) or the own best
-    where it is at least as good."""
-    runs, n = own.fitness.shape
-    flat = (np.arange(runs)[:, None] * n + slot).reshape(-1)
-    position = _as_complex(np.ascontiguousarray(own.position)).reshape(-1)[flat]
-    source = own.source.reshape(-1)[flat].reshape(slot.shape)
-    mine = own.fitness >= other
-    best = Best(
-        np.where(
-            mine[..., None], own.position, position.reshape(slot.shape)[..., None].view(np.float64)
-        ),
-        np.where(mine, own.fitness, other),
-        np.where(mine, own.source, source).astype(np.intp),
+def _swarm_best(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArray]:
+    """mdm_core.search.pso.swarm_best, compiled (mdm_montecarlo.swarm_kernels.swarm_best)."""
+    position, fitness, source, mine = kernels.swarm_best(
+        own.position, own.fitness, own.source, heard.position, heard.fitness, heard.source, links
     )
-    return best, mine
+    return Best(position, fitness, source), mine
+
+
+def _next_step(
+    config: SwarmConfig,
+    step: FloatArray,
+    position: FloatArray,
+    own: Best,
+    social: Best,
+    own_is_social: BoolArray,
+    inertia: FloatArray,
+    rng: np.random.Generator,
+) -> FloatArray:
+    """mdm_core.search.pso.next_step, compiled; ``inertia`` (runs, vehicles) is the PSO
+    weight for every particle or ARPSO's per-particle one."""
+    if config.variant == "spso":
+        direction = rng.standard_normal(position.shape)
+        uniform = rng.random(position.shape[:-1])
+        raw = kernels.spso_steps(
+            step,
+            position,
+            own.position,
+            own.fitness,
+            social.position,
+            social.fitness,
+            own_is_social,
+            config.spso_inertia,
+            config.spso_acceleration,
+            direction,
+            uniform,
+        )
+    else:
+        raw = kernels.pso_steps(
+            step,
+            position,
+            own.position,
+            own.fitness,
+            social.position,
+            social.fitness,
+            inertia,
+            config.cognitive,
+            config.social,
+            rng.random((2, *position.shape)),
+        )
+    kernels.clamp(raw, config.max_step, config.constant_speed)
+    return raw
+
+
+def _random_informants(rng: np.random.Generator, runs: int, n: int, k: int) -> BoolArray:
+    """mdm_core.search.pso.random_informants for (runs,), compiled."""
+    return kernels.informants(rng.random((runs, n, n)), k)
 
 
 def _as_complex(points: FloatArray) -> NDArray[np.complex128]:

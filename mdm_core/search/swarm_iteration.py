@@ -84,7 +84,6 @@ def choose_move(
     links: BoolArray,
     distance: float,
     rng: np.random.Generator,
-    best_of: BestOf = swarm_best,
 ) -> tuple[FloatArray, BoolArray, BoolArray]:
     """The displacement (..., 2) for the next interval, which particles follow a best, and
     which of them follow a peer's best rather than their own.
@@ -93,7 +92,7 @@ def choose_move(
     particle that followed a best (``guided``) has none left; ``distance``: how far a particle
     flies in one interval (speed x interval).
     """
-    social, own_is_social = best_of(own, heard, links)
+    social, own_is_social = swarm_best(own, heard, links)
     follow = social.fitness > 0
     inertia = arpso_weights(config, previous_best, own, current, heard_current, links)
     swarm_move = next_step(config, step, position, own, social, own_is_social, inertia, rng)
