@@ -69,7 +69,9 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     rng_targets, rng_start, rng_policy = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
     speed = profile.fleet.speed
-    tracks = scenario.tracks(n_runs, rng_targets)
+    duration = profile.mission.duration
+    cap = max(profile.mission.ts_cap, duration)
+    tracks = scenario.tracks(n_runs, rng_targets, horizon=cap)
     start = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
 
     n = n_runs * n_vehicles
@@ -82,8 +84,6 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     m = targets.count
     real = ~targets.false_mask
     first = np.full((n, m), np.inf)
-    duration = profile.mission.duration
-    cap = max(profile.mission.ts_cap, duration)
     stop = np.full(n_runs, cap)
     active = np.ones(n, dtype=bool)
     events = 0

@@ -264,7 +264,9 @@ def run_swarm_block(
     targets = scenario.targets
     real = ~targets.false_mask
     sensors = _Sensors(
-        tracks=scenario.tracks(n_runs, rng_targets),
+        tracks=scenario.tracks(
+            n_runs, rng_targets, horizon=max(profile.mission.ts_cap, profile.mission.duration)
+        ),
         runs=np.arange(n_runs),
         real=real,
         appear=targets.appear_times,

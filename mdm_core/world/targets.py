@@ -90,6 +90,10 @@ class TargetTracks:
     rng: np.random.Generator
     walk: RandomWalk | None = None
     grid_dt: float = 10.0
+    horizon: float = 0.0
+    """Seconds of path to make room for at once (the caller's last time; 0: grow as asked).
+    The room is reserved, not drawn, so the random stream does not depend on it; without it
+    the buffers double as they fill, copying what is drawn."""
     _starts: FloatArray = field(init=False, repr=False)
     """(runs, capacity, m, 2): where segment k of each run's path starts (a grid node)."""
     _velocity: FloatArray = field(init=False, repr=False)
@@ -103,8 +107,12 @@ class TargetTracks:
 
     def __post_init__(self) -> None:
         start = np.broadcast_to(self.spec.positions, (self.n_runs, self.spec.count, 2))
-        self._starts = np.empty((self.n_runs, 0, self.spec.count, 2))
-        self._velocity = np.empty((self.n_runs, 0, self.spec.count, 2))
+        room = 0
+        if self.walk is not None and self.horizon > 0:
+            last = int(np.floor(self.horizon / self.grid_dt + NODE_EPS))
+            room = (last // _CHUNK_NODES + 1) * _CHUNK_NODES
+        self._starts = np.empty((self.n_runs, room, self.spec.count, 2))
+        self._velocity = np.empty((self.n_runs, room, self.spec.count, 2))
         self._filled = 0
         self._last = np.array(start, dtype=float)
         self._free = np.array(start, dtype=float)
@@ -191,18 +199,22 @@ class TargetTracks:
             mean, std = walk.step_moments(steps)
             increments = self.rng.normal(mean, std, size=shape)
         increments = np.broadcast_to(increments, (*shape[:3], 2))
-        nodes = np.concatenate([self._last[:, None], self._walk(self._last, increments)], axis=1)
+        ends = self._walk(self._last, increments)
         end = self._filled + _CHUNK_NODES
         if end > self._starts.shape[1]:
             self._starts = self._resized(self._starts, end)
             self._velocity = self._resized(self._velocity, end)
-        self._starts[:, self._filled : end] = nodes[:, :-1]
-        velocity = np.diff(nodes, axis=1) / self.grid_dt
-        self._velocity[:, self._filled : end] = velocity
+        # Segment k runs from node k to node k + 1; the chunk's first node is the last one drawn.
+        starts = self._starts[:, self._filled : end]
+        starts[:, 0] = self._last
+        starts[:, 1:] = ends[:, :-1]
+        velocity = self._velocity[:, self._filled : end]
+        np.subtract(ends, starts, out=velocity)
+        velocity /= self.grid_dt
         speed2 = float(np.max(velocity[..., 0] ** 2 + velocity[..., 1] ** 2, initial=0.0))
         self._max_speed = max(self._max_speed, float(np.sqrt(speed2)))
         self._filled = end
-        self._last = nodes[:, -1]
+        self._last = ends[:, -1]
 
     def _resized(self, buffer: FloatArray, needed: int) -> FloatArray:
         """The buffer with room for ``needed`` segments (doubling), the drawn ones kept."""

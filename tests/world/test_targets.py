@@ -129,3 +129,26 @@ def test_track_does_not_depend_on_the_order_of_queries() -> None:
 def test_grid_that_is_not_a_multiple_of_the_sample_time_is_rejected() -> None:
     with pytest.raises(ValueError, match="whole multiple"):
         TargetTracks(spec((1, 1)), BIG, 1, np.random.default_rng(0), RandomWalk(), 0.25)
+
+
+@pytest.mark.parametrize("boundary", ["reflect", "bounce"])
+@pytest.mark.parametrize("horizon", [5000.0, 20000.0])
+def test_room_reserved_for_a_horizon_changes_no_draw(
+    boundary: WalkBoundary, horizon: float
+) -> None:
+    """A track with room reserved up front draws the same path as one whose buffers double,
+    before, at and past the horizon."""
+    walk = RandomWalk(boundary=boundary)
+    area = Area(20000.0, 20000.0)
+    s = spec((1000.0, 1000.0), (19990.0, 5000.0), (10000.0, 10.0))
+    grown = TargetTracks(s, area, 4, np.random.default_rng(8), walk, 50.0)
+    reserved = TargetTracks(s, area, 4, np.random.default_rng(8), walk, 50.0, horizon=horizon)
+    for until in (100.0, 4999.0, 5000.0, 12000.0, 30000.0):
+        a, b = grown.segments(until), reserved.segments(until)
+        k = int(until // 50.0)
+        np.testing.assert_array_equal(a[0][:, : k + 1], b[0][:, : k + 1])
+        np.testing.assert_array_equal(a[1][:, : k + 1], b[1][:, : k + 1])
+        assert grown.max_speed == reserved.max_speed
+    run = np.arange(4)
+    t = np.array([0.0, 4999.9, 5000.0, 29999.0])
+    np.testing.assert_array_equal(grown.positions(run, t), reserved.positions(run, t))
