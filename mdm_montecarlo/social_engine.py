@@ -291,6 +291,7 @@ def run_swarm_block(
     delay = round(spec.message_delay / dt)
     outbox: deque[Message] = deque(maxlen=delay + 1)
     broadcast = delay == 0 and spec.message_drop == 0.0 and not keep_inbox
+    all_peers = broadcast and config.variant != "spso"
 
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
     gaps, _, _ = sensors.sense(position, 0.0, known)
@@ -308,7 +309,10 @@ def run_swarm_block(
         if broadcast:
             heard, heard_current = _heard_from_own(own), _to_every_receiver(current)
         # mdm_core.search.swarm_iteration.choose_move, then the flight clipped to the area.
-        social, own_is_social = _swarm_best(own, heard, links)
+        if all_peers:
+            social, own_is_social = _best_of_all_peers(own)
+        else:
+            social, own_is_social = _swarm_best(own, heard, links)
         follow = social.fitness > 0
         inertia = np.full(shape, config.inertia)
         if config.variant == "arpso":
@@ -407,6 +411,15 @@ def _swarm_best(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArr
     """mdm_core.search.pso.swarm_best, compiled (mdm_montecarlo.swarm_kernels.swarm_best)."""
     position, fitness, source, mine = kernels.swarm_best(
         own.position, own.fitness, own.source, heard.position, heard.fitness, heard.source, links
+    )
+    return Best(position, fitness, source), mine
+
+
+def _best_of_all_peers(own: Best) -> tuple[Best, BoolArray]:
+    """_swarm_best(own, _heard_from_own(own), every other vehicle), from the run's first best
+    (mdm_montecarlo.swarm_kernels.best_of_all_peers)."""
+    position, fitness, source, mine = kernels.best_of_all_peers(
+        own.position, own.fitness, own.source
     )
     return Best(position, fitness, source), mine
 

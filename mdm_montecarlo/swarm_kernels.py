@@ -188,6 +188,34 @@ def swarm_best(
 
 
 @compiled
+def best_of_all_peers(
+    own_position: FloatArray, own_fitness: FloatArray, own_source: IntArray
+) -> tuple[FloatArray, FloatArray, IntArray, BoolArray]:
+    """swarm_best when every vehicle hears every other's own best (message_delay 0, drop 0,
+    links to every other vehicle: PSO, ARPSO), in (runs, vehicles) instead of (runs, vehicles,
+    senders): every vehicle compares its own best with the run's first best. The vehicle that
+    holds it keeps its own (a tie goes to the own best), as it would against the others'."""
+    runs, n = own_fitness.shape
+    position = np.empty((runs, n, 2))
+    fitness = np.empty((runs, n))
+    source = np.empty((runs, n), dtype=np.intp)
+    mine = np.empty((runs, n), dtype=np.bool_)
+    for r in range(runs):
+        top = 0
+        for j in range(1, n):
+            if own_fitness[r, j] > own_fitness[r, top]:
+                top = j
+        for i in range(n):
+            best = i if own_fitness[r, i] >= own_fitness[r, top] else top
+            mine[r, i] = best == i
+            position[r, i, 0] = own_position[r, best, 0]
+            position[r, i, 1] = own_position[r, best, 1]
+            fitness[r, i] = own_fitness[r, best]
+            source[r, i] = own_source[r, best]
+    return position, fitness, source, mine
+
+
+@compiled
 def arpso_inertia(
     previous_best: FloatArray,
     best: FloatArray,

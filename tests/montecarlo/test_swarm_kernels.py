@@ -128,6 +128,26 @@ def test_swarm_best_is_the_numpy_rule(broadcast: bool) -> None:
     assert not want_mine.all()
 
 
+def test_best_of_all_peers_is_swarm_best_over_every_other_vehicle() -> None:
+    _, own, _, _ = _state(6)
+    own.fitness[:3] = 0.5  # whole runs tied, and runs where the first best is not vehicle 0
+    own.fitness[3, 4] = 1.0
+    heard = Best(
+        np.broadcast_to(own.position[:, None], (RUNS, N, N, 2)),
+        np.broadcast_to(own.fitness[:, None], (RUNS, N, N)),
+        np.broadcast_to(own.source[:, None], (RUNS, N, N)),
+    )
+    others = np.broadcast_to(~np.eye(N, dtype=bool), (RUNS, N, N))
+    want, want_mine = swarm_best(own, heard, others)
+    position, fitness, source, mine = kernels.best_of_all_peers(
+        own.position, own.fitness, own.source
+    )
+    _same_best(Best(position, fitness, source), want)
+    _same(mine, want_mine)
+    assert want_mine[:3].all()
+    assert not want_mine[3].all()
+
+
 def test_arpso_inertia_is_arpso_weights() -> None:
     rng, own, _, _ = _state(7)
     config = SwarmConfig("arpso", max_step=100.0)
