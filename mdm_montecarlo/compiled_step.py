@@ -4,8 +4,9 @@
 event: the memory checks of the contacts, the level changes, the decaying index, the blind
 period, the anchor. Here one loop per lane makes the same comparisons and the same sums in the
 same order; the waypoints are then drawn by the compiled draws of ``compiled_waypoints`` and the
-confirmed targets remembered by the numpy code, as in ``step``. The companion keeps the numpy
-policy (tests/montecarlo/test_compiled_policy.py compares the two on random states).
+confirmed targets remembered in one more loop, as ``step`` and ``remember`` do. The companion
+keeps the numpy policy (tests/montecarlo/test_compiled_policy.py compares the two on random
+states).
 """
 
 from __future__ import annotations
@@ -42,6 +43,37 @@ def nearest2(memory: FloatArray, count: int, lane: int, x: float, y: float) -> f
             return float(d2)
         best = min(best, d2)
     return float(best)
+
+
+@compiled
+def _remember(
+    memory: FloatArray,
+    memory_count: IntArray,
+    lanes: IntArray,
+    new_confirmations: BoolArray,
+    contact_positions: FloatArray,
+) -> int:
+    """SearchPolicy.remember of the new confirmations (n, m) of distinct ``lanes``, a lane's in
+    target order, with their contact positions (n, m, 2). Returns the memory slots needed;
+    writes nothing if ``memory`` has fewer."""
+    n, m = new_confirmations.shape
+    needed = 0
+    for i in range(n):
+        count = memory_count[lanes[i]]
+        for j in range(m):
+            count += new_confirmations[i, j]
+        needed = max(needed, count)
+    if needed > memory.shape[1]:
+        return needed
+    for i in range(n):
+        lane = lanes[i]
+        for j in range(m):
+            if new_confirmations[i, j]:
+                slot = memory_count[lane]
+                memory[lane, slot, 0] = contact_positions[i, j, 0]
+                memory[lane, slot, 1] = contact_positions[i, j, 1]
+                memory_count[lane] = slot + 1
+    return needed
 
 
 @compiled
@@ -217,8 +249,14 @@ class CompiledPolicy(CompiledWaypoints):
         )
         confirmed = flags[:, CONFIRMED]
         if confirmed.any():
-            rows, cols = np.nonzero(new_confirmations)
-            self.remember(state, lanes[rows], obs.contact_positions[rows, cols])
+            args = (state.memory_count, lanes, new_confirmations, obs.contact_positions)
+            needed = _remember(state.memory, *args)
+            room = state.memory.shape[1]
+            if needed > room:  # SearchPolicy.remember's growth, then the same writes
+                grown = np.zeros((state.size, max(needed, 2 * room), 2))
+                grown[:, :room] = state.memory
+                state.memory = grown
+                _remember(state.memory, *args)
         return StepOutcome(
             flags[:, DETECTED], confirmed, new_confirmations, flags[:, EXPIRED], flags[:, REDRAW]
         )
