@@ -88,7 +88,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     active = np.ones(n, dtype=bool)
     events = 0
     appear = targets.appear_times
-    remembered = RememberedTargets(policy, tracks, n, m)
+    remembered = RememberedTargets(policy.config.memory_radius, tracks, n, m)
     lifetimes, radii, memory_rule = policy.lifetimes, policy.radii, policy.memory_rule
 
     while True:
@@ -110,9 +110,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
             runs,
             speed,
         )
-        eligible = np.ones((idx.size, m), dtype=bool)
-        exact = np.flatnonzero(policy.checks_exactly(state, idx))
-        eligible[exact] = ~remembered.known(state, idx[exact], runs[exact], t[exact])
+        eligible = remembered.eligible(state, idx, runs, t, policy.checks_exactly(state, idx))
         seg_start, seg_velocity = tracks.segments(until)
         # position and time move to the event; the same ignore rules as the policy's step,
         # so no contact is reported that it would drop.

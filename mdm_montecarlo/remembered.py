@@ -5,17 +5,23 @@ position the lane confirmed (SearchPolicy.memory_distance2). That answer only ch
 lane confirms again or a target crosses the R circle. Targets move at most at the tracks' top
 speed v, so an answer computed at time t holds until t + min |d - R| / v over the targets; fixed
 targets (v = 0) keep it until the next confirmation. A newly drawn path segment that raises the
-top speed voids every window.
+top speed voids every window. The stale answers are recomputed in one compiled loop (the
+targets' positions as TargetTracks.positions interpolates them, the nearest remembered target
+as memory_distance2 finds it), which also gives the engine its eligible contacts.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_core.search import SearchPolicy
 from mdm_core.search.policy import PolicyState
 from mdm_core.world import TargetTracks
+from mdm_core.world.targets import NODE_EPS
+from mdm_montecarlo.compiled_step import nearest2
+from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -25,37 +31,82 @@ IntArray = NDArray[np.intp]
 class RememberedTargets:
     """Cached SearchPolicy.known for every lane of a block, with per-lane validity windows."""
 
-    def __init__(self, policy: SearchPolicy, tracks: TargetTracks, lanes: int, targets: int):
-        self._policy = policy
+    def __init__(self, memory_radius: float, tracks: TargetTracks, lanes: int, targets: int):
+        self._radius = memory_radius
         self._tracks = tracks
         self._known = np.zeros((lanes, targets), dtype=bool)
         self._until = np.full(lanes, -np.inf)
         self._speed = tracks.max_speed
 
-    def known(
-        self, state: PolicyState, lanes: IntArray, runs: IntArray, t: FloatArray
+    def eligible(
+        self, state: PolicyState, lanes: IntArray, runs: IntArray, t: FloatArray, exact: BoolArray
     ) -> BoolArray:
-        """(len(lanes), m) known targets of the lanes (of the given runs) at their times t.
-
-        The targets' positions are looked up only for the lanes whose answer is stale."""
+        """(len(lanes), m): False for the targets the lanes (of the given runs, at their times
+        t) with ``exact`` set know they confirmed (SearchPolicy.known), True elsewhere."""
         if self._tracks.max_speed > self._speed:
             self._speed = self._tracks.max_speed
             self._until[:] = -np.inf
-        stale = np.flatnonzero(t >= self._until[lanes])
-        if stale.size:
-            radius = self._policy.config.memory_radius
-            due = lanes[stale]
-            d2 = self._policy.memory_distance2(
-                state, due, self._tracks.positions(runs[stale], t[stale])
-            )
-            self._known[due] = d2 <= radius * radius
-            if self._speed > 0:
-                margin = np.abs(np.sqrt(d2) - radius).min(axis=1)
-                self._until[due] = t[stale] + margin / self._speed
-            else:
-                self._until[due] = np.inf
-        return self._known[lanes]
+        seg_start, seg_velocity = self._tracks.segments(float(t.max(initial=0.0)))
+        return _eligible(
+            self._known,
+            self._until,
+            state.memory,
+            state.memory_count,
+            lanes,
+            runs,
+            t,
+            exact,
+            seg_start,
+            seg_velocity,
+            self._tracks.grid_dt,
+            self._tracks.moving,
+            self._radius,
+            self._speed,
+        )
 
     def forget(self, lanes: IntArray) -> None:
         """The lanes' memory changed (a confirmation): recompute their answer next time."""
         self._until[lanes] = -np.inf
+
+
+@compiled
+def _eligible(
+    known: BoolArray,
+    until: FloatArray,
+    memory: FloatArray,
+    memory_count: IntArray,
+    lanes: IntArray,
+    runs: IntArray,
+    t: FloatArray,
+    exact: BoolArray,
+    seg_start: FloatArray,
+    seg_velocity: FloatArray,
+    grid_dt: float,
+    moving: bool,
+    radius: float,
+    speed: float,
+) -> BoolArray:
+    """RememberedTargets.eligible's loop: the answers of the stale lanes recomputed in place
+    (``known``, ``until``), then every exact lane's row."""
+    n, m = lanes.shape[0], known.shape[1]
+    out = np.ones((n, m), dtype=np.bool_)
+    r2 = radius * radius
+    for i in range(n):
+        if not exact[i]:
+            continue
+        lane = lanes[i]
+        if t[i] >= until[lane]:
+            row = runs[i] if moving else 0
+            k = math.floor(t[i] / grid_dt + NODE_EPS) if moving else 0
+            offset = t[i] - k * grid_dt if moving else 0.0
+            margin = np.inf
+            for j in range(m):
+                x = seg_velocity[row, k, j, 0] * offset + seg_start[row, k, j, 0]
+                y = seg_velocity[row, k, j, 1] * offset + seg_start[row, k, j, 1]
+                d2 = nearest2(memory, memory_count[lane], lane, x, y)
+                known[lane, j] = d2 <= r2
+                margin = min(margin, abs(math.sqrt(d2) - radius))
+            until[lane] = t[i] + margin / speed if speed > 0 else np.inf
+        for j in range(m):
+            out[i, j] = not known[lane, j]
+    return out
