@@ -43,13 +43,14 @@ class Area:
             return np.clip(points, 0.0, size)
         period = 2.0 * size
         # points mod period (as np.mod, twice as fast; exact for points already in [0, period)),
-        # then mirrored past the far wall; in one buffer (the walks fold large arrays).
+        # then mirrored past the far wall: period - f is below f exactly where f > size, so
+        # the smaller of the two is the mirrored point. Two buffers (the walks fold large arrays).
         folded = np.divide(points, period)
         np.floor(folded, out=folded)
         folded *= period
         np.subtract(points, folded, out=folded)
-        np.subtract(period, folded, out=folded, where=folded > size)
-        return folded
+        mirrored = np.subtract(period, folded)
+        return np.minimum(folded, mirrored, out=folded)
 
     def perimeter_point(self, s: FloatArray) -> FloatArray:
         """Points at arc length fraction s in [0, 1) along the boundary, counter-clockwise from 0."""
