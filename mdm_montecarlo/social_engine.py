@@ -6,7 +6,8 @@ mdm_core.search.swarm_iteration, shared with the live companion):
 
 1. every vehicle with a best to follow (its own or one it heard of, fitness > 0) takes the PSO
    step of its variant (mdm_core.search.pso); the others fly the single-sensor exploration of
-   the profile's level 1 (mdm_core.search.SearchPolicy, US with delta_1 by default);
+   the profile's level 1 (mdm_core.search.SearchPolicy, US with delta_1 by default; its
+   waypoints drawn by the compiled draws of mdm_montecarlo.compiled_waypoints, the same numbers);
 2. the step is flown as a straight segment at most speed x interval long (clipped to the area);
    a real target whose r_2 disc the segment enters is confirmed (closed form,
    mdm_core.world.first_entry_time) and becomes known to that vehicle;
@@ -51,12 +52,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_core.search import SearchPolicy
 from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.pso import Best, SwarmConfig, forget
-from mdm_core.search.swarm_iteration import explore, refresh_informants
+from mdm_core.search.swarm_iteration import BestOf, explore, refresh_informants
 from mdm_core.world import Scenario, TargetTracks, first_entry_time
 from mdm_montecarlo import swarm_kernels as kernels
+from mdm_montecarlo.compiled_waypoints import CompiledWaypoints
 from mdm_montecarlo.engine import BlockResult, block_rngs
 from mdm_profiles import MissionProfile
 
@@ -254,7 +255,7 @@ def run_swarm_block(
     scenario = Scenario.from_profile(profile)
     config = swarm_config(profile)
     spec = profile.policy.swarm
-    explorer = SearchPolicy(policy_config(profile))
+    explorer = CompiledWaypoints(policy_config(profile))
     rng_targets, rng_start, rng = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
     shape = (n_runs, n_vehicles)
@@ -291,7 +292,8 @@ def run_swarm_block(
     delay = round(spec.message_delay / dt)
     outbox: deque[Message] = deque(maxlen=delay + 1)
     broadcast = delay == 0 and spec.message_drop == 0.0 and not keep_inbox
-    all_peers = broadcast and config.variant != "spso"
+    every_peer = broadcast and config.variant != "spso"
+    best_of: BestOf = _best_of_all_peers if every_peer else _swarm_best
 
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
     gaps, _, _ = sensors.sense(position, 0.0, known)
@@ -309,10 +311,7 @@ def run_swarm_block(
         if broadcast:
             heard, heard_current = _heard_from_own(own), _to_every_receiver(current)
         # mdm_core.search.swarm_iteration.choose_move, then the flight clipped to the area.
-        if all_peers:
-            social, own_is_social = _best_of_all_peers(own)
-        else:
-            social, own_is_social = _swarm_best(own, heard, links)
+        social, own_is_social = best_of(own, heard, links)
         follow = social.fitness > 0
         inertia = np.full(shape, config.inertia)
         if config.variant == "arpso":
@@ -415,8 +414,9 @@ def _swarm_best(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArr
     return Best(position, fitness, source), mine
 
 
-def _best_of_all_peers(own: Best) -> tuple[Best, BoolArray]:
-    """_swarm_best(own, _heard_from_own(own), every other vehicle), from the run's first best
+def _best_of_all_peers(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArray]:
+    """_swarm_best for heard = _heard_from_own(own) and links to every other vehicle (PSO,
+    ARPSO with every message delivered), from the run's first best
     (mdm_montecarlo.swarm_kernels.best_of_all_peers)."""
     position, fitness, source, mine = kernels.best_of_all_peers(
         own.position, own.fitness, own.source
