@@ -32,6 +32,7 @@ from mdm_core.search import Observation
 from mdm_core.search.from_profile import policy_config
 from mdm_core.world import Scenario
 from mdm_montecarlo.compiled_step import CompiledPolicy
+from mdm_montecarlo.compiled_tracks import compiled_tracks
 from mdm_montecarlo.remembered import RememberedTargets
 from mdm_montecarlo.round_kernels import advance, legs, record
 from mdm_profiles import MissionProfile
@@ -71,7 +72,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     speed = profile.fleet.speed
     duration = profile.mission.duration
     cap = max(profile.mission.ts_cap, duration)
-    tracks = scenario.tracks(n_runs, rng_targets, horizon=cap)
+    tracks = compiled_tracks(scenario, n_runs, rng_targets, cap)
     start = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
 
     n = n_runs * n_vehicles

@@ -57,6 +57,7 @@ from mdm_core.search.pso import Best, SwarmConfig, forget
 from mdm_core.search.swarm_iteration import BestOf, explore, refresh_informants
 from mdm_core.world import Scenario, TargetTracks, first_entry_time
 from mdm_montecarlo import swarm_kernels as kernels
+from mdm_montecarlo.compiled_tracks import compiled_tracks
 from mdm_montecarlo.compiled_waypoints import CompiledWaypoints
 from mdm_montecarlo.engine import BlockResult, block_rngs
 from mdm_profiles import MissionProfile
@@ -265,8 +266,8 @@ def run_swarm_block(
     targets = scenario.targets
     real = ~targets.false_mask
     sensors = _Sensors(
-        tracks=scenario.tracks(
-            n_runs, rng_targets, horizon=max(profile.mission.ts_cap, profile.mission.duration)
+        tracks=compiled_tracks(
+            scenario, n_runs, rng_targets, max(profile.mission.ts_cap, profile.mission.duration)
         ),
         runs=np.arange(n_runs),
         real=real,

@@ -57,10 +57,9 @@ class Scenario:
     def confirmation(self) -> Sensor:
         return self.sensors[-1]
 
-    def tracks(self, n_runs: int, rng: np.random.Generator, horizon: float = 0.0) -> TargetTracks:
-        """Target tracks for ``n_runs`` independent runs drawn from ``rng``, with room for paths
-        up to ``horizon`` seconds (TargetTracks.horizon)."""
-        return TargetTracks(self.targets, self.area, n_runs, rng, self.walk, self.grid_dt, horizon)
+    def tracks(self, n_runs: int, rng: np.random.Generator) -> TargetTracks:
+        """Target tracks for ``n_runs`` independent runs drawn from ``rng``."""
+        return TargetTracks(self.targets, self.area, n_runs, rng, self.walk, self.grid_dt)
 
     def live_run(
         self,

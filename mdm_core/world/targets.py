@@ -21,10 +21,10 @@ from mdm_core.world.area import Area
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 WalkBoundary = Literal["reflect", "clamp", "bounce", "free"]
-_CHUNK_NODES = 32
+CHUNK_NODES = 32
+"""Path nodes drawn at a time (the random stream does not depend on how far runs go)."""
 NODE_EPS = 1e-9
 """Slack on t / grid_dt when finding the segment that holds t (a time on a node is in the next)."""
-"""Path nodes drawn at a time (the random stream does not depend on how far runs go)."""
 
 
 @dataclass(frozen=True)
@@ -110,7 +110,7 @@ class TargetTracks:
         room = 0
         if self.walk is not None and self.horizon > 0:
             last = int(np.floor(self.horizon / self.grid_dt + NODE_EPS))
-            room = (last // _CHUNK_NODES + 1) * _CHUNK_NODES
+            room = (last // CHUNK_NODES + 1) * CHUNK_NODES
         self._starts = np.empty((self.n_runs, room, self.spec.count, 2))
         self._velocity = np.empty((self.n_runs, room, self.spec.count, 2))
         self._filled = 0
@@ -187,20 +187,24 @@ class TargetTracks:
         position += start
         return position, vel
 
-    def _grow(self) -> None:
+    def _increments(self) -> FloatArray:
+        """The next chunk's displacements (runs, chunk, m, 1 or 2): one per axis, or one for
+        both with shared_axes."""
         assert self.walk is not None
         walk = self.walk
         steps = round(self.grid_dt / walk.sample_time)
-        shape = (self.n_runs, _CHUNK_NODES, self.spec.count, 1 if walk.shared_axes else 2)
+        shape = (self.n_runs, CHUNK_NODES, self.spec.count, 1 if walk.shared_axes else 2)
         if steps == 1:
             r = self.rng.uniform(walk.low, walk.high, size=shape)
-            increments = r * walk.speed * walk.sample_time
-        else:
-            mean, std = walk.step_moments(steps)
-            increments = self.rng.normal(mean, std, size=shape)
-        increments = np.broadcast_to(increments, (*shape[:3], 2))
+            return np.asarray(r * walk.speed * walk.sample_time)
+        mean, std = walk.step_moments(steps)
+        return self.rng.normal(mean, std, size=shape)
+
+    def _grow(self) -> None:
+        increments = self._increments()
+        increments = np.broadcast_to(increments, (*increments.shape[:3], 2))
         ends = self._walk(self._last, increments)
-        end = self._filled + _CHUNK_NODES
+        end = self._filled + CHUNK_NODES
         if end > self._starts.shape[1]:
             self._starts = self._resized(self._starts, end)
             self._velocity = self._resized(self._velocity, end)

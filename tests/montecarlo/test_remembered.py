@@ -9,6 +9,7 @@ import pytest
 from mdm_core.search import SearchPolicy
 from mdm_core.search.from_profile import policy_config
 from mdm_core.world import Scenario
+from mdm_montecarlo.compiled_tracks import compiled_tracks
 from mdm_montecarlo.remembered import RememberedTargets
 from mdm_profiles import builtin_profile
 
@@ -20,7 +21,7 @@ def test_cached_answers_are_the_exact_ones(scenario: str) -> None:
     profile = builtin_profile(scenario)
     policy = SearchPolicy(policy_config(profile))
     radius = policy.config.memory_radius
-    tracks = Scenario.from_profile(profile).tracks(RUNS, np.random.default_rng(1), horizon=9000.0)
+    tracks = compiled_tracks(Scenario.from_profile(profile), RUNS, np.random.default_rng(1), 9000.0)
     rng = np.random.default_rng(2)
     n = RUNS * VEHICLES
     run_of = np.repeat(np.arange(RUNS), VEHICLES)
