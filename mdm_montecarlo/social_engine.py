@@ -293,8 +293,9 @@ def run_swarm_block(
     delay = round(spec.message_delay / dt)
     outbox: deque[Message] = deque(maxlen=delay + 1)
     broadcast = delay == 0 and spec.message_drop == 0.0 and not keep_inbox
-    every_peer = broadcast and config.variant != "spso"
-    best_of: BestOf = _best_of_all_peers if every_peer else _swarm_best
+    best_of: BestOf = _swarm_best
+    if broadcast:
+        best_of = _best_of_linked_peers if config.variant == "spso" else _best_of_all_peers
 
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
     gaps, _, _ = sensors.sense(position, 0.0, known)
@@ -372,7 +373,7 @@ def run_swarm_block(
                 links,
                 social_fitness,
                 lambda: _random_informants(rng, n_runs, n_vehicles, spec.informants),
-                _swarm_best,
+                best_of,
             )
         if t >= duration and _all_confirmed(first, real):
             break
@@ -421,6 +422,15 @@ def _best_of_all_peers(own: Best, heard: Best, links: BoolArray) -> tuple[Best, 
     (mdm_montecarlo.swarm_kernels.best_of_all_peers)."""
     position, fitness, source, mine = kernels.best_of_all_peers(
         own.position, own.fitness, own.source
+    )
+    return Best(position, fitness, source), mine
+
+
+def _best_of_linked_peers(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArray]:
+    """_swarm_best for heard = _heard_from_own(own) (SPSO with every message delivered)
+    (mdm_montecarlo.swarm_kernels.best_of_linked_peers)."""
+    position, fitness, source, mine = kernels.best_of_linked_peers(
+        own.position, own.fitness, own.source, links
     )
     return Best(position, fitness, source), mine
 

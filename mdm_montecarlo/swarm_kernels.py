@@ -216,6 +216,46 @@ def best_of_all_peers(
 
 
 @compiled
+def best_of_linked_peers(
+    own_position: FloatArray, own_fitness: FloatArray, own_source: IntArray, links: BoolArray
+) -> tuple[FloatArray, FloatArray, IntArray, BoolArray]:
+    """swarm_best when what every vehicle heard from sender j is j's own best (every message
+    delivered; SPSO's informant ``links``): the run's vehicles are ordered once by fitness,
+    highest first and the lower index first among equals, and each vehicle takes the first of
+    its linked senders in that order: the first best among them, as argmax finds it, after a
+    few links read instead of all of them."""
+    runs, n = own_fitness.shape
+    position = np.empty((runs, n, 2))
+    fitness = np.empty((runs, n))
+    source = np.empty((runs, n), dtype=np.intp)
+    mine = np.empty((runs, n), dtype=np.bool_)
+    order = np.empty(n, dtype=np.intp)
+    for r in range(runs):
+        for a in range(n):
+            value = own_fitness[r, a]
+            slot = a
+            while slot > 0 and own_fitness[r, order[slot - 1]] < value:
+                order[slot] = order[slot - 1]
+                slot -= 1
+            order[slot] = a
+        for i in range(n):
+            other = -np.inf
+            sender = i
+            for q in range(n):
+                if links[r, i, order[q]]:
+                    sender = order[q]
+                    other = own_fitness[r, sender]
+                    break
+            mine[r, i] = own_fitness[r, i] >= other
+            best = i if mine[r, i] else sender
+            position[r, i, 0] = own_position[r, best, 0]
+            position[r, i, 1] = own_position[r, best, 1]
+            fitness[r, i] = own_fitness[r, best]
+            source[r, i] = own_source[r, best]
+    return position, fitness, source, mine
+
+
+@compiled
 def arpso_inertia(
     previous_best: FloatArray,
     best: FloatArray,

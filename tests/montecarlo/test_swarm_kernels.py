@@ -128,6 +128,24 @@ def test_swarm_best_is_the_numpy_rule(broadcast: bool) -> None:
     assert not want_mine.all()
 
 
+@pytest.mark.parametrize("share", [0.0, 0.25, 1.0])
+def test_best_of_linked_peers_is_swarm_best_over_the_heard_own_bests(share: float) -> None:
+    _, own, _, _ = _state(7)  # fitness in quarters: ties between senders everywhere
+    links = np.random.default_rng(8).random((RUNS, N, N)) < share
+    heard = Best(
+        np.broadcast_to(own.position[:, None], (RUNS, N, N, 2)),
+        np.broadcast_to(own.fitness[:, None], (RUNS, N, N)),
+        np.broadcast_to(own.source[:, None], (RUNS, N, N)),
+    )
+    want, want_mine = swarm_best(own, heard, links)
+    position, fitness, source, mine = kernels.best_of_linked_peers(
+        own.position, own.fitness, own.source, links
+    )
+    _same_best(Best(position, fitness, source), want)
+    _same(mine, want_mine)
+    assert want_mine.all() == (share == 0.0)
+
+
 def test_best_of_all_peers_is_swarm_best_over_every_other_vehicle() -> None:
     _, own, _, _ = _state(6)
     own.fitness[:3] = 0.5  # whole runs tied, and runs where the first best is not vehicle 0
@@ -258,3 +276,16 @@ def test_random_informants_are_the_numpy_draw(k: int) -> None:
         kernels.informants(mine.random((RUNS, N, N)), k), random_informants(theirs, (RUNS,), N, k)
     )
     assert mine.random() == theirs.random()
+
+
+@pytest.mark.parametrize("k", [1, 3])
+def test_informants_with_tied_keys_are_the_partition_rule(k: int) -> None:
+    """Keys on a coarse grid tie often: the links are still those at or below the k-th
+    smallest key, as numpy's partition finds it (mdm_core.search.pso.random_informants)."""
+    keys = np.round(np.random.default_rng(k).random((RUNS, N, N)), 1)
+    want = keys.copy()
+    want[..., np.arange(N), np.arange(N)] = np.inf
+    kth = np.partition(want, k - 1, axis=-1)[..., k - 1, None]
+    got = kernels.informants(keys, k)
+    _same(got, want <= kth)
+    assert (got.sum(axis=-1) > k).any()  # ties linked more than k somewhere
