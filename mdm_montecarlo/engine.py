@@ -159,6 +159,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
             first,
             stop,
             active,
+            outcome.confirmed,
             outcome.new_confirmations,
             idx,
             runs,

@@ -191,6 +191,7 @@ def record(
     first: FloatArray,
     stop: FloatArray,
     active: BoolArray,
+    confirmed: BoolArray,
     confirmations: BoolArray,
     lanes: IntArray,
     runs: IntArray,
@@ -202,10 +203,13 @@ def record(
 ) -> None:
     """Keep each lane's first confirmation time of each real target, move the stop time of the
     runs that confirmed (the latest time a confirmation can still change T_nc or T_S: the
-    team's last first confirmation, within [duration, cap]) and retire the lanes past it."""
+    team's last first confirmation, within [duration, cap]) and retire the lanes past it.
+    ``confirmations`` (n, m) are the new ones; only the ``confirmed`` lanes (n,) have any."""
     m = first.shape[1]
     changed = np.zeros(stop.shape[0], dtype=np.bool_)
     for i in range(lanes.shape[0]):
+        if not confirmed[i]:
+            continue
         lane = lanes[i]
         for j in range(m):
             if confirmations[i, j] and real[j]:
