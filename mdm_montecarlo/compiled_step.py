@@ -251,11 +251,8 @@ class CompiledPolicy(CompiledWaypoints):
         if confirmed.any():
             args = (state.memory_count, lanes, new_confirmations, obs.contact_positions)
             needed = _remember(state.memory, *args)
-            room = state.memory.shape[1]
-            if needed > room:  # SearchPolicy.remember's growth, then the same writes
-                grown = np.zeros((state.size, max(needed, 2 * room), 2))
-                grown[:, :room] = state.memory
-                state.memory = grown
+            if needed > state.memory.shape[1]:  # remember's growth, then the same writes
+                state.make_room(needed)
                 _remember(state.memory, *args)
         return StepOutcome(
             flags[:, DETECTED], confirmed, new_confirmations, flags[:, EXPIRED], flags[:, REDRAW]

@@ -55,6 +55,14 @@ class PolicyState:
     def size(self) -> int:
         return len(self.level)
 
+    def make_room(self, slots: int) -> None:
+        """Give memory room for ``slots`` targets per vehicle (at least doubling it), the
+        remembered ones kept."""
+        room = self.memory.shape[1]
+        if slots > room:
+            grow = max(slots, 2 * room) - room
+            self.memory = np.concatenate([self.memory, np.zeros((self.size, grow, 2))], axis=1)
+
 
 @dataclass
 class Observation:
@@ -175,10 +183,7 @@ class SearchPolicy:
         rank = np.empty(len(lanes), dtype=np.intp)
         rank[order] = np.arange(len(lanes)) - np.searchsorted(by_lane, by_lane)
         slot = state.memory_count[lanes] + rank
-        needed = int(slot.max(initial=-1)) + 1
-        if needed > state.memory.shape[1]:
-            grow = max(needed, 2 * state.memory.shape[1]) - state.memory.shape[1]
-            state.memory = np.concatenate([state.memory, np.zeros((state.size, grow, 2))], axis=1)
+        state.make_room(int(slot.max(initial=-1)) + 1)
         state.memory[lanes, slot] = positions
         np.add.at(state.memory_count, lanes, 1)
 
