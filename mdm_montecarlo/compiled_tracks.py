@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from mdm_core.world import Scenario, TargetTracks
 from mdm_core.world.targets import CHUNK_NODES
+from mdm_montecarlo.compiled_waypoints import clip
 from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
@@ -100,7 +101,7 @@ def _append(
                     else:
                         node = start + step
                         if node < 0.0 or node > size[a]:
-                            node = _fold(node, size[a]) if rule == REFLECT else _clip(node, size[a])
+                            node = _fold(node, size[a]) if rule == REFLECT else clip(node, size[a])
                     starts[r, k, j, a] = start
                     velocity[r, k, j, a] = (node - start) / grid_dt
                     last[r, j, a] = node
@@ -108,9 +109,3 @@ def _append(
                 vy = velocity[r, k, j, 1]
                 top = max(top, vx * vx + vy * vy)
     return top
-
-
-@compiled
-def _clip(x: float, size: float) -> float:
-    """np.clip(x, 0, size) of one coordinate."""
-    return min(max(x, 0.0), size)

@@ -78,10 +78,16 @@ def _mod(a: float, b: float) -> float:
 
 
 @compiled
+def clip(value: float, size: float) -> float:
+    """np.clip(value, 0, size) of one coordinate."""
+    return min(max(value, 0.0), size)
+
+
+@compiled
 def _fold(value: float, size: float, rule: int) -> float:
     """_fold_into_area for one coordinate: clip onto [0, size] or mirror into it."""
     if rule == CLIP:
-        return min(max(value, 0.0), size)
+        return clip(value, size)
     period = 2.0 * size
     folded = _mod(value, period)
     return period - folded if folded > size else folded

@@ -410,28 +410,37 @@ def _heard_from_own(own: Best) -> Best:
 
 def _swarm_best(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArray]:
     """mdm_core.search.pso.swarm_best, compiled (mdm_montecarlo.swarm_kernels.swarm_best)."""
-    position, fitness, source, mine = kernels.swarm_best(
-        own.position, own.fitness, own.source, heard.position, heard.fitness, heard.source, links
+    return _as_best(
+        kernels.swarm_best(
+            own.position,
+            own.fitness,
+            own.source,
+            heard.position,
+            heard.fitness,
+            heard.source,
+            links,
+        )
     )
-    return Best(position, fitness, source), mine
 
 
 def _best_of_all_peers(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArray]:
     """_swarm_best for heard = _heard_from_own(own) and links to every other vehicle (PSO,
     ARPSO with every message delivered), from the run's first best
     (mdm_montecarlo.swarm_kernels.best_of_all_peers)."""
-    position, fitness, source, mine = kernels.best_of_all_peers(
-        own.position, own.fitness, own.source
-    )
-    return Best(position, fitness, source), mine
+    return _as_best(kernels.best_of_all_peers(own.position, own.fitness, own.source))
 
 
 def _best_of_linked_peers(own: Best, heard: Best, links: BoolArray) -> tuple[Best, BoolArray]:
     """_swarm_best for heard = _heard_from_own(own) (SPSO with every message delivered)
     (mdm_montecarlo.swarm_kernels.best_of_linked_peers)."""
-    position, fitness, source, mine = kernels.best_of_linked_peers(
-        own.position, own.fitness, own.source, links
-    )
+    return _as_best(kernels.best_of_linked_peers(own.position, own.fitness, own.source, links))
+
+
+def _as_best(
+    found: tuple[FloatArray, FloatArray, IntArray, BoolArray],
+) -> tuple[Best, BoolArray]:
+    """A swarm-best kernel's (position, fitness, source, mine) as (Best, mine)."""
+    position, fitness, source, mine = found
     return Best(position, fitness, source), mine
 
 

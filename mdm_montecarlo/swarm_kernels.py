@@ -196,23 +196,15 @@ def best_of_all_peers(
     senders): every vehicle compares its own best with the run's first best. The vehicle that
     holds it keeps its own (a tie goes to the own best), as it would against the others'."""
     runs, n = own_fitness.shape
-    position = np.empty((runs, n, 2))
-    fitness = np.empty((runs, n))
-    source = np.empty((runs, n), dtype=np.intp)
-    mine = np.empty((runs, n), dtype=np.bool_)
+    chosen = np.empty((runs, n), dtype=np.intp)
     for r in range(runs):
         top = 0
         for j in range(1, n):
             if own_fitness[r, j] > own_fitness[r, top]:
                 top = j
         for i in range(n):
-            best = i if own_fitness[r, i] >= own_fitness[r, top] else top
-            mine[r, i] = best == i
-            position[r, i, 0] = own_position[r, best, 0]
-            position[r, i, 1] = own_position[r, best, 1]
-            fitness[r, i] = own_fitness[r, best]
-            source[r, i] = own_source[r, best]
-    return position, fitness, source, mine
+            chosen[r, i] = i if own_fitness[r, i] >= own_fitness[r, top] else top
+    return _own_bests(own_position, own_fitness, own_source, chosen)
 
 
 @compiled
@@ -225,10 +217,7 @@ def best_of_linked_peers(
     its linked senders in that order: the first best among them, as argmax finds it, after a
     few links read instead of all of them."""
     runs, n = own_fitness.shape
-    position = np.empty((runs, n, 2))
-    fitness = np.empty((runs, n))
-    source = np.empty((runs, n), dtype=np.intp)
-    mine = np.empty((runs, n), dtype=np.bool_)
+    chosen = np.empty((runs, n), dtype=np.intp)
     order = np.empty(n, dtype=np.intp)
     for r in range(runs):
         for a in range(n):
@@ -246,8 +235,26 @@ def best_of_linked_peers(
                     sender = order[q]
                     other = own_fitness[r, sender]
                     break
-            mine[r, i] = own_fitness[r, i] >= other
-            best = i if mine[r, i] else sender
+            chosen[r, i] = i if own_fitness[r, i] >= other else sender
+    return _own_bests(own_position, own_fitness, own_source, chosen)
+
+
+@compiled
+def _own_bests(
+    own_position: FloatArray, own_fitness: FloatArray, own_source: IntArray, chosen: IntArray
+) -> tuple[FloatArray, FloatArray, IntArray, BoolArray]:
+    """swarm_best's answer when each vehicle's best is vehicle ``chosen`` (runs, vehicles) of
+    its run's own bests: position, fitness, source, and True where it chose itself (a sender
+    is chosen only when strictly better, so never the vehicle itself)."""
+    runs, n = own_fitness.shape
+    position = np.empty((runs, n, 2))
+    fitness = np.empty((runs, n))
+    source = np.empty((runs, n), dtype=np.intp)
+    mine = np.empty((runs, n), dtype=np.bool_)
+    for r in range(runs):
+        for i in range(n):
+            best = chosen[r, i]
+            mine[r, i] = best == i
             position[r, i, 0] = own_position[r, best, 0]
             position[r, i, 1] = own_position[r, best, 1]
             fitness[r, i] = own_fitness[r, best]

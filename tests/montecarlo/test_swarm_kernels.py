@@ -48,6 +48,15 @@ def _same_best(a: Best, b: Best) -> None:
         _same(np.asarray(x), np.asarray(y))
 
 
+def _heard_from_own(own: Best) -> Best:
+    """The engine's views when every message arrives at once: each sender's own best."""
+    return Best(
+        np.broadcast_to(own.position[:, None], (RUNS, N, N, 2)),
+        np.broadcast_to(own.fitness[:, None], (RUNS, N, N)),
+        np.broadcast_to(own.source[:, None], (RUNS, N, N)),
+    )
+
+
 @pytest.mark.parametrize("seed", range(3))
 def test_sense_is_the_squared_gaps_and_signal_fitness(seed: int) -> None:
     rng, _, position, known = _state(seed)
@@ -106,12 +115,8 @@ def test_known_is_shared_and_bests_are_forgotten_and_improved() -> None:
 def test_swarm_best_is_the_numpy_rule(broadcast: bool) -> None:
     rng, own, _, _ = _state(5)
     links = rng.random((RUNS, N, N)) < 0.5
-    if broadcast:  # the engine's views when every message arrives at once
-        heard = Best(
-            np.broadcast_to(own.position[:, None], (RUNS, N, N, 2)),
-            np.broadcast_to(own.fitness[:, None], (RUNS, N, N)),
-            np.broadcast_to(own.source[:, None], (RUNS, N, N)),
-        )
+    if broadcast:
+        heard = _heard_from_own(own)
     else:
         heard = Best(
             rng.uniform(0, 1000, (RUNS, N, N, 2)),
@@ -132,11 +137,7 @@ def test_swarm_best_is_the_numpy_rule(broadcast: bool) -> None:
 def test_best_of_linked_peers_is_swarm_best_over_the_heard_own_bests(share: float) -> None:
     _, own, _, _ = _state(7)  # fitness in quarters: ties between senders everywhere
     links = np.random.default_rng(8).random((RUNS, N, N)) < share
-    heard = Best(
-        np.broadcast_to(own.position[:, None], (RUNS, N, N, 2)),
-        np.broadcast_to(own.fitness[:, None], (RUNS, N, N)),
-        np.broadcast_to(own.source[:, None], (RUNS, N, N)),
-    )
+    heard = _heard_from_own(own)
     want, want_mine = swarm_best(own, heard, links)
     position, fitness, source, mine = kernels.best_of_linked_peers(
         own.position, own.fitness, own.source, links
@@ -150,11 +151,7 @@ def test_best_of_all_peers_is_swarm_best_over_every_other_vehicle() -> None:
     _, own, _, _ = _state(6)
     own.fitness[:3] = 0.5  # whole runs tied, and runs where the first best is not vehicle 0
     own.fitness[3, 4] = 1.0
-    heard = Best(
-        np.broadcast_to(own.position[:, None], (RUNS, N, N, 2)),
-        np.broadcast_to(own.fitness[:, None], (RUNS, N, N)),
-        np.broadcast_to(own.source[:, None], (RUNS, N, N)),
-    )
+    heard = _heard_from_own(own)
     others = np.broadcast_to(~np.eye(N, dtype=bool), (RUNS, N, N))
     want, want_mine = swarm_best(own, heard, others)
     position, fitness, source, mine = kernels.best_of_all_peers(
