@@ -54,10 +54,24 @@ def describe_errors(source: str, error: ValidationError) -> str:
     return "\n".join(lines)
 
 
+_FAST_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+"""libyaml's safe loader where PyYAML was built with it: the same data, about 9x faster (the
+98 profiles of `reproduce` took 1 CPU-s to parse with the pure-Python loader)."""
+
+
+def _read_yaml(text: str) -> object:
+    """Parse with the fast loader; on an error, parse again with the pure-Python one, whose
+    message quotes the offending line and points at the column."""
+    try:
+        return yaml.load(text, Loader=_FAST_LOADER)
+    except yaml.YAMLError:
+        return yaml.safe_load(text)
+
+
 def parse_profile(text: str, source: str) -> MissionProfile:
     """Validate YAML text; ``source`` names it in errors."""
     try:
-        data = yaml.safe_load(text)
+        data = _read_yaml(text)
     except yaml.YAMLError as exc:
         raise ProfileError(f"{source}: not valid YAML: {exc}") from exc
     if not isinstance(data, dict):

@@ -169,6 +169,18 @@ def test_invalid_yaml_names_the_file(tmp_path: Path) -> None:
     assert text.startswith(f"{path}: not valid YAML")
 
 
+def test_invalid_yaml_quotes_the_line_and_points_at_the_column(tmp_path: Path) -> None:
+    # libyaml's own messages give only "line 2, column 8"; the message quotes the line.
+    text, _ = _error(tmp_path, "name: x\nfleet: {vehicles: 3: 4}\n")
+    assert text.endswith("line 2, column 20:\n    fleet: {vehicles: 3: 4}\n" + " " * 23 + "^")
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
+def test_shipped_profiles_read_the_same_with_either_yaml_parser(path: Path) -> None:
+    text = path.read_text()
+    assert load_profile(path) == MissionProfile.model_validate(yaml.safe_load(text))
+
+
 def test_yaml_that_is_not_a_mapping_is_rejected(tmp_path: Path) -> None:
     text, path = _error(tmp_path, "- a\n- b\n")
     assert text == f"{path}: a profile is a YAML mapping, got list"
