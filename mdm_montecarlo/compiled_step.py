@@ -248,8 +248,15 @@ class CompiledPolicy(CompiledWaypoints):
             rng,
         )
         confirmed = flags[:, CONFIRMED]
-        if confirmed.any():
-            args = (state.memory_count, lanes, new_confirmations, obs.contact_positions)
+        rows = np.flatnonzero(confirmed)
+        if rows.size:
+            # Only the confirming lanes: a round confirms for a few of its thousands of lanes.
+            args = (
+                state.memory_count,
+                lanes[rows],
+                new_confirmations[rows],
+                obs.contact_positions[rows],
+            )
             needed = _remember(state.memory, *args)
             if needed > state.memory.shape[1]:  # remember's growth, then the same writes
                 state.make_room(needed)
