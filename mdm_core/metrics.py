@@ -57,11 +57,13 @@ class Summary:
         return cls(mean, std, mean - half, mean + half, n)
 
 
-def aise(tnc_mdm: float, tnc_sss: float) -> float:
-    """Average improvement in search efficiency, percent (section IV)."""
-    return (tnc_mdm - tnc_sss) / tnc_sss * 100.0
+def aise(tnc_mdm: float, tnc_sss: float) -> float | None:
+    """Average improvement in search efficiency, percent (section IV); None where the baseline
+    confirmed nothing (a percentage of zero is undefined: few runs, say)."""
+    return (tnc_mdm - tnc_sss) / tnc_sss * 100.0 if tnc_sss else None
 
 
-def aisc(ts_mdm: float, ts_sss: float) -> float:
-    """Average improvement in search completeness, percent (section IV)."""
-    return (ts_sss - ts_mdm) / ts_sss * 100.0
+def aisc(ts_mdm: float, ts_sss: float) -> float | None:
+    """Average improvement in search completeness, percent (section IV); None where the
+    baseline's T_S is zero."""
+    return (ts_sss - ts_mdm) / ts_sss * 100.0 if ts_sss else None

@@ -52,6 +52,10 @@ def _within(value: float, paper: float | None, tolerance: float) -> bool | None:
     return abs(value - paper) <= tolerance * abs(paper)
 
 
+def _rounded(pct: float | None) -> float | None:
+    return None if pct is None else round(pct, 1)
+
+
 def _pct(share: float | None) -> float | None:
     return None if share is None else round(100.0 * share, 1)
 
@@ -78,9 +82,9 @@ def measured_rows(rows: list[Row], results: dict[Case, MissionResults]) -> list[
         mdm_case = mdm_of.get((row.table, case.scenario, case.n_uav))
         if not case.method.startswith("MDM") and mdm_case is not None:
             mdm_tnc, mdm_ts, _ = stats[mdm_case]
-            aise = round(metrics.aise(mdm_tnc.mean, tnc.mean), 1)
+            aise = _rounded(metrics.aise(mdm_tnc.mean, tnc.mean))
             if results[case].has_ts:
-                aisc = round(metrics.aisc(mdm_ts.mean, ts.mean), 1)
+                aisc = _rounded(metrics.aisc(mdm_ts.mean, ts.mean))
         has_ts = results[case].has_ts
         levels = case.method.removeprefix("MDM:").split("+")
         paper = row.paper

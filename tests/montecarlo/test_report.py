@@ -14,7 +14,8 @@ from mdm_montecarlo.report import write_report
 from mdm_montecarlo.runner import run_many
 from mdm_montecarlo.section3b import SearchGeometry, confirmed_share, p_cm, p_cm_given, p_cs
 from mdm_montecarlo.study import Case, study_rows
-from mdm_montecarlo.tables import measured_rows
+from mdm_montecarlo.tables import format_table, measured_rows
+from mdm_profiles.overrides import apply_overrides
 
 MODEL = Path(__file__).resolve().parents[2] / "docs" / "model.md"
 PAPER = SearchGeometry(area=4e8, speed=20.0, confirm_radius=400.0, detect_radius=2000.0)
@@ -84,3 +85,20 @@ def test_section_3b_is_in_the_report(small_report: str) -> None:
     part = small_report.split("## Section III-B")[1]
     assert "![P_CS and P_CM](section3b-pcs-pcm.png)" in part
     assert len(re.findall(r"^\| \d+ \| 0\.\d{3} \|", part, re.MULTILINE)) == 5
+
+
+def test_no_improvement_percentage_against_a_baseline_that_confirmed_nothing() -> None:
+    # 60 s missions: nobody reaches a target, so AISE's baseline T_nc is 0 (as with --runs 1)
+    rows = study_rows(("simtable1",))
+    cases = list(dict.fromkeys(r.case for r in rows))
+    short = ["mission.duration=60", "mission.ts_cap=60"]
+    profiles = [apply_overrides(c.profile(), short) for c in cases]
+    results = dict(zip(cases, run_many(profiles, runs=2, seed=1), strict=True))
+    measured = measured_rows(rows, results)
+    baselines = [m for m in measured if m.method != "MDM"]
+    assert baselines
+    assert all(m.tnc_mean == 0 for m in measured)
+    assert all(m.aise_pct is None and m.aisc_pct is None for m in baselines)
+    table = format_table(measured)
+    assert "nan" not in table.lower()
+    assert "inf" not in table.lower()
