@@ -1,0 +1,29 @@
+"""The mdm-search image carries the Monte-Carlo engine's compiled (numba) kernels: a container's
+first `mdm-montecarlo reproduce` loads every kernel from the image's cache and compiles none
+(built and run on the same machine, so the same CPU).
+
+Skipped only where no Docker engine answers; `.ci/run` installs one."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.docker.conftest import IMAGE
+from tests.docker.engine import docker
+
+
+@pytest.mark.timeout(900)
+def test_a_fresh_container_loads_every_kernel_from_the_image(images: None) -> None:
+    # 20 runs per row, not the build's 1: blocks of another size must not need other kernels
+    done = docker(
+        "run", "--rm", "-e", "NUMBA_DEBUG_CACHE=1", IMAGE,
+        "mdm-montecarlo", "reproduce", "--runs", "20", "--workers", "1", "--no-progress",
+        "--out", "/tmp/report",
+        timeout=600,
+    )  # fmt: skip
+    log = done.stdout + done.stderr
+    loaded = log.count("data loaded from")
+    saved = [line for line in log.splitlines() if "data saved to" in line]
+    assert loaded > 20, f"only {loaded} kernels loaded from the cache:\n{log[-3000:]}"
+    assert not saved, "compiled in the container:\n" + "\n".join(saved[:20])
+    assert "report: /tmp/report/report.md" in log
