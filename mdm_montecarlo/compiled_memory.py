@@ -15,9 +15,9 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from mdm_core.jit import compiled
 from mdm_core.search import SearchPolicy
 from mdm_core.search.policy import PolicyState
-from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]

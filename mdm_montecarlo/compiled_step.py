@@ -16,10 +16,10 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from mdm_core.jit import compiled
 from mdm_core.search.levels import PolicyConfig
 from mdm_core.search.policy import Observation, PolicyState, StepOutcome
 from mdm_montecarlo.compiled_waypoints import RULES, CompiledWaypoints, next_waypoints
-from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

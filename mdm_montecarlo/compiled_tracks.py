@@ -16,10 +16,10 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from mdm_core.jit import compiled
 from mdm_core.world import Scenario, TargetTracks
 from mdm_core.world.targets import CHUNK_NODES
 from mdm_montecarlo.compiled_waypoints import clip
-from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
 

@@ -17,11 +17,11 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from mdm_core.jit import compiled
 from mdm_core.search.distributions import Brownian, Levy, Uniform
 from mdm_core.search.levels import PolicyConfig
 from mdm_core.search.policy import _BATCH, _REDRAWS, _STUCK, PolicyState
 from mdm_montecarlo.compiled_memory import CompiledMemoryPolicy
-from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]

@@ -15,9 +15,9 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from mdm_core.jit import compiled
 from mdm_core.world.sensors import REACH_SLACK
 from mdm_core.world.targets import NODE_EPS
-from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
 

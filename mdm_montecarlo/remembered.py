@@ -17,11 +17,11 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from mdm_core.jit import compiled
 from mdm_core.search.policy import PolicyState
 from mdm_core.world import TargetTracks
 from mdm_core.world.targets import NODE_EPS
 from mdm_montecarlo.compiled_step import nearest2
-from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

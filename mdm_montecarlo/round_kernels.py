@@ -25,10 +25,10 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from mdm_core.jit import compiled
 from mdm_core.world.targets import NODE_EPS
 from mdm_montecarlo.compiled_step import DISC, nearest2
 from mdm_montecarlo.entry_kernel import entry_times_of
-from mdm_montecarlo.jit import compiled
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

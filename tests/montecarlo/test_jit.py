@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from mdm_montecarlo.jit import compiled
+from mdm_core.jit import compiled
 
 
 def _without_source_file() -> Any:
