@@ -1,4 +1,5 @@
-"""numba's compiler for the engine's kernels: cached on disk where a cache can be written.
+"""numba's compiler for the project's kernels (the Monte-Carlo engine's, the emulator's fleet
+step): cached on disk where a cache can be written.
 
 ``njit(cache=True)`` raises at import when no cache folder is writable (a read-only install
 with a read-only home, say); the kernels are then compiled once per process instead (about
@@ -16,9 +17,10 @@ from numba import njit
 F = TypeVar("F", bound=Callable[..., Any])
 
 
-def compiled(fn: F) -> F:
-    """``fn`` compiled in nopython mode, with the GIL released, cached on disk if possible."""
+def compiled(fn: F, *, nogil: bool = True) -> F:
+    """``fn`` compiled in nopython mode, cached on disk if possible; with the GIL released
+    unless ``nogil`` is False (a kernel updating state that other threads read whole)."""
     try:
-        return cast(F, njit(cache=True, nogil=True)(fn))
+        return cast(F, njit(cache=True, nogil=nogil)(fn))
     except RuntimeError:  # "cannot cache function ...: no locator available"
-        return cast(F, njit(nogil=True)(fn))
+        return cast(F, njit(nogil=nogil)(fn))

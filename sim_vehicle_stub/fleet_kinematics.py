@@ -12,12 +12,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mdm_core.dynamics import LagModel
+from sim_vehicle_stub.fleet_step_kernel import GROUND_ALT, load_step, step_fleet
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
-
-GROUND_ALT = 0.3
-"""Below this height (m) a vehicle that is not climbing counts as on the ground."""
 
 
 class Fleet:
@@ -25,6 +23,7 @@ class Fleet:
 
     def __init__(self, start: FloatArray, model: LagModel, speed: float) -> None:
         n = len(start)
+        load_step()
         self.model = model
         # Position and altitude (velocity and climb rate) live in one (n, 3) array, so one lag
         # step moves all three axes; pos/alt (vel/vz) are views of it, updated in place.
@@ -94,13 +93,10 @@ class Fleet:
         self.v_vel[i] = rate
 
     def step(self, dt: float) -> None:
-        """Advance every vehicle by dt sim seconds.
-
-        The arithmetic is ``pursuit_reference`` and ``lag_step`` operation for operation (the
-        same results to the bit), with the axes stacked and fewer temporaries: this runs twice
-        per telemetry tick for the whole fleet."""
+        """Advance every vehicle by dt sim seconds: ``pursuit_reference`` and ``lag_step``
+        operation for operation (the same results to the bit), compiled (this runs twice per
+        telemetry tick for the whole fleet)."""
         tau = self.model.tau
-        k = 1.0 / (4.0 * tau)
         decay = self._decay.get(dt)
         if decay is None:
             if dt < 0:
@@ -109,47 +105,12 @@ class Fleet:
         self._cmd_vel += self._acc * dt  # h_vel += h_acc dt, v_vel += v_acc dt
         offset = self.h_target - self.pos
         dist = np.hypot(offset[:, 0], offset[:, 1])
-        # pursuit_reference(pos, h_target, min(speed, k dist)): its norm is sqrt of the sum of
-        # squares, not hypot; a zero distance gives no direction.
-        square = offset * offset
-        distance = np.sqrt(square[:, 0] + square[:, 1])[:, None]
-        ahead = distance > 0
-        direction = np.where(ahead, offset / np.where(ahead, distance, 1.0), 0.0)
-        pursuit = direction * np.minimum(self.speed, k * dist)[:, None]
-        vel_cmd = self.h_vel
-        norm = np.hypot(vel_cmd[:, 0], vel_cmd[:, 1])
-        scale = np.where(norm > self.speed, self.speed / np.maximum(norm, 1e-9), 1.0)
-        vel_cmd *= scale[:, None]  # in place: an integrated acceleration stops at the cap
-        ref = self._ref
-        href = ref[:, :2]
-        np.copyto(href, np.where(self.h_use_vel[:, None], vel_cmd, pursuit))
-        low = -self.descent
-        np.clip(self.v_vel, low, self.climb, out=self.v_vel)
-
-        vref = np.where(self.v_use_vel, self.v_vel, k * (self.v_target - self.alt))
-        ref[:, 2] = np.clip(vref, low, self.climb)
-        grounded = (self.alt <= GROUND_ALT) & (ref[:, 2] <= 0.0)
-        any_grounded = grounded.any()  # (in flight none is: the masked writes are skipped)
-        if any_grounded:
-            href[grounded] = 0.0  # (href is h_ref)
-
-        # lag_step on the three axes at once, into new arrays written back with one copy each:
-        # a thread reading the state (the tests' observers) never sees half a step.
-        where, speed = self._where, self._speed
-        error = speed - ref
-        new_speed = ref + error * decay
-        new_where = where + ref * dt
-        new_where += error * tau * (1.0 - decay)
-        if any_grounded:
-            new_where[grounded, :2] = where[grounded, :2]
-            new_speed[grounded, :2] = 0.0
-        alt, vz = new_where[:, 2], new_speed[:, 2]
-        np.maximum(alt, 0.0, out=alt)
-        touching = alt <= 0.0
-        if touching.any():
-            vz[:] = np.where(touching, np.maximum(vz, 0.0), vz)
-        where[...] = new_where
-        speed[...] = new_speed
+        norm = np.hypot(self.h_vel[:, 0], self.h_vel[:, 1])
+        step_fleet(
+            self._where, self._speed, self._ref, self._cmd_vel, self.h_target, dist, norm,
+            self.h_use_vel, self.v_use_vel, self.v_target, self.speed, self.climb, self.descent,
+            tau, dt, decay,
+        )  # fmt: skip
 
     def update_yaw(self, dt: float) -> None:
         """Heading after ``dt`` s: the commanded yaw, else turning at the commanded yaw rate,

@@ -11,7 +11,8 @@ import numpy as np
 
 from sim_vehicle_stub.config import system_id
 from sim_vehicle_stub.events import EventLog
-from sim_vehicle_stub.fleet_kinematics import GROUND_ALT, Fleet
+from sim_vehicle_stub.fleet_kinematics import Fleet
+from sim_vehicle_stub.fleet_step_kernel import GROUND_ALT
 from sim_vehicle_stub.params import ParamTable
 from sim_vehicle_stub.personas.base import (
     Action,
