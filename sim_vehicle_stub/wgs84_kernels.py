@@ -35,8 +35,7 @@ _E4X2 = 2 * E2**2
 _A2H = A**2 / 2
 
 
-@compiled
-def to_ecef(
+def _to_ecef(
     north: FloatArray,
     east: FloatArray,
     up: FloatArray,
@@ -59,8 +58,7 @@ def to_ecef(
     return x, y, z
 
 
-@compiled
-def heikkinen_g(z: FloatArray, p: FloatArray) -> FloatArray:
+def _heikkinen_g(z: FloatArray, p: FloatArray) -> FloatArray:
     """g of each point (``p`` is its distance from the axis)."""
     g = np.empty(z.size)
     for i in range(z.size):
@@ -68,8 +66,7 @@ def heikkinen_g(z: FloatArray, p: FloatArray) -> FloatArray:
     return g
 
 
-@compiled
-def cbrt_argument(z: FloatArray, p: FloatArray, g3: FloatArray) -> FloatArray:
+def _cbrt_argument(z: FloatArray, p: FloatArray, g3: FloatArray) -> FloatArray:
     """1 + c + sqrt(c^2 + 2c) of each point, given g^3."""
     out = np.empty(z.size)
     for i in range(z.size):
@@ -79,8 +76,7 @@ def cbrt_argument(z: FloatArray, p: FloatArray, g3: FloatArray) -> FloatArray:
     return out
 
 
-@compiled
-def arctan_argument_and_height(
+def _arctan_argument_and_height(
     z: FloatArray, p: FloatArray, g: FloatArray, s: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """The tangent of each point's latitude (before arctan) and its height, given g and s."""
@@ -104,3 +100,10 @@ def arctan_argument_and_height(
         height[i] = u * (1 - _B2 / (A * v))
         tangent[i] = (zi + EP2 * z0) / pi
     return tangent, height
+
+
+# A zero divisor gives inf/NaN as in the numpy version (a point on the Earth's axis, say).
+to_ecef = compiled(_to_ecef, error_model="numpy")
+heikkinen_g = compiled(_heikkinen_g, error_model="numpy")
+cbrt_argument = compiled(_cbrt_argument, error_model="numpy")
+arctan_argument_and_height = compiled(_arctan_argument_and_height, error_model="numpy")
