@@ -311,8 +311,8 @@ class Emulator:
         t = self.clock.now
         self.fleet.update_yaw(dt)
         vehicles = self.vehicles
-        margins = np.array([v.limits.fence_margin for v in vehicles])
-        inside = inside_fences(self.scenario.area, self.fleet.pos, margins).tolist()
+        margins = [v.limits.fence_margin for v in vehicles]
+        inside = inside_fences(self.scenario.area, self.fleet.pos, margins)
         for node, ok in zip(self.nodes, inside, strict=True):
             v = node.vehicle
             v.update()
