@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from mdm_core.dynamics import LagModel
 from sim_vehicle_stub.fleet_step_kernel import GROUND_ALT, load_step, step_fleet
+from sim_vehicle_stub.tilt_kernel import tilt_tangents
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -56,6 +57,7 @@ class Fleet:
         self.h_acc: FloatArray = self._acc[:, :2]
         self.v_acc: FloatArray = self._acc[:, 2]
         """Acceleration-only targets, integrated into the commanded velocities."""
+        self.attitude()  # its kernel compiled or loaded now, not in the first tick of a loop
 
     def __len__(self) -> int:
         return len(self.pos)
@@ -125,8 +127,6 @@ class Fleet:
 
     def attitude(self, g: float = 9.81) -> tuple[FloatArray, FloatArray]:
         """Roll and pitch (rad) that produce the current lag-loop acceleration."""
-        accel = (self.h_ref - self.vel) / self.model.tau
         c, s = np.cos(self.yaw), np.sin(self.yaw)
-        forward = accel[:, 0] * c + accel[:, 1] * s
-        right = -accel[:, 0] * s + accel[:, 1] * c
-        return np.arctan(right / g), -np.arctan(forward / g)
+        right, forward = tilt_tangents(self._ref, self._speed, c, s, self.model.tau, g)
+        return np.arctan(right), -np.arctan(forward)
