@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from mdm_core.world import Scenario, TargetTracks, contacts
 from sim_vehicle_stub.events import EventLog
+from sim_vehicle_stub.readout_kernel import readout
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -49,6 +50,10 @@ class SensorWorld:
         self._present = np.zeros(m, dtype=bool)
         """Targets that have appeared (recomputed when the next one is due)."""
         self._next_appearance = -math.inf
+        # the readout kernel compiled or loaded now, not in the first tick of a running loop
+        none = np.zeros(0, dtype=np.intp)
+        readout(np.zeros((0, m), dtype=bool), np.zeros((0, m)), self._present,
+                np.zeros(0, dtype=bool), scenario.targets.false_mask, self._in_range, none, none)  # fmt: skip
 
     def targets_at(self, t: float) -> FloatArray:
         if not self.tracks.moving and self._static is not None:
@@ -76,10 +81,9 @@ class SensorWorld:
         # contacts() broadcasts (m,)-shaped targets and presence over the vehicles
         mask, strength = contacts(radius[on], confirms, vehicles[on], targets, present,
                                   spec.false_mask)  # fmt: skip
-        visible = present & ~(confirms[:, None] & spec.false_mask[None, :])
-        signal = np.where(visible, strength, 0.0).max(axis=1, initial=0.0).tolist()
-        entered = mask & ~self._in_range[on, :, sensor]
-        self._in_range[on, :, sensor] = mask
+        strongest, entered = readout(mask, strength, present, confirms, spec.false_mask,
+                                     self._in_range, on, sensor)  # fmt: skip
+        signal = strongest.tolist()
         if entered.any():
             for row, k in zip(*np.nonzero(entered), strict=True):
                 self._log_entry(t, int(on[row]), int(sensor[row]), int(k), targets)
