@@ -1,6 +1,6 @@
-"""The mdm-search image carries the Monte-Carlo engine's compiled (numba) kernels: a container's
-first `mdm-montecarlo reproduce` loads every kernel from the image's cache and compiles none
-(built and run on the same machine, so the same CPU).
+"""The mdm-search image carries the compiled (numba) kernels of the Monte-Carlo engine and of the
+emulator: a container's first `mdm-montecarlo reproduce` or `sim-vehicle` loads every kernel
+from the image's cache and compiles none (built and run on the same machine, so the same CPU).
 
 Skipped only where no Docker engine answers; `.ci/run` installs one."""
 
@@ -27,3 +27,16 @@ def test_a_fresh_container_loads_every_kernel_from_the_image(images: None) -> No
     assert loaded > 20, f"only {loaded} kernels loaded from the cache:\n{log[-3000:]}"
     assert not saved, "compiled in the container:\n" + "\n".join(saved[:20])
     assert "report: /tmp/report/report.md" in log
+
+
+@pytest.mark.timeout(300)
+def test_a_fresh_emulator_container_loads_its_kernels_from_the_image(images: None) -> None:
+    done = docker(
+        "run", "--rm", "-e", "NUMBA_DEBUG_CACHE=1", IMAGE,
+        "sim-vehicle", "--vehicles", "3", "--speedup", "max", "--duration", "20",
+        timeout=240,
+    )  # fmt: skip
+    log = done.stdout + done.stderr
+    saved = [line for line in log.splitlines() if "data saved to" in line]
+    assert "data loaded from" in log, f"no kernel loaded from the cache:\n{log[-3000:]}"
+    assert not saved, "compiled in the container:\n" + "\n".join(saved[:20])
