@@ -9,6 +9,8 @@ import json
 import logging
 import signal
 import sys
+import threading
+from collections.abc import Iterator
 from pathlib import Path
 
 from mavlink_signing import ENV_VAR, load_signing_key
@@ -16,7 +18,6 @@ from mdm_core.ports import GCS_UDP, TCP_BASE, VEHICLE_OWN_UDP_BASE, VEHICLE_UDP_
 from mdm_profiles import ProfileError, builtin_profile, builtin_profiles, load_profile
 from mdm_profiles.schema import MissionProfile
 from sim_vehicle_stub.config import EmulatorConfig
-from sim_vehicle_stub.emulator import Emulator
 from sim_vehicle_stub.personas import persona_names
 
 
@@ -120,13 +121,41 @@ def config_from_args(args: argparse.Namespace) -> EmulatorConfig:
     )
 
 
-async def _serve(config: EmulatorConfig, duration: float | None, stats: Path | None) -> None:
+@contextlib.contextmanager
+def _stops_noted() -> Iterator[list[int]]:
+    """SIGINT and SIGTERM noted, not acted on, until the event loop takes them over. A stop that
+    arrives while the emulator starts (numba loading its kernels takes about a second) then
+    ends it cleanly, exit status 0, instead of killing it. Only the main thread can set
+    handlers; the previous ones are restored on the way out."""
+    noted: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield noted
+        return
+    previous = {
+        sig: signal.signal(sig, lambda signum, _frame: noted.append(signum))
+        for sig in (signal.SIGINT, signal.SIGTERM)
+    }
+    try:
+        yield noted
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+async def _serve(
+    config: EmulatorConfig, duration: float | None, stats: Path | None, stops: list[int]
+) -> None:
+    # Imported here, after the stop handlers: with it come numba and the compiled kernels.
+    from sim_vehicle_stub.emulator import Emulator
+
     emulator = Emulator(config)
     task = asyncio.create_task(emulator.run(duration))
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
         with contextlib.suppress(NotImplementedError):
             loop.add_signal_handler(sig, task.cancel)
+    if stops:  # asked to stop before the loop's handlers were in place
+        task.cancel()
     with contextlib.suppress(asyncio.CancelledError):
         await task
     if stats is not None:
@@ -134,21 +163,22 @@ async def _serve(config: EmulatorConfig, duration: float | None, stats: Path | N
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    logging.basicConfig(
-        level=args.log_level.upper(), format="%(asctime)s %(levelname)s %(name)s: %(message)s"
-    )
-    try:
-        config = config_from_args(args)
-    except (ProfileError, ValueError, OSError) as exc:
-        print(f"sim-vehicle: {exc}", file=sys.stderr)
-        return 2
-    try:
-        asyncio.run(_serve(config, args.duration, args.stats))
-    except OSError as exc:
-        print(f"sim-vehicle: {exc}", file=sys.stderr)
-        return 1
-    return 0
+    with _stops_noted() as stops:
+        args = build_parser().parse_args(argv)
+        logging.basicConfig(
+            level=args.log_level.upper(), format="%(asctime)s %(levelname)s %(name)s: %(message)s"
+        )
+        try:
+            config = config_from_args(args)
+        except (ProfileError, ValueError, OSError) as exc:
+            print(f"sim-vehicle: {exc}", file=sys.stderr)
+            return 2
+        try:
+            asyncio.run(_serve(config, args.duration, args.stats, stops))
+        except OSError as exc:
+            print(f"sim-vehicle: {exc}", file=sys.stderr)
+            return 1
+        return 0
 
 
 if __name__ == "__main__":

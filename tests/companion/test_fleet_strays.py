@@ -26,7 +26,7 @@ def test_a_stray_emulator_is_ignored_and_reported(tmp_path: Path) -> None:
     base = free_port_block(2).base
     fleet = subprocess.Popen(
         [sys.executable, "-m", "companion.cli", "fleet", "--profile", profile, "--vehicles",
-         "2", "--duration", "200", "--base-port", str(base), "--out", str(out), "--quiet"],
+         "2", "--duration", "600", "--base-port", str(base), "--out", str(out), "--quiet"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     stray: subprocess.Popen[bytes] | None = None
