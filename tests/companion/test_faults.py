@@ -151,6 +151,13 @@ def test_killed_companion_restarts_with_its_memory(
     first.kill()  # SIGKILL: no chance to clean up
     first.wait()
     confirmed = read_log(_log(tmp_path)).of(events.Confirmation)
+    # The restart comes after the vehicle's setpoint-loss failsafe (PX4: POSCTL after
+    # COM_OF_LOSS_T, 1 s of wall time at any speed-up), as after a real crash. Restarted within
+    # that second, the companion could see the failsafe's mode change as a pilot taking over,
+    # depending on how fast the machine starts Python.
+    wait_until(lambda: any(r["event"] == "failsafe"
+                           for r in records(tmp_path / "emulator-events.jsonl")),
+               15, "the setpoint-loss failsafe")  # fmt: skip
     procs.companion(small_profile, 0, base, duration=3000)
     wait_until(lambda: has(tmp_path, events.Start, resumed=len(confirmed)), 20, "restart")
     logged = read_log(_log(tmp_path)).events
