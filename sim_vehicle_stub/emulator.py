@@ -194,6 +194,7 @@ class Emulator:
     async def run(self, duration: float | None = None) -> None:
         """Run until ``duration`` sim seconds have passed (forever when None) or cancelled."""
         await self.start()
+        self.clock.restart()
         try:
             while duration is None or self.clock.now < duration:
                 if self._task is not None and self._task.done():

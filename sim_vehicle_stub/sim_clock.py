@@ -21,6 +21,12 @@ class SimClock:
         self._wall0 = time.monotonic()
         self._sim0 = 0.0
 
+    def restart(self) -> None:
+        """Pace sim time from now on: what came before the loop started (loading the compiled
+        kernels, about a second) is not lag for the loop to catch up by running fast."""
+        self._wall0 = time.monotonic()
+        self._sim0 = self.now
+
     def advance(self, dt: float) -> None:
         self.now += dt
 
