@@ -46,26 +46,33 @@ def nearest2(memory: FloatArray, count: int, lane: int, x: float, y: float) -> f
 
 
 @compiled
-def _remember(
+def remember_confirmed(
     memory: FloatArray,
     memory_count: IntArray,
     lanes: IntArray,
     new_confirmations: BoolArray,
     contact_positions: FloatArray,
-) -> int:
-    """SearchPolicy.remember of the new confirmations (n, m) of distinct ``lanes``, a lane's in
-    target order, with their contact positions (n, m, 2). Returns the memory slots needed;
-    writes nothing if ``memory`` has fewer."""
+    confirmed: BoolArray,
+) -> FloatArray:
+    """SearchPolicy.remember of the new confirmations (n, m) of the ``confirmed`` rows of
+    distinct ``lanes``, a lane's in target order, with their contact positions (n, m, 2).
+    Returns the memory: ``memory`` itself, or a copy grown as PolicyState.make_room grows it."""
     n, m = new_confirmations.shape
     needed = 0
     for i in range(n):
-        count = memory_count[lanes[i]]
-        for j in range(m):
-            count += new_confirmations[i, j]
-        needed = max(needed, count)
-    if needed > memory.shape[1]:
-        return needed
+        if confirmed[i]:
+            count = memory_count[lanes[i]]
+            for j in range(m):
+                count += new_confirmations[i, j]
+            needed = max(needed, count)
+    room = memory.shape[1]
+    if needed > room:
+        grown = np.zeros((memory.shape[0], max(needed, 2 * room), 2))
+        grown[:, :room] = memory
+        memory = grown
     for i in range(n):
+        if not confirmed[i]:
+            continue
         lane = lanes[i]
         for j in range(m):
             if new_confirmations[i, j]:
@@ -73,11 +80,11 @@ def _remember(
                 memory[lane, slot, 0] = contact_positions[i, j, 0]
                 memory[lane, slot, 1] = contact_positions[i, j, 1]
                 memory_count[lane] = slot + 1
-    return needed
+    return memory
 
 
 @compiled
-def _step(
+def step_lanes(
     level: IntArray,
     entered: FloatArray,
     blind_until: FloatArray,
@@ -207,6 +214,16 @@ class CompiledPolicy(CompiledWaypoints):
         return self._radii
 
     @property
+    def table(self) -> FloatArray | None:
+        """The levels' parameters as the compiled draws read them (compiled_waypoints)."""
+        return self._table
+
+    @property
+    def area(self) -> FloatArray:
+        """The search area's (north, east) size, metres."""
+        return self._area
+
+    @property
     def memory_rule(self) -> int:
         """detection_memory as the kernels read it (DISC, EXACT or NONE)."""
         return self._memory_rule
@@ -221,7 +238,7 @@ class CompiledPolicy(CompiledWaypoints):
         """SearchPolicy.step for distinct ``lanes`` (as the engine steps them)."""
         if self._table is None:
             return super().step(state, lanes, obs, rng)
-        new_confirmations, flags = _step(
+        new_confirmations, flags = step_lanes(
             state.level,
             state.entered,
             state.blind_until,
@@ -248,19 +265,14 @@ class CompiledPolicy(CompiledWaypoints):
             rng,
         )
         confirmed = flags[:, CONFIRMED]
-        rows = np.flatnonzero(confirmed)
-        if rows.size:
-            # Only the confirming lanes: a round confirms for a few of its thousands of lanes.
-            args = (
-                state.memory_count,
-                lanes[rows],
-                new_confirmations[rows],
-                obs.contact_positions[rows],
-            )
-            needed = _remember(state.memory, *args)
-            if needed > state.memory.shape[1]:  # remember's growth, then the same writes
-                state.make_room(needed)
-                _remember(state.memory, *args)
+        state.memory = remember_confirmed(
+            state.memory,
+            state.memory_count,
+            lanes,
+            new_confirmations,
+            obs.contact_positions,
+            confirmed,
+        )
         return StepOutcome(
             flags[:, DETECTED], confirmed, new_confirmations, flags[:, EXPIRED], flags[:, REDRAW]
         )

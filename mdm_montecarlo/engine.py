@@ -14,8 +14,10 @@ Vehicles do not communicate, so lanes of one run only share the targets; the tea
 the minimum over its vehicles of each target's first confirmation time.
 
 Speed: a round's loops over the lanes are compiled with numba (``round_kernels``), and so is
-the policy (``compiled_step.CompiledPolicy``: the numpy ``SearchPolicy``'s step and waypoint
-draws, bit for bit, from the same random stream); the companion flies the numpy policy.
+the policy (``compiled_step``: the numpy ``SearchPolicy``'s step and waypoint draws, bit for
+bit, from the same random stream); ``block_rounds.fly_rounds`` runs the rounds one after
+another in one compiled loop, back in Python only to grow the dynamic targets' paths. The
+companion flies the numpy policy.
 
 Randomness: runs are cut into blocks of ``block_runs``; block b draws from
 SeedSequence([seed, b]) alone, so results are identical for any number of workers.
@@ -28,13 +30,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_core.search import Observation
 from mdm_core.search.from_profile import policy_config
 from mdm_core.world import Scenario
+from mdm_montecarlo.block_rounds import DONE, fly_rounds
 from mdm_montecarlo.compiled_step import CompiledPolicy
 from mdm_montecarlo.compiled_tracks import compiled_tracks
+from mdm_montecarlo.compiled_waypoints import RULES
 from mdm_montecarlo.remembered import RememberedTargets
-from mdm_montecarlo.round_kernels import advance, legs, record
 from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]
@@ -76,99 +78,70 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     start = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
 
     n = n_runs * n_vehicles
-    run_of = np.repeat(np.arange(n_runs), n_vehicles)
     position = start.reshape(n, 2).copy()
     time = np.zeros(n)
     state = policy.start(position, time, rng_policy)
+    assert policy.table is not None  # else start raised the numpy draws' error
 
     targets = scenario.targets
     m = targets.count
-    real = ~targets.false_mask
     first = np.full((n, m), np.inf)
     stop = np.full(n_runs, cap)
     active = np.ones(n, dtype=bool)
-    events = 0
-    appear = targets.appear_times
     remembered = RememberedTargets(policy.config.memory_radius, tracks, n, m)
-    lifetimes, radii, memory_rule = policy.lifetimes, policy.radii, policy.memory_rule
-
+    config = policy.config
+    events = 0
+    visible = tracks.max_speed  # the first round checks its windows before any path is drawn
+    seg_start, seg_velocity = tracks.segments(0.0)
     while True:
-        idx = np.flatnonzero(active)
-        if idx.size == 0:
-            break
-        runs = run_of[idx]
-        t = time[idx]
-        unit, leg, left, horizon, until = legs(
-            state.waypoint,
-            position,
-            time,
+        status, reach, rounds, state.memory = fly_rounds(
             state.level,
             state.entered,
             state.blind_until,
-            lifetimes,
-            stop,
-            idx,
-            runs,
-            speed,
-        )
-        eligible = remembered.eligible(state, idx, runs, t, policy.checks_exactly(state, idx))
-        seg_start, seg_velocity = tracks.segments(until)
-        # position and time move to the event; the same ignore rules as the policy's step,
-        # so no contact is reported that it would drop.
-        reached, contacts, target_pos = advance(
-            state.level,
-            state.blind_until,
+            state.anchor,
+            state.waypoint,
             state.memory,
             state.memory_count,
             position,
             time,
-            state.waypoint,
-            idx,
-            runs,
-            unit,
-            leg,
-            left,
-            horizon,
-            eligible,
-            radii,
-            memory_rule,
-            targets.false_mask,
-            appear,
-            seg_start,
-            seg_velocity,
-            tracks.grid_dt,
-            tracks.max_speed,
-            tracks.moving,
-            speed,
-        )
-        new_t = time[idx]
-        new_x = position[idx]
-
-        obs = Observation(
-            time=new_t,
-            position=new_x,
-            reached=reached,
-            contacts=contacts,
-            contact_positions=target_pos,
-        )
-        outcome = policy.step(state, idx, obs, rng_policy)
-        remembered.forget(idx[outcome.confirmed])
-        events += 1
-
-        record(
+            active,
             first,
             stop,
-            active,
-            outcome.confirmed,
-            outcome.new_confirmations,
-            idx,
-            runs,
-            time,
-            real,
+            remembered.known,
+            remembered.until,
+            remembered.speed,
+            visible,
+            tracks.max_speed,
+            seg_start,
+            seg_velocity,
+            tracks.filled,
+            tracks.grid_dt,
+            tracks.moving,
+            targets.false_mask,
+            targets.appear_times,
+            ~targets.false_mask,
+            policy.lifetimes,
+            policy.radii,
+            policy.memory_rule,
+            float(config.memory_radius),
+            float(config.fallback_blind_time),
+            policy.table,
+            policy.area,
+            RULES[config.out_of_area],
+            config.waypoint_origin == "anchor",
+            config.confine_to_detection,
             n_vehicles,
+            speed,
             duration,
             cap,
+            rng_policy,
         )
+        events += rounds
+        if status == DONE:
+            break
+        if events:  # the interrupted round checks against the paths drawn before it
+            visible = tracks.max_speed
+        seg_start, seg_velocity = tracks.segments(reach)
 
     per_vehicle = first.reshape(n_runs, n_vehicles, m)
     return BlockResult(block, per_vehicle, events, float(time.sum()))

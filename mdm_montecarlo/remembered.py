@@ -29,27 +29,34 @@ IntArray = NDArray[np.intp]
 
 
 class RememberedTargets:
-    """Cached SearchPolicy.known for every lane of a block, with per-lane validity windows."""
+    """Cached SearchPolicy.known for every lane of a block, with per-lane validity windows.
+
+    The engine's compiled round loop (``block_rounds``) works on these arrays directly;
+    ``eligible`` and ``forget`` are one round's worth of it (tests compare them with
+    SearchPolicy.known)."""
 
     def __init__(self, memory_radius: float, tracks: TargetTracks, lanes: int, targets: int):
-        self._radius = memory_radius
+        self.radius = memory_radius
         self._tracks = tracks
-        self._known = np.zeros((lanes, targets), dtype=bool)
-        self._until = np.full(lanes, -np.inf)
-        self._speed = tracks.max_speed
+        self.known = np.zeros((lanes, targets), dtype=bool)
+        """(lanes, m) the cached answers."""
+        self.until = np.full(lanes, -np.inf)
+        """(lanes,) the time each lane's answers hold until."""
+        self.speed = np.array([tracks.max_speed])
+        """(1,) the target speed the windows were computed with."""
 
     def eligible(
         self, state: PolicyState, lanes: IntArray, runs: IntArray, t: FloatArray, exact: BoolArray
     ) -> BoolArray:
         """(len(lanes), m): False for the targets the lanes (of the given runs, at their times
         t) with ``exact`` set know they confirmed (SearchPolicy.known), True elsewhere."""
-        if self._tracks.max_speed > self._speed:
-            self._speed = self._tracks.max_speed
-            self._until[:] = -np.inf
+        visible = self._tracks.max_speed
         seg_start, seg_velocity = self._tracks.segments(float(t.max(initial=0.0)))
-        return _eligible(
-            self._known,
-            self._until,
+        return eligible(
+            self.known,
+            self.until,
+            self.speed,
+            visible,
             state.memory,
             state.memory_count,
             lanes,
@@ -60,19 +67,20 @@ class RememberedTargets:
             seg_velocity,
             self._tracks.grid_dt,
             self._tracks.moving,
-            self._radius,
-            self._speed,
+            self.radius,
         )
 
     def forget(self, lanes: IntArray) -> None:
         """The lanes' memory changed (a confirmation): recompute their answer next time."""
-        self._until[lanes] = -np.inf
+        self.until[lanes] = -np.inf
 
 
 @compiled
-def _eligible(
+def eligible(
     known: BoolArray,
     until: FloatArray,
+    speed: FloatArray,
+    visible: float,
     memory: FloatArray,
     memory_count: IntArray,
     lanes: IntArray,
@@ -84,10 +92,13 @@ def _eligible(
     grid_dt: float,
     moving: bool,
     radius: float,
-    speed: float,
 ) -> BoolArray:
     """RememberedTargets.eligible's loop: the answers of the stale lanes recomputed in place
-    (``known``, ``until``), then every exact lane's row."""
+    (``known``, ``until``), then every exact lane's row. ``visible`` is the tracks' top speed
+    before this round's growth: a higher one than ``speed[0]`` voids every window first."""
+    if visible > speed[0]:
+        speed[0] = visible
+        until[:] = -np.inf
     n, m = lanes.shape[0], known.shape[1]
     out = np.ones((n, m), dtype=np.bool_)
     r2 = radius * radius
@@ -106,7 +117,7 @@ def _eligible(
                 d2 = nearest2(memory, memory_count[lane], lane, x, y)
                 known[lane, j] = d2 <= r2
                 margin = min(margin, abs(math.sqrt(d2) - radius))
-            until[lane] = t[i] + margin / speed if speed > 0 else np.inf
+            until[lane] = t[i] + margin / speed[0] if speed[0] > 0 else np.inf
         for j in range(m):
             out[i, j] = not known[lane, j]
     return out

@@ -12,8 +12,7 @@ two loops over the lanes do the same arithmetic in the same order:
 
 - ``record``: the first confirmation times, the runs' stop times and which lanes go on.
 
-What stays in numpy: the remembered-targets cache (it reads the tracks' positions), the growth
-of the tracks and the memory update.
+``block_rounds`` calls them round after round; only the growth of the tracks stays in numpy.
 Results are bit-identical to the numpy round (tests/montecarlo/test_determinism.py and the
 reproduce comparison in docs/model.md).
 """

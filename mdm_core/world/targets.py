@@ -129,6 +129,11 @@ class TargetTracks:
         return self.walk is not None
 
     @property
+    def filled(self) -> int:
+        """Path segments drawn so far (``segments`` draws more)."""
+        return self._filled
+
+    @property
     def max_speed(self) -> float:
         """The highest target speed on any path segment drawn so far (0 for fixed targets)."""
         return self._max_speed
