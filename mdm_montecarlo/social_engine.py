@@ -352,6 +352,8 @@ def run_swarm_block(
     sensors.sense(targets_now, position, known, np.zeros(shape), source, nearest)
     step = np.zeros((*shape, 2))
     guided = np.zeros(shape, dtype=bool)
+    # SPSO: the swarm bests the informants' refresh found for the next iteration.
+    social: tuple[Best, BoolArray] | None = None
     social_fitness = np.zeros(shape)
     stop = max(profile.mission.ts_cap, profile.mission.duration)
     duration = profile.mission.duration
@@ -361,7 +363,7 @@ def run_swarm_block(
 
     while t < stop - 1e-9:
         # mdm_core.search.swarm_iteration.choose_move, then the flight clipped to the area.
-        best, own_is_social = best_of(own, heard, links)
+        best, own_is_social = best_of(own, heard, links) if social is None else social
         follow = best.fitness > 0
         if config.variant == "arpso":
             inertia = kernels.arpso_inertia(
@@ -418,7 +420,7 @@ def run_swarm_block(
         if not broadcast:
             inbox.forget(known)
         if config.variant == "spso":
-            social_fitness = _refresh_informants(
+            social, social_fitness = _refresh_informants(
                 rng, own, heard, links, social_fitness, best_of, spec.informants
             )
         if t >= duration and _all_confirmed(first, real):
@@ -549,15 +551,32 @@ def _refresh_informants(
     local_fitness: FloatArray,
     best_of: BestOf,
     k: int,
-) -> FloatArray:
+) -> tuple[tuple[Best, BoolArray], FloatArray]:
     """mdm_core.search.swarm_iteration.refresh_informants with ``links`` updated in place (the
-    same draw; only the stuck particles' rows are computed: swarm_kernels.relink). Returns the
-    local bests' fitness to compare with next time."""
-    updated, _ = best_of(own, heard, links)
-    stuck = updated.fitness <= local_fitness
+    same draw; only the stuck particles' rows are computed: swarm_kernels.relink). Returns
+    best_of's answer over the new links (the next iteration's: nothing changes the bests
+    before it; only the stuck particles' is found again) and the local bests' fitness to
+    compare with next time."""
+    updated, mine = best_of(own, heard, links)
+    fitness = updated.fitness.copy()
+    stuck = fitness <= local_fitness
     if stuck.any():
         kernels.relink(rng.random(links.shape), stuck, k, links)
-    return updated.fitness
+        kernels.update_swarm_best(
+            own.position,
+            own.fitness,
+            own.source,
+            heard.position,
+            heard.fitness,
+            heard.source,
+            links,
+            stuck,
+            updated.position,
+            updated.fitness,
+            updated.source,
+            mine,
+        )
+    return (updated, mine), fitness
 
 
 def _as_complex(points: FloatArray) -> NDArray[np.complex128]:

@@ -159,15 +159,53 @@ def swarm_best(
 ) -> tuple[FloatArray, FloatArray, IntArray, BoolArray]:
     """mdm_core.search.pso.swarm_best for own (runs, vehicles) and heard (runs, vehicles,
     senders) bests: position, fitness, source of the best, and True where it is the own best
-    (ties go to it; among the linked senders the first best wins, as argmax picks)."""
+    (update_swarm_best)."""
     runs, n = own_fitness.shape
-    senders = links.shape[2]
     position = np.empty((runs, n, 2))
     fitness = np.empty((runs, n))
     source = np.empty((runs, n), dtype=np.intp)
     mine = np.empty((runs, n), dtype=np.bool_)
+    update_swarm_best(
+        own_position,
+        own_fitness,
+        own_source,
+        heard_position,
+        heard_fitness,
+        heard_source,
+        links,
+        np.ones((runs, n), dtype=np.bool_),
+        position,
+        fitness,
+        source,
+        mine,
+    )
+    return position, fitness, source, mine
+
+
+@compiled
+def update_swarm_best(
+    own_position: FloatArray,
+    own_fitness: FloatArray,
+    own_source: IntArray,
+    heard_position: FloatArray,
+    heard_fitness: FloatArray,
+    heard_source: IntArray,
+    links: BoolArray,
+    rows: BoolArray,
+    position: FloatArray,
+    fitness: FloatArray,
+    source: IntArray,
+    mine: BoolArray,
+) -> None:
+    """swarm_best of the particles where ``rows`` (runs, vehicles), written in place into
+    ``position``, ``fitness``, ``source`` and ``mine`` (ties go to the own best; among the
+    linked senders the first best wins, as argmax picks)."""
+    runs, n = own_fitness.shape
+    senders = links.shape[2]
     for r in range(runs):
         for i in range(n):
+            if not rows[r, i]:
+                continue
             other = -np.inf
             slot = 0
             for j in range(senders):
@@ -185,7 +223,6 @@ def swarm_best(
                 position[r, i, 1] = heard_position[r, i, slot, 1]
                 fitness[r, i] = other
                 source[r, i] = heard_source[r, i, slot]
-    return position, fitness, source, mine
 
 
 @compiled

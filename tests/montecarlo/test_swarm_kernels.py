@@ -315,3 +315,35 @@ def test_relink_redraws_the_rows_of_the_stuck_particles() -> None:
     want = np.where(stuck[..., None], kernels.informants(keys.copy(), 3), links)
     kernels.relink(keys, stuck, 3, links)
     _same(links, want)
+
+
+def test_update_swarm_best_redoes_the_chosen_rows() -> None:
+    rng, own, _, _ = _state(13)
+    links = rng.random((RUNS, N, N)) < 0.5
+    heard = _heard_from_own(own)
+    found = kernels.swarm_best(
+        own.position, own.fitness, own.source, heard.position, heard.fitness, heard.source, links
+    )
+    rows = rng.random((RUNS, N)) < 0.4
+    links[rows] = rng.random((int(rows.sum()), N)) < 0.5
+    want = kernels.swarm_best(
+        own.position, own.fitness, own.source, heard.position, heard.fitness, heard.source, links
+    )
+    position, fitness, source, mine = found
+    position, fitness, source, mine = position.copy(), fitness.copy(), source.copy(), mine.copy()
+    kernels.update_swarm_best(
+        own.position,
+        own.fitness,
+        own.source,
+        heard.position,
+        heard.fitness,
+        heard.source,
+        links,
+        rows,
+        position,
+        fitness,
+        source,
+        mine,
+    )
+    for a, b in zip((position, fitness, source, mine), want, strict=True):
+        _same(a, b)
