@@ -18,24 +18,26 @@ mdm_core.search.swarm_iteration, shared with the live companion):
    reaches each other vehicle ``message_delay`` seconds later unless lost (``message_drop``).
    A receiver keeps the last message it got from each sender.
 
-Cost: the vehicles of a run share its targets, so target positions are read per run. The
-squared vehicle-target distances are computed once per iteration, at the end of the step; the
-signal reading of that iteration and the confirmations of the next (same positions, same time)
-both use them: the closed form is solved only for the pairs close enough to meet within the
-step, strengths only for the pairs within the signal radius. A delivery touches only the runs
-whose message or losses changed since the last one (a few per cent of them per iteration).
-All of this gives bit-for-bit the results of solving every pair and delivering everywhere.
-The per-particle passes (sensing, swarm bests, the PSO rules, flight, personal bests, SPSO's
-informants) are compiled loops (mdm_montecarlo.swarm_kernels) doing the arithmetic and the
-random draws of the numpy rules of mdm_core.search.pso and swarm_iteration in their order: the
-same results bit for bit, without a (runs, vehicles, ...) temporary per operation.
+Cost: the vehicles of a run share its targets, so target positions are read per run, once per
+iteration, at the end of the step: the signal reading of that iteration and the confirmations
+of the next (same positions, same time) both use them. The reading keeps every vehicle's
+squared distance to its nearest real target; the confirmations look again only at the vehicles
+within reach of one, and solve the closed form only for the pairs close enough to meet within
+the step; strengths are computed only for the pairs within the signal radius. A delivery
+touches only the runs whose message or losses changed since the last one (a few per cent of
+them per iteration). All of this gives bit-for-bit the results of solving every pair and
+delivering everywhere. The per-particle passes (sensing, swarm bests, the PSO rules, flight,
+personal bests, SPSO's informants, redrawn only for the particles whose local best is stuck)
+are compiled loops (mdm_montecarlo.swarm_kernels) doing the arithmetic and the random draws of
+the numpy rules of mdm_core.search.pso and swarm_iteration in their order: the same results bit
+for bit, without a (runs, vehicles, ...) temporary per operation.
 
 When every message arrives at once and none is lost (message_delay 0, message_drop 0, the
 paper's setting), what receiver i heard from sender j is sender j's own best and reading as
 they stand (both are dropped by the same ``forget``: after a delivery every vehicle of a run
-knows the same confirmed targets). The (runs, receivers, senders) inbox is then not kept: the
-heard tables are views of the own bests and the losses' draw is skipped by advancing the
-generator. Same results bit for bit as the inbox (tests/montecarlo/test_pso_engine.py compares
+knows the same confirmed targets, so a delivery is each confirmation made known to its whole
+run). The (runs, receivers, senders) inbox is then not kept: the heard tables are views of the
+own bests and the losses' draw is skipped by advancing the generator. Same results bit for bit as the inbox (tests/montecarlo/test_pso_engine.py compares
 the two).
 
 Randomness: SeedSequence([seed, block]) as in engine.py, drawn in a fixed order over the whole
@@ -54,7 +56,7 @@ from numpy.typing import NDArray
 
 from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.pso import Best, SwarmConfig, forget
-from mdm_core.search.swarm_iteration import BestOf, explore, refresh_informants
+from mdm_core.search.swarm_iteration import BestOf, explore
 from mdm_core.world import Scenario, TargetTracks, first_entry_time
 from mdm_montecarlo import swarm_kernels as kernels
 from mdm_montecarlo.compiled_tracks import compiled_tracks
@@ -97,50 +99,77 @@ class _Sensors:
     dt: float
     """Update interval, s."""
 
+    def motion(self, t: float) -> _Targets:
+        """Every run's targets at time t."""
+        target, velocity = self.tracks.motion(self.runs, np.full(len(self.runs), t))
+        return _Targets(target, velocity, t, self.dt * _length_bound(velocity))
+
     def sense(
-        self, position: FloatArray, t: float, known: BoolArray
-    ) -> tuple[FloatArray, FloatArray, IntArray]:
-        """The squared distances (runs, vehicles, targets) from ``position`` (runs, vehicles, 2)
-        to the targets at time t, rounded as mdm_core.world.contacts rounds them, and every
-        vehicle's fitness and its source (mdm_core.search.pso.signal_fitness): the signal
-        sensor's strongest exp(-d / R) of a present target within R that the vehicle does not
-        know to be confirmed (as mdm_core.world.contacts reads it). Strengths are computed only
-        for the pairs nearer than R (a superset from the squared distances)."""
-        target = self.tracks.positions(self.runs, np.full(len(self.runs), t))
+        self,
+        targets: _Targets,
+        position: FloatArray,
+        known: BoolArray,
+        fitness: FloatArray,
+        source: IntArray,
+        nearest: FloatArray,
+    ) -> None:
+        """Every vehicle's fitness and its source (mdm_core.search.pso.signal_fitness) at
+        ``position`` (runs, vehicles, 2), in place: the signal sensor's strongest exp(-d / R)
+        of a present target within R that the vehicle does not know to be confirmed (as
+        mdm_core.world.contacts reads it); strengths are computed only for the pairs nearer
+        than R (a superset from the squared distances). ``nearest``: every vehicle's smallest
+        squared distance to a real target, for confirm."""
         radius = self.signal_radius
-        return kernels.sense(
-            target, position, self.appear, t, radius, radius * radius * _NEAR, known
+        kernels.sense(
+            targets.position,
+            position,
+            self.appear,
+            targets.t,
+            radius,
+            radius * radius * _NEAR,
+            known,
+            self.real,
+            fitness,
+            source,
+            nearest,
         )
 
     def confirm(
         self,
+        targets: _Targets,
         position: FloatArray,
+        nearest: FloatArray,
         step: FloatArray,
-        gaps: FloatArray,
-        t: float,
+        longest: float,
         first: FloatArray,
         known: BoolArray,
-    ) -> None:
+    ) -> tuple[IntArray, IntArray]:
         """Confirm the real targets whose disc the segments ``position`` -> ``position + step``
-        (runs, vehicles, 2), flown from t to t + dt, enter: ``first`` and ``known`` (runs,
-        vehicles, targets) are updated in place. ``gaps``: from sense(position, t, known).
+        (runs, vehicles, 2), flown from targets.t to targets.t + dt, enter: ``first`` and
+        ``known`` (runs, vehicles, targets) are updated in place. ``nearest``: from
+        sense(targets, position, ...); ``longest``: the largest absolute coordinate of a step.
+        Returns the (run, target) of every confirmation.
 
         The closed form (mdm_core.world.first_entry_time) is solved only for the
         vehicle x target pairs that can meet in the interval: those no farther apart than
         confirm_radius + the longest step + the farthest a target moves in dt.
         """
-        target, velocity = self.tracks.motion(self.runs, np.full(len(self.runs), t))
-        travel = _length_bound(step) + self.dt * _length_bound(velocity)
+        t = targets.t
+        travel = math.sqrt(2.0) * longest + targets.travel
         # The slack covers the rounding of the closed form; it only adds pairs to solve.
         reach = self.confirm_radius + travel + _SLACK
-        run, lane, index = kernels.open_pairs(gaps, reach * reach, self.real, known)
+        run, lane, index = kernels.open_pairs(
+            targets.position, position, nearest, reach * reach, self.real, known
+        )
         pairs = len(run)
+        if pairs == 0:
+            return run, index
         entry = first_entry_time(
             position[run, lane],
             step[run, lane] / self.dt,
             np.full(pairs, self.dt),
-            target[run, index][:, None, :],
-            velocity[run, index][:, None, :],
+            targets.position[run, index][:, None, :],
+            targets.velocity[run, index][:, None, :],
             np.full(pairs, self.confirm_radius),
             np.ones((pairs, 1), dtype=bool),
             (self.appear[index] - t)[:, None],
@@ -149,6 +178,19 @@ class _Sensors:
         run, lane, index = run[hit], lane[hit], index[hit]
         first[run, lane, index] = np.minimum(first[run, lane, index], t + entry[hit])
         known[run, lane, index] = True
+        return run, index
+
+
+@dataclass(frozen=True)
+class _Targets:
+    """Every run's targets at one time: (runs, targets, 2) positions and velocities, both
+    holding until the next node of their tracks."""
+
+    position: FloatArray
+    velocity: FloatArray
+    t: float
+    travel: float
+    """dt x a bound of the targets' speeds: at most how far one moves in an interval."""
 
 
 @dataclass
@@ -284,8 +326,12 @@ def run_swarm_block(
     known = np.zeros((*shape, m), dtype=bool)
     own = Best(position.copy(), np.zeros(shape), np.full(shape, -1, dtype=np.intp))
     inbox = _Inbox.empty(shape, n_vehicles)
+    # The last reading, its source and the squared distance to the nearest real target.
     current = np.zeros(shape)
+    source = np.full(shape, -1, dtype=np.intp)
+    nearest = np.empty(shape)
     previous_best = np.zeros(shape)
+    inertia = np.full(shape, config.inertia)
     others = ~np.eye(n_vehicles, dtype=bool)
     links = np.broadcast_to(others, (*shape, n_vehicles)).copy()
     if config.variant == "spso":
@@ -294,13 +340,20 @@ def run_swarm_block(
     outbox: deque[Message] = deque(maxlen=delay + 1)
     broadcast = delay == 0 and spec.message_drop == 0.0 and not keep_inbox
     best_of: BestOf = _swarm_best
+    # The tables below are updated in place: these are read every iteration.
+    heard, heard_current = inbox.heard, inbox.current
     if broadcast:
         best_of = _best_of_linked_peers if config.variant == "spso" else _best_of_all_peers
+        heard, heard_current = _heard_from_own(own), _to_every_receiver(current)
 
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
-    gaps, _, _ = sensors.sense(position, 0.0, known)
+    targets_now = sensors.motion(0.0)
+    # Only the distances: the first reading is taken after the first step.
+    sensors.sense(targets_now, position, known, np.zeros(shape), source, nearest)
     step = np.zeros((*shape, 2))
     guided = np.zeros(shape, dtype=bool)
+    # SPSO: the swarm bests the informants' refresh found for the next iteration.
+    social: tuple[Best, BoolArray] | None = None
     social_fitness = np.zeros(shape)
     stop = max(profile.mission.ts_cap, profile.mission.duration)
     duration = profile.mission.duration
@@ -309,13 +362,9 @@ def run_swarm_block(
     followed = 0
 
     while t < stop - 1e-9:
-        heard, heard_current = inbox.heard, inbox.current
-        if broadcast:
-            heard, heard_current = _heard_from_own(own), _to_every_receiver(current)
         # mdm_core.search.swarm_iteration.choose_move, then the flight clipped to the area.
-        social, own_is_social = best_of(own, heard, links)
-        follow = social.fitness > 0
-        inertia = np.full(shape, config.inertia)
+        best, own_is_social = best_of(own, heard, links) if social is None else social
+        follow = best.fitness > 0
         if config.variant == "arpso":
             inertia = kernels.arpso_inertia(
                 previous_best,
@@ -327,19 +376,19 @@ def run_swarm_block(
                 config.arpso_speed_weight,
                 config.arpso_aggregation_weight,
             )
-        swarm_move = _next_step(config, step, position, own, social, own_is_social, inertia, rng)
+        swarm_move = _next_step(config, step, position, own, best, own_is_social, inertia, rng)
         # Particles that lost their best go back to exploring from where they are.
         lost = guided & ~follow
         if lost.any():
             waypoint[lost] = explore(explorer, position[lost], rng)
-        new_position, step, reached = kernels.fly(
+        new_position, step, reached, longest = kernels.fly(
             position, swarm_move, follow, waypoint, speed * dt, area
         )
         guided = follow
         followed += int(np.count_nonzero(follow & ~own_is_social))
 
         # Confirmations along the straight segment flown in this iteration.
-        sensors.confirm(position, step, gaps, t, first, known)
+        confirmed = sensors.confirm(targets_now, position, nearest, step, longest, first, known)
         position = new_position
         t += dt
         steps += 1
@@ -348,7 +397,8 @@ def run_swarm_block(
             waypoint[reached] = explore(explorer, position[reached], rng)
 
         # Fitness: the signal sensor, targets known to be confirmed left out.
-        gaps, current, source = sensors.sense(position, t, known)
+        targets_now = sensors.motion(t)
+        sensors.sense(targets_now, position, known, current, source, nearest)
         previous_best = kernels.read_into_best(
             own.position, own.fitness, own.source, known, position, current, source
         )
@@ -357,7 +407,10 @@ def run_swarm_block(
             # The losses are drawn every iteration, so the random stream does not depend on
             # delay or drop; with drop 0 none is lost and the numbers are not needed.
             _skip_uniforms(rng, n * n_vehicles)
-            kernels.share_known(known)
+            # Every vehicle of a run knew the same targets before this iteration's
+            # confirmations (the last share): each is now known to the whole run.
+            run, index = confirmed
+            known[run, :, index] = True
         else:
             outbox.append(Message(own.copy(), current.copy(), known.astype(np.float32)))
             got = (rng.random((*shape, n_vehicles)) >= spec.message_drop) & others
@@ -367,13 +420,8 @@ def run_swarm_block(
         if not broadcast:
             inbox.forget(known)
         if config.variant == "spso":
-            links, social_fitness = refresh_informants(
-                own,
-                _heard_from_own(own) if broadcast else inbox.heard,
-                links,
-                social_fitness,
-                lambda: _random_informants(rng, n_runs, n_vehicles, spec.informants),
-                best_of,
+            social, social_fitness = _refresh_informants(
+                rng, own, heard, links, social_fitness, best_of, spec.informants
             )
         if t >= duration and _all_confirmed(first, real):
             break
@@ -459,7 +507,7 @@ def _next_step(
     if config.variant == "spso":
         direction = rng.standard_normal(position.shape)
         uniform = rng.random(position.shape[:-1])
-        raw = kernels.spso_steps(
+        return kernels.spso_steps(
             step,
             position,
             own.position,
@@ -471,27 +519,64 @@ def _next_step(
             config.spso_acceleration,
             direction,
             uniform,
+            config.max_step,
+            config.constant_speed,
         )
-    else:
-        raw = kernels.pso_steps(
-            step,
-            position,
-            own.position,
-            own.fitness,
-            social.position,
-            social.fitness,
-            inertia,
-            config.cognitive,
-            config.social,
-            rng.random((2, *position.shape)),
-        )
-    kernels.clamp(raw, config.max_step, config.constant_speed)
-    return raw
+    return kernels.pso_steps(
+        step,
+        position,
+        own.position,
+        own.fitness,
+        social.position,
+        social.fitness,
+        inertia,
+        config.cognitive,
+        config.social,
+        rng.random((2, *position.shape)),
+        config.max_step,
+        config.constant_speed,
+    )
 
 
 def _random_informants(rng: np.random.Generator, runs: int, n: int, k: int) -> BoolArray:
     """mdm_core.search.pso.random_informants for (runs,), compiled."""
     return kernels.informants(rng.random((runs, n, n)), k)
+
+
+def _refresh_informants(
+    rng: np.random.Generator,
+    own: Best,
+    heard: Best,
+    links: BoolArray,
+    local_fitness: FloatArray,
+    best_of: BestOf,
+    k: int,
+) -> tuple[tuple[Best, BoolArray], FloatArray]:
+    """mdm_core.search.swarm_iteration.refresh_informants with ``links`` updated in place (the
+    same draw; only the stuck particles' rows are computed: swarm_kernels.relink). Returns
+    best_of's answer over the new links (the next iteration's: nothing changes the bests
+    before it; only the stuck particles' is found again) and the local bests' fitness to
+    compare with next time."""
+    updated, mine = best_of(own, heard, links)
+    fitness = updated.fitness.copy()
+    stuck = fitness <= local_fitness
+    if stuck.any():
+        kernels.relink(rng.random(links.shape), stuck, k, links)
+        kernels.update_swarm_best(
+            own.position,
+            own.fitness,
+            own.source,
+            heard.position,
+            heard.fitness,
+            heard.source,
+            links,
+            stuck,
+            updated.position,
+            updated.fitness,
+            updated.source,
+            mine,
+        )
+    return (updated, mine), fitness
 
 
 def _as_complex(points: FloatArray) -> NDArray[np.complex128]:

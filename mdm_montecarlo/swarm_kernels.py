@@ -36,76 +36,77 @@ def sense(
     radius: float,
     near: float,
     known: BoolArray,
-) -> tuple[FloatArray, FloatArray, IntArray]:
-    """Squared distances (runs, vehicles, targets) from ``position`` (runs, vehicles, 2) to
-    ``target`` (runs, targets, 2), and every vehicle's fitness and its source: the strongest
-    exp(-d / radius) above THRESHOLD of a present target within ``radius`` it does not know to
-    be confirmed (0 and -1 if none), as mdm_core.search.pso.signal_fitness picks it. Strengths
-    are computed only for squared distances below ``near`` (radius^2 with a rounding margin)."""
+    real: BoolArray,
+    fitness: FloatArray,
+    source: IntArray,
+    nearest: FloatArray,
+) -> None:
+    """Every vehicle's fitness and its source, in place in ``fitness`` and ``source`` (runs,
+    vehicles), from ``position`` (runs, vehicles, 2) and ``target`` (runs, targets, 2): the
+    strongest exp(-d / radius) above THRESHOLD of a present target within ``radius`` it does
+    not know to be confirmed (0 and -1 if none), as mdm_core.search.pso.signal_fitness picks
+    it. Strengths are computed only for squared distances below ``near`` (radius^2 with a
+    rounding margin). ``nearest``: the smallest squared distance to a ``real`` target (inf if
+    none), the squares rounded as mdm_core.world.contacts rounds them (_gap)."""
     runs, n, m = known.shape
-    gaps = np.empty((runs, n, m))
-    fitness = np.zeros((runs, n))
-    source = np.full((runs, n), -1, dtype=np.intp)
     for r in range(runs):
         for i in range(n):
             best = 0.0
+            found = -1
+            closest = np.inf
             for k in range(m):
-                dx = target[r, k, 0] - position[r, i, 0]
-                dy = target[r, k, 1] - position[r, i, 1]
-                gap = dx * dx + dy * dy
-                gaps[r, i, k] = gap
-                if gap < near:
+                gap = _gap(target, position, r, i, k)
+                if real[k] and gap < closest:
+                    closest = gap
+                # The strength only where the target could be read (the cheap tests first).
+                if gap < near and appear[k] <= t and not known[r, i, k]:
                     distance = math.sqrt(gap)
-                    strength = math.exp(-distance / radius)
-                    if (
-                        distance < radius
-                        and strength > THRESHOLD
-                        and appear[k] <= t
-                        and not known[r, i, k]
-                        and strength > best
-                    ):
-                        best = strength
-                        source[r, i] = k
+                    if distance < radius:
+                        strength = math.exp(-distance / radius)
+                        if strength > THRESHOLD and strength > best:
+                            best = strength
+                            found = k
             fitness[r, i] = best
-    return gaps, fitness, source
+            source[r, i] = found
+            nearest[r, i] = closest
+
+
+@compiled
+def _gap(target: FloatArray, position: FloatArray, r: int, i: int, k: int) -> float:
+    """Squared distance from vehicle i to target k of run r."""
+    dx: float = target[r, k, 0] - position[r, i, 0]
+    dy: float = target[r, k, 1] - position[r, i, 1]
+    return dx * dx + dy * dy
 
 
 @compiled
 def open_pairs(
-    gaps: FloatArray, reach2: float, real: BoolArray, known: BoolArray
+    target: FloatArray,
+    position: FloatArray,
+    nearest: FloatArray,
+    reach2: float,
+    real: BoolArray,
+    known: BoolArray,
 ) -> tuple[IntArray, IntArray, IntArray]:
     """(run, vehicle, target) indices, in row-major order, of the pairs no farther apart than
-    sqrt(reach2) whose target is real and not yet known to that vehicle to be confirmed."""
-    runs, n, m = gaps.shape
-    run = np.empty(gaps.size, dtype=np.intp)
-    lane = np.empty(gaps.size, dtype=np.intp)
-    index = np.empty(gaps.size, dtype=np.intp)
+    sqrt(reach2) whose target is real and not yet known to that vehicle to be confirmed.
+    ``nearest``: sense's for these positions and targets; only the vehicles with a real target
+    within reach are looked at, their squared distances computed again (the same floats)."""
+    _, n, m = known.shape
+    close = np.flatnonzero(nearest.ravel() <= reach2)
+    run = np.empty(close.size * m, dtype=np.intp)
+    lane = np.empty(close.size * m, dtype=np.intp)
+    index = np.empty(close.size * m, dtype=np.intp)
     count = 0
-    for r in range(runs):
-        for i in range(n):
-            for k in range(m):
-                if gaps[r, i, k] <= reach2 and real[k] and not known[r, i, k]:
-                    run[count] = r
-                    lane[count] = i
-                    index[count] = k
-                    count += 1
+    for flat in close:
+        r, i = divmod(flat, n)
+        for k in range(m):
+            if _gap(target, position, r, i, k) <= reach2 and real[k] and not known[r, i, k]:
+                run[count] = r
+                lane[count] = i
+                index[count] = k
+                count += 1
     return run[:count], lane[:count], index[:count]
-
-
-@compiled
-def share_known(known: BoolArray) -> None:
-    """Every vehicle of a run knows what any of them knows (``known`` (runs, vehicles,
-    targets), in place)."""
-    runs, n, m = known.shape
-    anyone = np.empty(m, dtype=np.bool_)
-    for r in range(runs):
-        anyone[:] = False
-        for i in range(n):
-            for k in range(m):
-                anyone[k] |= known[r, i, k]
-        for i in range(n):
-            for k in range(m):
-                known[r, i, k] = anyone[k]
 
 
 @compiled
@@ -158,15 +159,53 @@ def swarm_best(
 ) -> tuple[FloatArray, FloatArray, IntArray, BoolArray]:
     """mdm_core.search.pso.swarm_best for own (runs, vehicles) and heard (runs, vehicles,
     senders) bests: position, fitness, source of the best, and True where it is the own best
-    (ties go to it; among the linked senders the first best wins, as argmax picks)."""
+    (update_swarm_best)."""
     runs, n = own_fitness.shape
-    senders = links.shape[2]
     position = np.empty((runs, n, 2))
     fitness = np.empty((runs, n))
     source = np.empty((runs, n), dtype=np.intp)
     mine = np.empty((runs, n), dtype=np.bool_)
+    update_swarm_best(
+        own_position,
+        own_fitness,
+        own_source,
+        heard_position,
+        heard_fitness,
+        heard_source,
+        links,
+        np.ones((runs, n), dtype=np.bool_),
+        position,
+        fitness,
+        source,
+        mine,
+    )
+    return position, fitness, source, mine
+
+
+@compiled
+def update_swarm_best(
+    own_position: FloatArray,
+    own_fitness: FloatArray,
+    own_source: IntArray,
+    heard_position: FloatArray,
+    heard_fitness: FloatArray,
+    heard_source: IntArray,
+    links: BoolArray,
+    rows: BoolArray,
+    position: FloatArray,
+    fitness: FloatArray,
+    source: IntArray,
+    mine: BoolArray,
+) -> None:
+    """swarm_best of the particles where ``rows`` (runs, vehicles), written in place into
+    ``position``, ``fitness``, ``source`` and ``mine`` (ties go to the own best; among the
+    linked senders the first best wins, as argmax picks)."""
+    runs, n = own_fitness.shape
+    senders = links.shape[2]
     for r in range(runs):
         for i in range(n):
+            if not rows[r, i]:
+                continue
             other = -np.inf
             slot = 0
             for j in range(senders):
@@ -184,7 +223,6 @@ def swarm_best(
                 position[r, i, 1] = heard_position[r, i, slot, 1]
                 fitness[r, i] = other
                 source[r, i] = heard_source[r, i, slot]
-    return position, fitness, source, mine
 
 
 @compiled
@@ -282,13 +320,17 @@ def arpso_inertia(
     inertia = np.empty((runs, n))
     for r in range(runs):
         for i in range(n):
-            reads[0] = current[r, i]
+            reads[0] = top = current[r, i]
             count = 1
             for j in range(senders):
-                reads[1 + j] = heard_current[r, i, j] if links[r, i, j] else 0.0
-                count += links[r, i, j]
+                value = 0.0
+                if links[r, i, j]:
+                    value = heard_current[r, i, j]
+                    count += 1
+                reads[1 + j] = value
+                top = max(top, value)
             h = _ratio(previous_best[r, i], best[r, i])
-            s = _ratio(_pairwise_sum(reads) / count, reads.max())
+            s = _ratio(_pairwise_sum(reads) / count, top)
             inertia[r, i] = initial - speed_weight * (1.0 - h) + aggregation_weight * s
     return inertia
 
@@ -330,28 +372,29 @@ def _pairwise_sum(values: FloatArray) -> float:
 @compiled
 def _block_sum(values: FloatArray, first: int, count: int) -> float:
     """values[first:first + count].sum() for count <= 128 in numpy's order: in sequence below 8
-    values, else 8 interleaved accumulators added pairwise, then the remainder in sequence."""
+    values, else 8 interleaved accumulators added pairwise, then the remainder in sequence
+    (read by index: slices of ``values`` cost more than the sums)."""
     if count < 8:
         total = 0.0
         for i in range(first, first + count):
             total += values[i]
         return total
-    acc = values[first : first + 8]
-    a0, a1, a2, a3, a4, a5, a6, a7 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6], acc[7]
-    i = 8
-    while i < count - count % 8:
-        acc = values[first + i : first + i + 8]
-        a0 += acc[0]
-        a1 += acc[1]
-        a2 += acc[2]
-        a3 += acc[3]
-        a4 += acc[4]
-        a5 += acc[5]
-        a6 += acc[6]
-        a7 += acc[7]
+    a0, a1, a2, a3 = values[first], values[first + 1], values[first + 2], values[first + 3]
+    a4, a5, a6, a7 = values[first + 4], values[first + 5], values[first + 6], values[first + 7]
+    i = first + 8
+    end = first + count - count % 8
+    while i < end:
+        a0 += values[i]
+        a1 += values[i + 1]
+        a2 += values[i + 2]
+        a3 += values[i + 3]
+        a4 += values[i + 4]
+        a5 += values[i + 5]
+        a6 += values[i + 6]
+        a7 += values[i + 7]
         i += 8
     total = ((a0 + a1) + (a2 + a3)) + ((a4 + a5) + (a6 + a7))
-    for k in range(first + i, first + count):
+    for k in range(end, first + count):
         total += values[k]
     return float(total)
 
@@ -375,9 +418,11 @@ def pso_steps(
     c1: float,
     c2: float,
     uniform: FloatArray,
+    max_step: float,
+    constant_speed: bool,
 ) -> FloatArray:
-    """mdm_core.search.pso.pso_step as next_step calls it (a best of fitness 0 pulls nowhere),
-    per-particle ``inertia`` (runs, vehicles), before clamping; ``uniform`` (2, runs,
+    """mdm_core.search.pso.next_step for PSO and ARPSO: pso_step (a best of fitness 0 pulls
+    nowhere) with per-particle ``inertia`` (runs, vehicles), then clamp; ``uniform`` (2, runs,
     vehicles, 2): its r1, then its r2."""
     runs, n, _ = position.shape
     r1 = uniform[0]
@@ -400,6 +445,7 @@ def pso_steps(
                     + c1 * r1[r, i, a] * (personal - x)
                     + c2 * r2[r, i, a] * (social - x)
                 )
+    clamp(raw, max_step, constant_speed)
     return raw
 
 
@@ -416,10 +462,12 @@ def spso_steps(
     acceleration: float,
     direction: FloatArray,
     uniform: FloatArray,
+    max_step: float,
+    constant_speed: bool,
 ) -> FloatArray:
-    """mdm_core.search.pso.spso_step as next_step calls it, before clamping, from its draws:
-    the standard normal ``direction`` (runs, vehicles, 2), then the radii's ``uniform``
-    (runs, vehicles)."""
+    """mdm_core.search.pso.next_step for SPSO: spso_step from its draws, the standard normal
+    ``direction`` (runs, vehicles, 2), then the radii's ``uniform`` (runs, vehicles); then
+    clamp."""
     runs, n, _ = position.shape
     c = acceleration
     raw = np.empty((runs, n, 2))
@@ -447,6 +495,7 @@ def spso_steps(
             for a in range(2):
                 sample = centre[a] + direction[r, i, a] / norm * reach
                 raw[r, i, a] = inertia * step[r, i, a] + sample - position[r, i, a]
+    clamp(raw, max_step, constant_speed)
     return raw
 
 
@@ -482,14 +531,16 @@ def fly(
     waypoint: FloatArray,
     distance: float,
     area: FloatArray,
-) -> tuple[FloatArray, FloatArray, BoolArray]:
+) -> tuple[FloatArray, FloatArray, BoolArray, float]:
     """One interval's flight: followers take ``swarm_move``, the others head for their
     waypoint, at most ``distance`` (swarm_iteration.choose_move), clipped to the area.
-    Returns the new positions, the steps flown and which explorers reached their waypoint."""
+    Returns the new positions, the steps flown, which explorers reached their waypoint and the
+    largest absolute coordinate of a step."""
     runs, n, _ = position.shape
     new_position = np.empty((runs, n, 2))
     step = np.empty((runs, n, 2))
     reached = np.zeros((runs, n), dtype=np.bool_)
+    longest = 0.0
     for r in range(runs):
         for i in range(n):
             scale = 1.0
@@ -504,36 +555,54 @@ def fly(
                 moved = min(max(x + move, 0.0), area[a])
                 new_position[r, i, a] = moved
                 step[r, i, a] = moved - x
+                longest = max(longest, abs(moved - x))
             if not follow[r, i]:
                 left = _length(
                     waypoint[r, i, 0] - new_position[r, i, 0],
                     waypoint[r, i, 1] - new_position[r, i, 1],
                 )
                 reached[r, i] = left <= 1e-6
-    return new_position, step, reached
+    return new_position, step, reached, longest
 
 
 @compiled
 def informants(keys: FloatArray, k: int) -> BoolArray:
     """mdm_core.search.pso.random_informants from its uniform ``keys`` (runs, n, n), whose
-    diagonal is set to inf in place: row i links the k particles other than i with the smallest
-    keys, those with fewer than k keys below theirs (keys <= the k-th smallest)."""
+    diagonal is set to inf in place (_link_row)."""
     runs, n, _ = keys.shape
-    links = np.zeros((runs, n, n), dtype=np.bool_)
-    k = min(k, n - 1)
-    if k == 0:
-        return links
+    links = np.empty((runs, n, n), dtype=np.bool_)
     for r in range(runs):
         for i in range(n):
-            keys[r, i, i] = np.inf
-        for i in range(n):
-            row = keys[r, i]
-            for j in range(n):
-                below = 0
-                for other in range(n):
-                    below += row[other] < row[j]
-                links[r, i, j] = below < k
+            _link_row(keys, r, i, k, links)
     return links
+
+
+@compiled
+def relink(keys: FloatArray, stuck: BoolArray, k: int, links: BoolArray) -> None:
+    """SPSO's adaptive random topology (mdm_core.search.swarm_iteration.refresh_informants)
+    in place: the rows of ``links`` of the ``stuck`` (runs, n) particles become those of
+    informants(keys, k) (the rest of ``keys`` is not read)."""
+    runs, n = stuck.shape
+    for r in range(runs):
+        for i in range(n):
+            if stuck[r, i]:
+                _link_row(keys, r, i, k, links)
+
+
+@compiled
+def _link_row(keys: FloatArray, r: int, i: int, k: int, links: BoolArray) -> None:
+    """Row (r, i) of random_informants from its keys (runs, n, n), keys[r, i, i] set to inf in
+    place: links[r, i] True for the k particles other than i with the smallest keys, those with
+    fewer than k keys below theirs (keys <= the k-th smallest, as numpy's partition finds it)."""
+    n = keys.shape[2]
+    keys[r, i, i] = np.inf
+    k = min(k, n - 1)
+    for j in range(n):
+        key = keys[r, i, j]
+        below = 0
+        for other in range(n):
+            below += keys[r, i, other] < key
+        links[r, i, j] = below < k
 
 
 @compiled

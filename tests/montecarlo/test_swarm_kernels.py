@@ -58,19 +58,32 @@ def _heard_from_own(own: Best) -> Best:
 
 
 @pytest.mark.parametrize("seed", range(3))
-def test_sense_is_the_squared_gaps_and_signal_fitness(seed: int) -> None:
+def test_sense_is_signal_fitness_and_the_nearest_real_target(seed: int) -> None:
     rng, _, position, known = _state(seed)
     target = rng.uniform(0, 1000, (RUNS, M, 2))
     radius, t = 300.0, 20.0
     appear = np.array([0.0, t, 50.0, 0.0, t])
-    gaps, fitness, source = kernels.sense(
-        target, position, appear, t, radius, radius * radius * (1 + 1e-9), known
+    real = np.array([True, True, False, True, False])
+    fitness, nearest = np.empty((RUNS, N)), np.empty((RUNS, N))
+    source = np.empty((RUNS, N), dtype=np.intp)
+    kernels.sense(
+        target,
+        position,
+        appear,
+        t,
+        radius,
+        radius * radius * (1 + 1e-9),
+        known,
+        real,
+        fitness,
+        source,
+        nearest,
     )
     dx = target[:, None, :, 0] - position[:, :, None, 0]
     dy = target[:, None, :, 1] - position[:, :, None, 1]
-    expected = dx * dx + dy * dy
-    _same(gaps, expected)
-    distance = np.sqrt(expected)
+    gaps = dx * dx + dy * dy
+    _same(nearest, gaps[..., real].min(axis=-1))
+    distance = np.sqrt(gaps)
     # The kernel's exp is the C library's (numpy's AVX-512 exp rounds some last bits otherwise).
     strength = libm.exp(-distance / radius)
     usable = (distance < radius) & (strength > THRESHOLD) & (appear <= t) & ~known
@@ -81,21 +94,23 @@ def test_sense_is_the_squared_gaps_and_signal_fitness(seed: int) -> None:
 
 
 def test_open_pairs_are_the_near_unknown_real_pairs() -> None:
-    rng, _, _, known = _state(3)
-    gaps = rng.uniform(0, 100, known.shape)
+    rng, _, position, known = _state(3)
+    target = rng.uniform(0, 1000, (RUNS, M, 2))
     real = rng.random(M) < 0.7
-    got = kernels.open_pairs(gaps, 40.0, real, known)
-    want = np.nonzero((gaps <= 40.0) & real & ~known)
+    dx = target[:, None, :, 0] - position[:, :, None, 0]
+    dy = target[:, None, :, 1] - position[:, :, None, 1]
+    gaps = dx * dx + dy * dy
+    reach2 = 200.0**2
+    nearest = np.where(real, gaps, np.inf).min(axis=-1)
+    got = kernels.open_pairs(target, position, nearest, reach2, real, known)
+    want = np.nonzero((gaps <= reach2) & real & ~known)
+    assert len(want[0]) > 10
     for a, b in zip(got, want, strict=True):
         _same(a, b.astype(np.intp))
 
 
-def test_known_is_shared_and_bests_are_forgotten_and_improved() -> None:
+def test_bests_are_forgotten_and_improved() -> None:
     rng, own, position, known = _state(4)
-    shared = known.copy()
-    kernels.share_known(shared)
-    _same(shared, known | known.any(axis=1, keepdims=True))
-
     forgotten = own.copy()
     kernels.forget_known(forgotten.fitness, forgotten.source, known)
     _same_best(forgotten, forget(own, known))
@@ -222,6 +237,8 @@ def test_steps_are_next_step(variant: Variant, constant_speed: bool) -> None:
             config.spso_acceleration,
             direction,
             uniform,
+            config.max_step,
+            config.constant_speed,
         )
     else:
         weight = inertia if variant == "arpso" else np.full((RUNS, N), config.inertia)
@@ -236,8 +253,9 @@ def test_steps_are_next_step(variant: Variant, constant_speed: bool) -> None:
             config.cognitive,
             config.social,
             mine.random((2, RUNS, N, 2)),
+            config.max_step,
+            config.constant_speed,
         )
-    kernels.clamp(got, config.max_step, config.constant_speed)
     _same(got, want)
     assert mine.random() == draws.random()
 
@@ -256,11 +274,12 @@ def test_fly_is_the_exploration_move_clipped_to_the_area() -> None:
     move = np.where(follow[..., None], swarm_move, explore_move)
     want_position = np.clip(position + move, 0.0, area)
     want_reached = ~follow & (_length(waypoint - want_position) <= 1e-6)
-    new_position, step, reached = kernels.fly(
+    new_position, step, reached, longest = kernels.fly(
         position, swarm_move, follow, waypoint, distance, area
     )
     _same(new_position, want_position)
     _same(step, want_position - position)
+    assert longest == np.abs(want_position - position).max()
     _same(reached, want_reached)
     assert want_reached.any()
     assert (want_position == 0.0).any()
@@ -286,3 +305,45 @@ def test_informants_with_tied_keys_are_the_partition_rule(k: int) -> None:
     got = kernels.informants(keys, k)
     _same(got, want <= kth)
     assert (got.sum(axis=-1) > k).any()  # ties linked more than k somewhere
+
+
+def test_relink_redraws_the_rows_of_the_stuck_particles() -> None:
+    rng = np.random.default_rng(12)
+    links = rng.random((RUNS, N, N)) < 0.5
+    keys = rng.random((RUNS, N, N))
+    stuck = rng.random((RUNS, N)) < 0.4
+    want = np.where(stuck[..., None], kernels.informants(keys.copy(), 3), links)
+    kernels.relink(keys, stuck, 3, links)
+    _same(links, want)
+
+
+def test_update_swarm_best_redoes_the_chosen_rows() -> None:
+    rng, own, _, _ = _state(13)
+    links = rng.random((RUNS, N, N)) < 0.5
+    heard = _heard_from_own(own)
+    found = kernels.swarm_best(
+        own.position, own.fitness, own.source, heard.position, heard.fitness, heard.source, links
+    )
+    rows = rng.random((RUNS, N)) < 0.4
+    links[rows] = rng.random((int(rows.sum()), N)) < 0.5
+    want = kernels.swarm_best(
+        own.position, own.fitness, own.source, heard.position, heard.fitness, heard.source, links
+    )
+    position, fitness, source, mine = found
+    position, fitness, source, mine = position.copy(), fitness.copy(), source.copy(), mine.copy()
+    kernels.update_swarm_best(
+        own.position,
+        own.fitness,
+        own.source,
+        heard.position,
+        heard.fitness,
+        heard.source,
+        links,
+        rows,
+        position,
+        fitness,
+        source,
+        mine,
+    )
+    for a, b in zip((position, fitness, source, mine), want, strict=True):
+        _same(a, b)
