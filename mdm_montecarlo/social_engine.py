@@ -37,8 +37,8 @@ paper's setting), what receiver i heard from sender j is sender j's own best and
 they stand (both are dropped by the same ``forget``: after a delivery every vehicle of a run
 knows the same confirmed targets, so a delivery is each confirmation made known to its whole
 run). The (runs, receivers, senders) inbox is then not kept: the heard tables are views of the
-own bests and the losses' draw is skipped by advancing the generator. Same results bit for bit as the inbox (tests/montecarlo/test_pso_engine.py compares
-the two).
+own bests and the losses' draw is skipped by advancing the generator. Same results bit for bit
+as the inbox (tests/montecarlo/test_pso_engine.py compares the two).
 
 Randomness: SeedSequence([seed, block]) as in engine.py, drawn in a fixed order over the whole
 block, so results are identical for any number of workers.
