@@ -112,7 +112,8 @@ def advance(
 
     ``eligible`` (n, m) comes in with the remembered targets of the lanes that check exactly
     cleared. Returns the lanes that reached their waypoint, the contacts (n, m) and the
-    contacted targets' positions (n, m, 2; NaN for lanes without a contact)."""
+    contacted targets' positions (n, m, 2; only the contacts' entries are written: the policy
+    step reads no other)."""
     n, m = eligible.shape
     last = radii.shape[0] - 1
     start = np.empty((n, 2))
@@ -153,7 +154,7 @@ def advance(
     )
     reached = np.zeros(n, dtype=np.bool_)
     contacts = np.zeros((n, m), dtype=np.bool_)
-    where = np.full((n, m, 2), np.nan)
+    where = np.empty((n, m, 2))
     for i in range(n):
         lane = lanes[i]
         soonest = np.inf
@@ -180,8 +181,9 @@ def advance(
         offset = new_t - k * grid_dt if moving else 0.0
         for j in range(m):
             contacts[i, j] = entry[i, j] <= soonest + CONTACT_EPS
-            where[i, j, 0] = seg_velocity[row, k, j, 0] * offset + seg_start[row, k, j, 0]
-            where[i, j, 1] = seg_velocity[row, k, j, 1] * offset + seg_start[row, k, j, 1]
+            if contacts[i, j]:
+                where[i, j, 0] = seg_velocity[row, k, j, 0] * offset + seg_start[row, k, j, 0]
+                where[i, j, 1] = seg_velocity[row, k, j, 1] * offset + seg_start[row, k, j, 1]
     return reached, contacts, where
 
 
