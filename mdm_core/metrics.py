@@ -12,10 +12,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-# stdtrit(df, p) is what scipy.stats.t.ppf(p, df) evaluates; scipy.special alone is a third of
-# scipy.stats' import time, which every `mdm-montecarlo` start paid.
-from scipy.special import stdtrit
-
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
@@ -49,6 +45,11 @@ class Summary:
 
     @classmethod
     def of(cls, values: NDArray[np.generic]) -> Summary:
+        # stdtrit(df, p) is what scipy.stats.t.ppf(p, df) evaluates (scipy.special alone is a
+        # third of scipy.stats' import time). Imported here, not at the top: `reproduce` starts
+        # its simulation workers before it needs a summary, and they never do.
+        from scipy.special import stdtrit
+
         values = np.asarray(values, dtype=float)
         n = len(values)
         mean = float(values.mean()) if n else float("nan")

@@ -10,6 +10,7 @@ Workers ignore SIGINT (Ctrl-C reaches the whole process group; only the parent h
 
 from __future__ import annotations
 
+import gc
 import multiprocessing
 import signal
 from collections.abc import Callable, Generator
@@ -30,12 +31,17 @@ def _serve(task: Callable[..., Any], jobs: Connection, results: Connection) -> N
 
 
 def imap_unordered(
-    task: Callable[..., Any], jobs: list[Job], workers: int
+    task: Callable[..., Any],
+    jobs: list[Job],
+    workers: int,
+    started: Callable[[], object] | None = None,
 ) -> Generator[Any, None, None]:
     """``task(*job)`` for every job in ``workers`` processes, results as they finish.
 
-    Jobs are handed out in the given order, one at a time per worker. Closing the iterator
-    early (an exception in the caller, KeyboardInterrupt) kills the workers at once.
+    Jobs are handed out in the given order, one at a time per worker. ``started`` is called in
+    this process once every worker has its first job: work of the caller's that the workers do
+    not need can run then, not before they start. Closing the iterator early (an exception in
+    the caller, KeyboardInterrupt) kills the workers at once.
     """
     ctx = multiprocessing.get_context()
     pending = list(reversed(jobs))
@@ -47,12 +53,20 @@ def imap_unordered(
             job_read, job_write = ctx.Pipe(duplex=False)
             result_read, result_write = ctx.Pipe(duplex=False)
             proc = ctx.Process(target=_serve, args=(task, job_read, result_write), daemon=True)
-            proc.start()
+            # Forked with this process's objects frozen, a worker's full collections skip them
+            # (the imports: ~120 000 objects, ~0.1 s a pass, about one pass per worker).
+            gc.freeze()
+            try:
+                proc.start()
+            finally:
+                gc.unfreeze()
             job_read.close()
             result_write.close()
             procs.append(proc)
             links[result_read] = job_write
             job_write.send(pending.pop())
+        if started is not None:
+            started()
         active = set(links)
         while active:
             for ready in wait(list(active)):

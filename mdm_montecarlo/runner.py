@@ -138,8 +138,13 @@ def run_many(
     scheduler: str | None = None,
     progress: Progress | None = None,
     block_runs: int = BLOCK_RUNS,
+    meanwhile: Callable[[], object] | None = None,
 ) -> list[MissionResults]:
-    """``run_missions`` for several profiles at once, sharing one pool (or Dask client)."""
+    """``run_missions`` for several profiles at once, sharing one pool (or Dask client).
+
+    ``meanwhile`` is called once in this process while the runs compute elsewhere (local
+    workers or Dask), never with ``workers=1`` and no scheduler.
+    """
     if runs < 1:
         raise ValueError(f"runs must be >= 1, got {runs}")
     if workers < 1:
@@ -151,7 +156,7 @@ def run_many(
     expected = {i: sum(1 for job in jobs if job[0] == i) for i in range(len(profiles))}
     done = progress or (lambda _n: None)
     try:
-        _run_jobs(profiles, jobs, seed, workers, scheduler, blocks, done)
+        _run_jobs(profiles, jobs, seed, workers, scheduler, blocks, done, meanwhile)
     except KeyboardInterrupt:
         finished = {
             i: _collect(profiles[i], seed, got)
@@ -175,6 +180,7 @@ def _run_jobs(
     scheduler: str | None,
     blocks: dict[int, list[BlockResult]],
     done: Progress,
+    meanwhile: Callable[[], object] | None,
 ) -> None:
     """Compute every (profile, block, runs) job into ``blocks`` (in place)."""
     if scheduler is not None:
@@ -186,12 +192,14 @@ def _run_jobs(
                 client.submit(simulate_block, profiles[i], seed, b, n, pure=False): i
                 for i, b, n in jobs
             }
+            if meanwhile is not None:
+                meanwhile()
             for fut in dask_completed(futures):  # type: ignore[no-untyped-call]
                 blocks[futures[fut]].append(fut.result())
                 done(blocks[futures[fut]][-1].per_vehicle.shape[0])
     elif workers > 1:
         work = [(i, profiles[i], seed, b, n) for i, b, n in jobs]
-        for i, result in imap_unordered(_indexed_block, work, workers):
+        for i, result in imap_unordered(_indexed_block, work, workers, meanwhile):
             blocks[i].append(result)
             done(result.per_vehicle.shape[0])
     else:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import csv
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -108,3 +110,13 @@ def test_unwritable_out_is_refused_before_any_simulation(
     err = capsys.readouterr().err
     assert f"--out {out}: not a writable folder" in err
     assert "Traceback" not in err
+
+
+def test_matplotlib_and_scipy_special_wait_until_the_workers_start() -> None:
+    """reproduce imports them while the simulation workers run (cli._import_report); numba
+    imports the top-level scipy package only."""
+    code = (
+        "import sys, mdm_montecarlo.cli; print({'matplotlib', 'scipy.special'} & set(sys.modules))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "set()"

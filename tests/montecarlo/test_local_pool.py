@@ -3,6 +3,8 @@ gone after the iterator is closed (as on Ctrl-C)."""
 
 from __future__ import annotations
 
+import gc
+import multiprocessing
 import os
 
 import pytest
@@ -16,6 +18,10 @@ def _square(x: int) -> tuple[int, int]:
 
 def _fail(x: int) -> int:
     raise ValueError(f"bad job {x}")
+
+
+def _frozen(_x: int) -> int:
+    return gc.get_freeze_count()
 
 
 def test_every_job_once_from_several_processes() -> None:
@@ -36,3 +42,23 @@ def test_closing_early_stops_the_workers() -> None:
     results.close()
     with pytest.raises(ProcessLookupError):
         os.kill(pid, 0)
+
+
+def test_started_is_called_here_once_every_worker_has_its_job() -> None:
+    before = len(multiprocessing.active_children())
+    seen: list[int] = []
+    jobs = [(x,) for x in range(6)]
+
+    def started() -> None:
+        seen.append(len(multiprocessing.active_children()) - before)
+
+    out = list(imap_unordered(_square, jobs, workers=2, started=started))
+    assert sorted(v for v, _ in out) == [x * x for x in range(6)]
+    assert seen == [2]
+
+
+def test_workers_inherit_this_process_objects_frozen_and_it_unfreezes_them() -> None:
+    before = gc.get_freeze_count()
+    (frozen,) = imap_unordered(_frozen, [(0,)], workers=1)
+    assert frozen > before
+    assert gc.get_freeze_count() == before
