@@ -5,24 +5,29 @@ step): cached on disk where a cache can be written.
 with a read-only home, say); the kernels are then compiled once per process instead (about
 15 s for all of them on the project's machine, most of it the policy's random draws) rather
 than the engine failing to import.
+
+Every kernel uses numba's numpy error model: a float division by zero gives inf or NaN, as in
+the numpy code each kernel replaces, instead of raising ZeroDivisionError. The Python model
+tests every divisor before dividing; without those tests the engine's kernels take about 8 %
+less CPU (docs/model.md, "Speed of reproduce"), with the same results wherever no division by
+zero happens (where one does, the Python model would have raised).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Literal, TypeVar, cast
+from typing import Any, TypeVar, cast
 
 from numba import njit
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 
-def compiled(fn: F, *, nogil: bool = True, error_model: Literal["python", "numpy"] = "python") -> F:
-    """``fn`` compiled in nopython mode, cached on disk if possible; with the GIL released
-    unless ``nogil`` is False (a kernel updating state that other threads read whole).
-    ``error_model="numpy"``: a float division by zero gives inf or NaN, as in numpy, instead of
-    raising ZeroDivisionError."""
+def compiled(fn: F, *, nogil: bool = True) -> F:
+    """``fn`` compiled in nopython mode with numpy's error model, cached on disk if possible;
+    with the GIL released unless ``nogil`` is False (a kernel updating state that other threads
+    read whole)."""
     try:
-        return cast(F, njit(cache=True, nogil=nogil, error_model=error_model)(fn))
+        return cast(F, njit(cache=True, nogil=nogil, error_model="numpy")(fn))
     except RuntimeError:  # "cannot cache function ...: no locator available"
-        return cast(F, njit(nogil=nogil, error_model=error_model)(fn))
+        return cast(F, njit(nogil=nogil, error_model="numpy")(fn))

@@ -116,7 +116,7 @@ def _step(
         speed[i, 0], speed[i, 1], speed[i, 2] = s0, s1, s2
 
 
-step_fleet = compiled(_step, nogil=False, error_model="numpy")
+step_fleet = compiled(_step, nogil=False)
 """The compiled step; it holds the GIL, so a thread reading the state (the tests' observers)
 never sees a vehicle half stepped; a zero divisor gives inf/NaN as in numpy."""
 

@@ -48,4 +48,4 @@ def _readout(
     return signal, entered
 
 
-readout = compiled(_readout, error_model="numpy")
+readout = compiled(_readout)

@@ -31,4 +31,4 @@ def _tilt_tangents(
     return right, forward
 
 
-tilt_tangents = compiled(_tilt_tangents, error_model="numpy")
+tilt_tangents = compiled(_tilt_tangents)

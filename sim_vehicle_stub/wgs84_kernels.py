@@ -103,7 +103,7 @@ def _arctan_argument_and_height(
 
 
 # A zero divisor gives inf/NaN as in the numpy version (a point on the Earth's axis, say).
-to_ecef = compiled(_to_ecef, error_model="numpy")
-heikkinen_g = compiled(_heikkinen_g, error_model="numpy")
-cbrt_argument = compiled(_cbrt_argument, error_model="numpy")
-arctan_argument_and_height = compiled(_arctan_argument_and_height, error_model="numpy")
+to_ecef = compiled(_to_ecef)
+heikkinen_g = compiled(_heikkinen_g)
+cbrt_argument = compiled(_cbrt_argument)
+arctan_argument_and_height = compiled(_arctan_argument_and_height)

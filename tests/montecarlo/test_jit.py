@@ -22,3 +22,14 @@ def test_a_kernel_without_a_cache_location_still_compiles_and_runs() -> None:
     kernel = compiled(_without_source_file())
     assert kernel(np.arange(4.0)) == 12.0
     assert kernel.signatures  # compiled by numba, not the Python function handed back
+
+
+def _ratio(a: float, b: float) -> float:
+    return a / b
+
+
+def test_a_division_by_zero_gives_what_numpy_gives() -> None:
+    kernel = compiled(_ratio)
+    assert kernel(1.0, 0.0) == np.inf
+    assert np.isnan(kernel(0.0, 0.0))
+    assert kernel(-1.0, 0.0) == -np.inf
