@@ -4,10 +4,10 @@ A round moves every active lane to its next event: ``legs``, the remembered targ
 (``remembered.eligible``), ``advance``, the policy step and its memory update
 (``compiled_step``), ``record``. Called from Python, each round cost two dozen numpy calls
 and six kernel dispatches around those loops, about a sixth of the MDM rows' CPU time over
-their 18 000 rounds (benchmarks/README.md, "the engine's round loop"). Here the same kernels
-run in the same order on the same arrays, round after round, and the loop only returns when
-the block is done or a dynamic target's path must grow (its draws are numpy's; the caller
-grows it and calls again, which redoes the round from its start: nothing was changed yet).
+their 18 000 rounds (docs/model.md, "Session 11"). Here the same kernels run in the same
+order on the same arrays, round after round, and the loop only returns when the block is done
+or a dynamic target's path must grow (its draws are numpy's; the caller grows it and calls
+again, which redoes the round from its start: nothing was changed yet).
 
 Which top speed each step sees is the Python loop's: the remembered targets' windows are
 checked against the speed of the paths drawn before the round's growth, the entry times

@@ -2,7 +2,7 @@
 
 A round was some sixty numpy calls on (lanes,) and (lanes, targets) temporaries around the
 compiled entry kernel and the compiled policy step (docs/model.md, "Speed of reproduce"). Here
-two loops over the lanes do the same arithmetic in the same order:
+three loops over the lanes do the same arithmetic in the same order:
 
 - ``legs``: the straight leg to the waypoint, the level's deadline and the horizon of the leg
   (the earliest of waypoint, deadline and the run's stop time);
