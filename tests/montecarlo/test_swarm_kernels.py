@@ -18,9 +18,10 @@ from mdm_core.search.pso import (
     signal_fitness,
     swarm_best,
 )
-from mdm_core.search.swarm_iteration import arpso_weights, read_into_best
+from mdm_core.search.swarm_iteration import arpso_weights, read_into_best, refresh_informants
 from mdm_core.world.sensors import THRESHOLD
 from mdm_montecarlo import swarm_kernels as kernels
+from mdm_montecarlo.social_engine import _refresh_informants, _swarm_best
 
 RUNS, N, M = 40, 7, 5
 
@@ -347,3 +348,29 @@ def test_update_swarm_best_redoes_the_chosen_rows() -> None:
     )
     for a, b in zip((position, fitness, source, mine), want, strict=True):
         _same(a, b)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_refresh_informants_in_place_is_the_companions_rule(seed: int) -> None:
+    """The engine's in-place refresh (social_engine._refresh_informants) and the companion's
+    (swarm_iteration.refresh_informants) give the same links, fitness and random stream, and
+    the best the engine carries over is swarm_best over the new links."""
+    rng, own, _, _ = _state(20 + seed)
+    heard = _heard_from_own(own)
+    links = rng.random((RUNS, N, N)) < 0.5
+    local = rng.integers(0, 4, (RUNS, N)) / 4.0
+    mine, theirs = np.random.default_rng(seed), np.random.default_rng(seed)
+    want_links, want_fitness = refresh_informants(
+        own, heard, links.copy(), local, lambda: random_informants(theirs, (RUNS,), N, 3)
+    )
+    got_links = links.copy()
+    (best, best_mine), got_fitness = _refresh_informants(
+        mine, own, heard, got_links, local, _swarm_best, 3
+    )
+    _same(got_links, want_links)
+    _same(got_fitness, want_fitness)
+    want_best, want_mine = swarm_best(own, heard, want_links)
+    _same_best(best, want_best)
+    _same(best_mine, want_mine)
+    assert mine.random() == theirs.random()
+    assert (want_links != links).any()  # some particles were stuck and relinked
