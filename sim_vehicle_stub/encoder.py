@@ -39,8 +39,8 @@ def _x25crc(data: bytes) -> int:
 
 
 # fastcrc's C function when installed (pymavlink uses it too), called without a wrapper:
-# every telemetry frame goes through here.
-_crc = mavcrc.mcrf4xx or _x25crc
+# every telemetry frame and every setpoint received goes through here.
+mavlink_crc = mavcrc.mcrf4xx or _x25crc
 
 
 class Encoder:
@@ -74,7 +74,7 @@ class Encoder:
             len(payload), self._incompat, 0, seq, self.sysid, self.compid, msg_id & 0xFFFF,
             msg_id >> 16,
         ) + payload  # fmt: skip
-        data = b"\xfd" + body + _CRC.pack(_crc(body + _EXTRA[crc_extra]))
+        data = b"\xfd" + body + _CRC.pack(mavlink_crc(body + _EXTRA[crc_extra]))
         if self.signing is not None:
             data += self.signing.signature(data)
         return data

@@ -10,6 +10,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from sim_vehicle_stub.mavlink import dialect
+from sim_vehicle_stub.plain_decode import decode_plain, plain_type
 
 _V2, _V1 = 0xFD, 0xFE
 _MAX_FRAMES_PER_READ = 64
@@ -128,8 +129,12 @@ class FrameDecoder:
                 errors += 1
                 i += total
                 continue
+            plain = plain_type(msgid) if magic == _V2 else None
             try:
-                msg = self._mav.decode(bytearray(buf[i : i + total]))
+                if plain is not None:
+                    msg = decode_plain(plain, buf[i : i + total])
+                else:
+                    msg = self._mav.decode(bytearray(buf[i : i + total]))
             except dialect.MAVError as exc:
                 if "CRC" in str(exc):
                     stats.bad_crc += 1

@@ -41,7 +41,12 @@ _LIMIT = 1e7
 
 
 def _ok(*values: float) -> bool:
-    return all(math.isfinite(x) and abs(x) < _LIMIT for x in values)
+    """Every value finite and below the limit (``abs(x) < _LIMIT`` is false for NaN and inf).
+    A loop, not ``all()`` over a generator: this runs for every setpoint received."""
+    for x in values:  # noqa: SIM110
+        if not abs(x) < _LIMIT:
+            return False
+    return True
 
 
 def local_setpoint(msg: Any, v: Vehicle, t: float) -> NeuSetpoint | None:
