@@ -36,17 +36,16 @@ class Geofence:
         return cls(np.array([[0.0, 0.0], [north, 0.0], [north, east], [0.0, east]]))
 
     def contains(self, point: FloatArray | tuple[float, float]) -> bool:
-        """Ray casting; points on an edge count as inside."""
+        """Ray casting; points on an edge count as inside (the distance to the edges is only
+        needed where the ray says outside, which is rare in flight)."""
         x, y = float(point[0]), float(point[1])
-        if self._nearest(x, y)[0] <= 1e-9:
-            return True
         inside = False
         for an, ae, bn, be, _, _, _ in self._edges:
             if (ae > y) != (be > y):
                 cross = an + (y - ae) * (bn - an) / (be - ae)
                 if x < cross:
                     inside = not inside
-        return inside
+        return inside or self._nearest(x, y)[0] <= 1e-9
 
     def clamp(self, point: FloatArray) -> FloatArray:
         """``point`` if inside, else the nearest point on the fence's boundary."""

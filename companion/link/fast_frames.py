@@ -39,10 +39,12 @@ SETPOINT = mavlink2.MAVLink_set_position_target_local_ned_message.unpacker
 afx, afy, afz, yaw, yaw_rate, type_mask, target_system, target_component, coordinate_frame."""
 
 
-def _crc16(data: bytes) -> int:
-    if mavcrc.mcrf4xx is not None:
-        return int(mavcrc.mcrf4xx(data))
+def _x25crc(data: bytes) -> int:
     return int(mavcrc.x25crc(data).crc)
+
+
+_crc16 = mavcrc.mcrf4xx or _x25crc
+"""fastcrc's C function when installed (pymavlink uses it too), called without a wrapper."""
 
 
 def split(data: bytes) -> list[tuple[int, int, bytes]] | None:
