@@ -13,12 +13,15 @@ work: on every telemetry datagram it sends one ready-made SET_POSITION_TARGET_LO
 - ``blocking``: a plain blocking ``recvfrom`` / ``sendto`` loop; the least a Python process
   can do per answer;
 - ``asyncio``: the same inside an asyncio DatagramProtocol, as the companion receives;
+- ``essential``: the asyncio answerer doing the companion's own per-answer work and nothing
+  else: its frame split and decode (``fast_frames``), pursuit guidance inside a geofence, the
+  setpoint's encode and the .tlog; no events, lifecycle, sensors or policy check;
 - ``none``: no answerer and no lockstep (the emulator alone, its telemetry drained by the sink).
 
 Printed per kind: sim/wall, the emulator's CPU s per sim s and the answerers' (their sum), and
-the bound 2 cores give at that total. What a real companion adds on top of ``asyncio`` is its
-decision, decode and encode (companion_answer_cost.py); no scheduling gets the fleet below the
-``asyncio`` total.
+the bound 2 cores give at that total. No scheduling gets the fleet below the ``asyncio`` total;
+the gap between ``essential`` and a real companion (companion_fleet_speed.py) is its framework
+(events, lifecycle, sensors, policy check).
 """
 
 from __future__ import annotations
@@ -62,7 +65,7 @@ if kind == "blocking":
         data, addr = sock.recvfrom(4096)
         sock.sendto(frames[k], addr)
         k = (k + 1) & 0xFF
-else:
+elif kind == "asyncio":
     class Answer(asyncio.DatagramProtocol):
         k = 0
         def connection_made(self, transport):
@@ -70,6 +73,41 @@ else:
         def datagram_received(self, data, addr):
             self.transport.sendto(frames[self.k], addr)
             self.k = (self.k + 1) & 0xFF
+else:  # essential: the companion's own decode, guidance, encode and .tlog, nothing else
+    import tempfile
+    from pathlib import Path
+    import numpy as np
+    from companion.geofence import Geofence
+    from companion.guidance import GuidanceConfig, pursuit
+    from companion.link import fast_frames
+    from companion.link.tlog import TelemetryLog
+    fence = Geofence.rectangle(20000.0, 20000.0)
+    guide = GuidanceConfig(speed=20.0, altitude=30.0, acceptance_radius=5.0)
+    goal = np.array([5000.0, 15000.0])
+    tlog = TelemetryLog(Path(tempfile.mkdtemp()) / "v.tlog")
+    class Answer(asyncio.DatagramProtocol):
+        k = 0
+        def connection_made(self, transport):
+            self.transport = transport
+        def datagram_received(self, data, addr):
+            position = None
+            for msg_id, _, frame in fast_frames.split(data) or ():
+                tlog.write(frame)
+                fields = fast_frames.unpack(msg_id, frame)
+                if msg_id == fast_frames.LOCAL_POSITION_NED:
+                    position = fields
+            if position is None:
+                return
+            t, north, east, down = position[:4]
+            sp = pursuit(np.array([north, east]), down, goal, guide, fence, 0.1)
+            payload = fast_frames.SETPOINT.pack(t, sp.north, sp.east, sp.down, sp.vn, sp.ve,
+                                                sp.vd, 0.0, 0.0, 0.0, 0.0, 0.0, 3527, sysid, 1, 1)
+            out = fast_frames.frame(fast_frames.SET_POSITION_TARGET_LOCAL_NED, payload, self.k,
+                                    255, 190)
+            tlog.write(out)
+            self.transport.sendto(out, addr)
+            self.k = (self.k + 1) & 0xFF
+if kind != "blocking":
     async def main():
         loop = asyncio.get_running_loop()
         await loop.create_datagram_endpoint(Answer, sock=sock)
@@ -149,7 +187,7 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--speedup", type=_speedup, default=100.0, help="a ratio, or max: flat out")
     p.add_argument("--wall", type=float, default=8.0, help="wall seconds measured per kind")
-    p.add_argument("--kinds", default="none,blocking,asyncio")
+    p.add_argument("--kinds", default="none,blocking,asyncio,essential")
     args = p.parse_args()
     for kind in args.kinds.split(","):
         print(load_note(), flush=True)
