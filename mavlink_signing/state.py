@@ -18,7 +18,7 @@ import time
 from collections.abc import Callable
 from enum import Enum
 
-from pymavlink.generator import mavcrc
+from mavlink_signing.frame_crc import frame_crc
 
 SECRET_BYTES = 32
 SIGNATURE_BYTES = 13
@@ -74,7 +74,7 @@ class SigningState:
         head = bytearray(frame[:-2])
         head[2] |= _FLAG_SIGNED
         head += bytes((crc_extra,))
-        crc = int(mavcrc.x25crc(bytes(head[1:])).crc)
+        crc = frame_crc(bytes(head[1:]))
         signed = bytes(head[:-1]) + crc.to_bytes(2, "little")
         return signed + self.signature(signed)
 

@@ -11,9 +11,8 @@ import re
 import struct
 from typing import Any
 
-from pymavlink.generator import mavcrc
-
 from mavlink_signing import SigningState
+from mavlink_signing.frame_crc import frame_crc
 from sim_vehicle_stub.mavlink import dialect
 
 _HEADER = struct.Struct("<BBBBBBHB")
@@ -32,15 +31,6 @@ def _fast_fields(cls: type) -> tuple[str, ...] | None:
         arrays = any(code != "s" for _, code in _COUNTED.findall(fmt))
         _FAST[cls] = None if arrays else tuple(cls.ordered_fieldnames)  # type: ignore[attr-defined]
     return _FAST[cls]
-
-
-def _x25crc(data: bytes) -> int:
-    return int(mavcrc.x25crc(data).crc)
-
-
-# fastcrc's C function when installed (pymavlink uses it too), called without a wrapper:
-# every telemetry frame and every setpoint received goes through here.
-mavlink_crc = mavcrc.mcrf4xx or _x25crc
 
 
 class Encoder:
@@ -74,7 +64,7 @@ class Encoder:
             len(payload), self._incompat, 0, seq, self.sysid, self.compid, msg_id & 0xFFFF,
             msg_id >> 16,
         ) + payload  # fmt: skip
-        data = b"\xfd" + body + _CRC.pack(mavlink_crc(body + _EXTRA[crc_extra]))
+        data = b"\xfd" + body + _CRC.pack(frame_crc(body + _EXTRA[crc_extra]))
         if self.signing is not None:
             data += self.signing.signature(data)
         return data

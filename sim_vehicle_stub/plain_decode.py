@@ -16,7 +16,7 @@ import re
 import struct
 from typing import Any, NamedTuple
 
-from sim_vehicle_stub.encoder import mavlink_crc
+from mavlink_signing.frame_crc import frame_crc
 from sim_vehicle_stub.mavlink import dialect
 
 _CRC = struct.Struct("<H")
@@ -53,7 +53,7 @@ def decode_plain(kind: PlainType, frame: bytes) -> Any:
     plen, incompat = frame[1], frame[2]
     end = 10 + plen
     crc = _CRC.unpack_from(frame, end)[0]
-    if crc != mavlink_crc(frame[1:end] + kind.extra):
+    if crc != frame_crc(frame[1:end] + kind.extra):
         raise dialect.MAVError(f"invalid MAVLink CRC in msgID {kind.cls.id}")
     size = kind.unpacker.size
     payload = frame[10:end]

@@ -16,7 +16,8 @@ from __future__ import annotations
 import struct
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
-from pymavlink.generator import mavcrc
+
+from mavlink_signing.frame_crc import frame_crc
 
 LOCAL_POSITION_NED = mavlink2.MAVLINK_MSG_ID_LOCAL_POSITION_NED
 NAMED_VALUE_FLOAT = mavlink2.MAVLINK_MSG_ID_NAMED_VALUE_FLOAT
@@ -39,14 +40,6 @@ SETPOINT = mavlink2.MAVLink_set_position_target_local_ned_message.unpacker
 afx, afy, afz, yaw, yaw_rate, type_mask, target_system, target_component, coordinate_frame."""
 
 
-def _x25crc(data: bytes) -> int:
-    return int(mavcrc.x25crc(data).crc)
-
-
-_crc16 = mavcrc.mcrf4xx or _x25crc
-"""fastcrc's C function when installed (pymavlink uses it too), called without a wrapper."""
-
-
 def split(data: bytes) -> list[tuple[int, int, bytes]] | None:
     """(message id, source system, frame) of every frame, or None to leave it to pymavlink."""
     out = []
@@ -59,7 +52,7 @@ def split(data: bytes) -> list[tuple[int, int, bytes]] | None:
         extra = _EXTRA.get(msg_id)
         if end > n or extra is None:
             return None
-        if _crc16(data[i + 1 : end - 2] + extra) != data[end - 2] | (data[end - 1] << 8):
+        if frame_crc(data[i + 1 : end - 2] + extra) != data[end - 2] | (data[end - 1] << 8):
             return None
         out.append((msg_id, data[i + 5], data[i:end]))
         i = end
@@ -87,4 +80,4 @@ def frame(msg_id: int, payload: bytes, seq: int, system: int, component: int) ->
     header = _HEADER.pack(0xFD, len(payload), 0, 0, seq, system, component, msg_id & 0xFFFF,
                           msg_id >> 16)  # fmt: skip
     body = header + payload
-    return body + _CRC.pack(_crc16(body[1:] + _EXTRA[msg_id]))
+    return body + _CRC.pack(frame_crc(body[1:] + _EXTRA[msg_id]))
