@@ -5,10 +5,11 @@ that does nothing but answer.
 
 Every vehicle flies in the external mode (armed, sensors on, as in emulator_speedup.py), streams
 what a fleet companion leaves on (LOCAL_POSITION_NED at 10 Hz, HEARTBEAT and SYS_STATUS at
-1 Hz, the sensor's readings), and the emulator runs in lockstep: each telemetry tick waits until every vehicle has answered. Each
-vehicle is answered by its own process, as the fleet's companions do, but one that does no
-work: on every telemetry datagram it sends one ready-made SET_POSITION_TARGET_LOCAL_NED back
-(one of 256 frames packed before the run, one per sequence number). Three kinds of answerer:
+1 Hz, the sensor's readings), and the emulator runs in lockstep: each telemetry tick waits
+until every vehicle has answered. Each vehicle is answered by its own process, as the fleet's
+companions do; the first two kinds do no work: on every telemetry datagram they send one
+ready-made SET_POSITION_TARGET_LOCAL_NED back (one of 256 frames packed before the run, one per
+sequence number). The kinds (``--kinds``):
 
 - ``blocking``: a plain blocking ``recvfrom`` / ``sendto`` loop; the least a Python process
   can do per answer;
@@ -37,14 +38,14 @@ from pathlib import Path
 
 from emulator_common import SINK, fly_everyone, load_note
 
+from companion.link.pymavlink_link import GLOBAL_POSITION_INT, UNREAD_STREAMS
 from mdm_profiles import builtin_profile
 from sim_vehicle_stub.config import EmulatorConfig, system_id
 from sim_vehicle_stub.emulator import Emulator
 
 N = 12
-UNREAD = (30, 2, 24, 147, 242, 245, 33)
-"""ATTITUDE, SYSTEM_TIME, GPS_RAW_INT, BATTERY_STATUS, HOME_POSITION, EXTENDED_SYS_STATE and
-GLOBAL_POSITION_INT: the streams a fleet companion switches off on its dedicated link."""
+UNREAD = (*UNREAD_STREAMS, GLOBAL_POSITION_INT)
+"""What a fleet companion switches off on its dedicated link (paper-fixed has no fence watch)."""
 
 ANSWERER = r"""
 import asyncio, socket, sys

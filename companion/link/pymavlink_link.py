@@ -47,6 +47,17 @@ _NOT_AUTOPILOT_TYPES = {
 }
 _HEALTH_BITS = mavlink2.MAV_SYS_STATUS_SENSOR_GPS | mavlink2.MAV_SYS_STATUS_PREARM_CHECK
 _PARAM_INT32 = mavlink2.MAV_PARAM_TYPE_INT32
+UNREAD_STREAMS = (
+    mavlink2.MAVLINK_MSG_ID_ATTITUDE,
+    mavlink2.MAVLINK_MSG_ID_SYSTEM_TIME,
+    mavlink2.MAVLINK_MSG_ID_GPS_RAW_INT,
+    mavlink2.MAVLINK_MSG_ID_BATTERY_STATUS,
+    mavlink2.MAVLINK_MSG_ID_HOME_POSITION,
+    mavlink2.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
+)
+"""Streams the mission never reads, switched off on a dedicated link (``configure_streams``)."""
+GLOBAL_POSITION_INT = mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT
+"""Switched off too, unless the fence watch reads it."""
 _DRAIN_MAX = 256
 """Datagrams read at once beyond the one asyncio hands over (see ``PymavlinkLink._drain``)."""
 
@@ -480,7 +491,7 @@ class PymavlinkLink(VehicleLink):
         GLOBAL_POSITION_INT unless the fence watch reads it): at high speed-ups every message not parsed is
         CPU for the rest of the fleet. Only on a dedicated link (``--dedicated-link``): a ground
         station sharing the link would lose them."""
-        unused = [30, 2, 24, 147, 242, 245] + ([] if self.global_position else [33])
+        unused = UNREAD_STREAMS + (() if self.global_position else (GLOBAL_POSITION_INT,))
         for msg_id in unused:
             if not await self.command_long(
                 mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL, float(msg_id), -1.0
