@@ -60,8 +60,22 @@ def pursuit(
     position + v * period is kept inside the fence. (Two-vectors on floats: numpy's per-call
     overhead was most of the cost; np.hypot keeps the norms to the bit.)
     """
-    tn, te = fence.clamp_xy(float(waypoint[0]), float(waypoint[1]))
-    pn, pe = float(position[0]), float(position[1])
+    return pursuit_xy(float(position[0]), float(position[1]), down, float(waypoint[0]),
+                      float(waypoint[1]), config, fence, period)  # fmt: skip
+
+
+def pursuit_xy(
+    pn: float,
+    pe: float,
+    down: float,
+    wn: float,
+    we: float,
+    config: GuidanceConfig,
+    fence: Geofence,
+    period: float,
+) -> NedSetpoint:
+    """:func:`pursuit` from the position (pn, pe) to the waypoint (wn, we), on floats."""
+    tn, te = fence.clamp_xy(wn, we)
     on, oe = tn - pn, te - pe
     distance = float(np.hypot(on, oe))
     period = max(period, 1e-3)

@@ -10,7 +10,7 @@ import time
 from abc import ABC, abstractmethod
 from collections import deque
 from collections.abc import Callable
-from typing import Literal
+from typing import Literal, Protocol
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
@@ -30,6 +30,23 @@ SetpointKind = Literal["velocity", "position"]
 _REASON_WAIT_S = 0.3
 """How long a refusal waits for the STATUSTEXT that explains it: ArduPilot queues the text
 before the COMMAND_ACK, but sends it from its text queue, which can come out after the ack."""
+
+
+class PositionAnswerer(Protocol):
+    """Takes a position that came alone, without the events' path (mission/search_answer.py)."""
+
+    def ready(self, vehicle_time: float, north: float, east: float) -> bool:
+        """Whether this position (vehicle s, profile frame) only needs steering."""
+
+    def answer(
+        self,
+        pos: LocalPosition,
+        signal: float | None,
+        before: list[LinkEvent],
+        after: list[LinkEvent],
+    ) -> None:
+        """Steer from ``pos``; ``signal``: the sensor's SENS_SIG reading that came with it;
+        ``before`` / ``after``: the other events of its datagram, in order."""
 
 
 class LinkError(RuntimeError):
@@ -60,6 +77,9 @@ class VehicleLink(ABC):
         self.listener: Callable[[list[LinkEvent]], None] | None = None
         """Takes the events instead of ``events`` once set (the mission's decision loop): each
         batch read in one callback, at once, without a queue and a task switch per position."""
+        self.answerer: PositionAnswerer | None = None
+        """Set with ``listener`` in the search: a backend may hand it a position that came alone
+        (with at most the sensor's signal) instead of publishing events, when ``ready`` says so."""
         self.autopilot = None
         self.streams = StreamWatch()
         self.heard: set[int] = set()

@@ -23,6 +23,7 @@ from companion.link.fence_protocol import MISSION_KINDS, FenceTransfer
 from companion.link.messages import (
     Heartbeat,
     LinkEvent,
+    LocalPosition,
     SensorContact,
     SensorSignal,
     StatusText,
@@ -58,6 +59,8 @@ UNREAD_STREAMS = (
 """Streams the mission never reads, switched off on a dedicated link (``configure_streams``)."""
 GLOBAL_POSITION_INT = mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT
 """Switched off too, unless the fence watch reads it."""
+_BESIDE_POSITION = frozenset({fast_frames.HEARTBEAT, fast_frames.SYS_STATUS})
+"""What ``_answer`` takes beside the position and the signal (each second of a vehicle's)."""
 _DRAIN_MAX = 256
 """Datagrams read at once beyond the one asyncio hands over (see ``PymavlinkLink._drain``)."""
 
@@ -67,9 +70,12 @@ class _Protocol(asyncio.DatagramProtocol, asyncio.Protocol):
         self.link = link
 
     def datagram_received(self, data: bytes, addr: tuple[str | Any, int]) -> None:
-        self.link._receive(data, addr)
-        self.link._drain()
-        self.link._publish_pending()
+        link = self.link
+        if link.answerer is not None and link._answer(data, addr):
+            return
+        link._receive(data, addr)
+        link._drain()
+        link._publish_pending()
 
     def data_received(self, data: bytes) -> None:
         self.link._receive(data, None)
@@ -198,6 +204,67 @@ class PymavlinkLink(VehicleLink):
                 return
             self._receive(data, addr)
 
+    def _answer(self, data: bytes, addr: tuple[str | Any, int]) -> bool:
+        """A datagram of the locked vehicle holding one LOCAL_POSITION_NED, the sensor's signal
+        (NAMED_VALUE_FLOAT), HEARTBEAT and SYS_STATUS and nothing else, with no datagram waiting
+        behind it: to the answerer when it says the position only needs steering, the heartbeat
+        and status as events before or after it, in their order. The link's own bookkeeping
+        (.tlog, stream rates, the setpoint's time_boot_ms, the autopilot) is :meth:`_receive`'s.
+        False: take the events' path (nothing was changed)."""
+        answerer, sock = self.answerer, self._sock
+        if (answerer is None or sock is None or self._signing is not None or self._pending
+                or self.alignment is not None or addr != self._remote):  # fmt: skip
+            return False
+        received = time.perf_counter()
+        frames = fast_frames.split(data)
+        if frames is None:
+            return False
+        position: tuple[int, float, float, float, float, float, float] | None = None
+        signal = None
+        at, rare = 0, []
+        for i, (msg_id, system, frame) in enumerate(frames):
+            if system != self.target_system:
+                return False
+            if msg_id == fast_frames.LOCAL_POSITION_NED:
+                if position is not None:  # two: the batch acts on the newest
+                    return False
+                position = cast(tuple[int, float, float, float, float, float, float],
+                                fast_frames.unpack(msg_id, frame))  # fmt: skip
+                at = i
+            elif msg_id == fast_frames.NAMED_VALUE_FLOAT:
+                _, value, name = fast_frames.unpack(msg_id, frame)
+                if name == b"SENS_SIG":
+                    signal = cast(float, value)
+            elif msg_id in _BESIDE_POSITION:
+                rare.append((i, msg_id, frame))
+            else:
+                return False
+        if position is None:
+            return False
+        t, x, y, z, vx, vy, vz = position
+        if not answerer.ready(t / 1000.0, x, y):
+            return False
+        try:  # another datagram waiting: the batch acts on the newest position only
+            sock.recv(1, socket.MSG_PEEK)
+            return False
+        except (BlockingIOError, InterruptedError):
+            pass
+        except OSError:  # ICMP port unreachable and the like: the transport reports them
+            return False
+        if self._tlog is not None:
+            for _, _, frame in frames:
+                self._tlog.write(frame)
+        before: list[LinkEvent] = []
+        after: list[LinkEvent] = []
+        for i, msg_id, frame in rare:
+            if (event := self._event(msg_id, frame, received)) is not None:
+                (before if i < at else after).append(event)
+        self._time_ms = t
+        self.streams.note("LOCAL_POSITION_NED", t / 1000.0)
+        pos = LocalPosition(t / 1000.0, x, y, z, vx, vy, vz, received)
+        answerer.answer(pos, signal, before, after)
+        return True
+
     def _publish_pending(self) -> None:
         batch = self._pending
         if batch:
@@ -219,13 +286,16 @@ class PymavlinkLink(VehicleLink):
                 continue
             if self._tlog is not None:
                 self._tlog.write(frame)
-            try:
-                event = self._fast_event(msg_id, frame, received)
-            except (UnknownAutopilotError, ValueError) as exc:
-                log.warning("ignored %s: %s", mavlink2.mavlink_map[msg_id].msgname, exc)
-                continue
-            if event is not None:
+            if (event := self._event(msg_id, frame, received)) is not None:
                 self._pending.append(event)
+
+    def _event(self, msg_id: int, frame: bytes, received: float) -> LinkEvent | None:
+        """:meth:`_fast_event`; a message no event can carry is logged and dropped."""
+        try:
+            return self._fast_event(msg_id, frame, received)
+        except (UnknownAutopilotError, ValueError) as exc:
+            log.warning("ignored %s: %s", mavlink2.mavlink_map[msg_id].msgname, exc)
+            return None
 
     def _fast_event(self, msg_id: int, frame: bytes, received: float) -> LinkEvent | None:
         """:meth:`_translate` of a fast_frames message."""

@@ -67,7 +67,10 @@ class StreamWatch:
         now = time.monotonic()
         self._wall[name] = now
         if vehicle_time is not None:
-            self._times.setdefault(name, deque(maxlen=self._keep)).append(vehicle_time)
+            times = self._times.get(name)
+            if times is None:  # (not setdefault: that builds a deque on every call)
+                times = self._times[name] = deque(maxlen=self._keep)
+            times.append(vehicle_time)
 
     def seen_since(self, name: str, since: float) -> bool:
         """Arrived after ``since`` (time.monotonic)."""

@@ -33,7 +33,9 @@ class MissionCore(Protocol):
 
     def sensor(self) -> int: ...
 
-    def needs_step(self, time: float, reached: bool, contacts: FloatArray) -> bool: ...
+    def needs_step(
+        self, time: float, position: FloatArray, reached: bool, contacts: FloatArray
+    ) -> bool: ...
 
     def step(
         self, time: float, position: FloatArray, reached: bool, contacts: FloatArray

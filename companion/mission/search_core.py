@@ -66,9 +66,18 @@ class SearchCore:
         """Index of the sensor this level switches on."""
         return sensor_for_level(self.profile, self.level)
 
-    def needs_step(self, time: float, reached: bool, contacts: FloatArray) -> bool:
-        """A step with no contacts, waypoint not reached and C_I not run out changes nothing."""
-        return reached or len(contacts) > 0 or time >= self.deadline
+    def needs_step(
+        self, time: float, position: FloatArray, reached: bool, contacts: FloatArray
+    ) -> bool:
+        """Whether :meth:`step` would change anything: never without contacts, the waypoint
+        reached or C_I run out; with contacts, only where the policy says (a target it
+        confirmed itself, read again, changes nothing)."""
+        if not (reached or len(contacts) > 0 or time >= self.deadline):
+            return False
+        assert self.state is not None
+        contacts = _distinct(contacts, self.policy.config.memory_radius)
+        here = (float(position[0]), float(position[1]))
+        return self.policy.step_changes(self.state, 0, time, here, reached, contacts)
 
     def step(
         self, time: float, position: FloatArray, reached: bool, contacts: FloatArray

@@ -127,7 +127,9 @@ class SwarmCore:
         """The confirmation sensor: it confirms and its SENS_SIG is the fitness."""
         return len(self.profile.sensors) - 1
 
-    def needs_step(self, time: float, reached: bool, contacts: FloatArray) -> bool:
+    def needs_step(
+        self, time: float, position: FloatArray, reached: bool, contacts: FloatArray
+    ) -> bool:
         return len(contacts) > 0 or time >= self.next_update
 
     def step(

@@ -22,6 +22,14 @@ class VehicleClock:
         self._jump = reboot_jump
         self.now = floor
 
+    def peek(self, raw: float) -> float | None:
+        """What :meth:`update` of ``raw`` would return, without updating; None where it would
+        shift the offset or log (the first reading, a jump back)."""
+        last = self._last_raw
+        if last is None or raw < last - self._jump:
+            return None
+        return max(self.now, raw + self._offset)
+
     def update(self, raw: float) -> float:
         """Mission time of a vehicle timestamp ``raw`` (seconds)."""
         if self._last_raw is None:

@@ -56,6 +56,7 @@ from companion.mission.lifecycle_events import (
 )
 from companion.mission.lifecycle_steps import LifecycleSteps
 from companion.mission.phase import Phase
+from companion.mission.search_answer import TICK_S, SearchAnswer
 from companion.mission.swarm_core import SwarmCore, SwarmExchange
 from companion.mission.vehicle_clock import VehicleClock
 from companion.mission.vehicle_fence import VehicleFence
@@ -159,6 +160,8 @@ class VehicleMission:
             VehicleFence(link, own_fence, config.vehicle, self.emit) if own_fence else None
         )
         self.lifecycle = LifecycleSteps(self)
+        self.answer = SearchAnswer(self)
+        """The search's common answer without the decision loop's events (search_answer.py)."""
 
     # -- public ----------------------------------------------------------------------------
 
@@ -275,22 +278,28 @@ class VehicleMission:
                 return
             timer = loop.call_later(self.config.heartbeat_period, beat)
 
+        def stop(exc: Exception) -> None:
+            failed.append(exc)
+            self.link.listener = None
+            self.link.answerer = None
+            if me is not None:
+                me.cancel()
+
         def listen(batch: list[LinkEvent]) -> None:
             # Called by the link as it reads (one batch per socket read): the setpoint leaves
             # in the same loop iteration as the position came in. An error ends this loop.
             try:
                 self._handle_batch(batch)
             except Exception as exc:
-                failed.append(exc)
-                self.link.listener = None
-                if me is not None:
-                    me.cancel()
+                stop(exc)
 
         beat()
         try:
             if not events.empty():  # what came before the listener
                 self._handle_queued(events.get_nowait(), events)
             self.link.listener = listen
+            self.answer.failed = stop
+            self.link.answerer = self.answer
             await loop.create_future()  # until cancelled (the mission ends, an error)
         except asyncio.CancelledError:
             if failed:
@@ -298,6 +307,7 @@ class VehicleMission:
             raise
         finally:
             self.link.listener = None
+            self.link.answerer = None
             if timer is not None:
                 timer.cancel()
 
@@ -408,7 +418,8 @@ class VehicleMission:
         self._chores.add(task)
         task.add_done_callback(self._chores.discard)
 
-    def _on_position(self, pos: LocalPosition) -> None:
+    def _note_position(self, pos: LocalPosition) -> float:
+        """The vehicle's clock, period and position from ``pos``; its mission time."""
         self._received_time = max(self._received_time, pos.time)
         prev = self.position
         t = self.clock.update(pos.time)
@@ -416,7 +427,11 @@ class VehicleMission:
             self._period += 0.2 * (min(pos.time - prev.time, 1.0) - self._period)
         self.position = pos
         self.sensors.observe(t, pos.north, pos.east)
-        if t - self._last_tick >= 10.0:
+        return t
+
+    def _on_position(self, pos: LocalPosition) -> None:
+        t = self._note_position(pos)
+        if t - self._last_tick >= TICK_S:
             self._last_tick = t
             self.emit("tick", phase=self.phase.value, level=self.core.level, wall=round(time.time(), 3),
                       north=round(pos.north, 1), east=round(pos.east, 1),
@@ -471,8 +486,9 @@ class VehicleMission:
         # area's edge and the fence is clamped, and the clamped point is where it stops.
         goal = self.fence.clamp(self.core.waypoint)
         reached = guidance.reached(here, goal, self.guide.acceptance_radius)
-        if self.core.needs_step(t, reached, contacts):
+        if self.core.needs_step(t, here, reached, contacts):
             d = self.core.step(t, here, reached, contacts)
+            goal = self.fence.clamp(self.core.waypoint)
             if d.detected:
                 self.record(events.Detection(round(pos.north, 1), round(pos.east, 1), d.level))
             for north, east in d.confirmed:
@@ -493,8 +509,9 @@ class VehicleMission:
             wp = self.fence.clamp(self.core.waypoint)
             sp = NedSetpoint(float(wp[0]), float(wp[1]), -self.guide.altitude, 0.0, 0.0, 0.0)
         else:
-            sp = guidance.pursuit(here, pos.down, self.core.waypoint, self.guide, self.fence,
-                                  self._period)  # fmt: skip
+            wp = self.core.waypoint
+            self.answer.steer_to(float(wp[0]), float(wp[1]), (float(goal[0]), float(goal[1])))
+            sp = guidance.pursuit(here, pos.down, wp, self.guide, self.fence, self._period)
         self._send(sp, pos)
 
     def _send(self, sp: NedSetpoint, pos: LocalPosition) -> None:
@@ -598,6 +615,7 @@ class VehicleMission:
         woken = changed or state.end_reason != self.state.end_reason
         self.state = state
         if changed:
+            self.answer.forget()
             self.record(events.PhaseChange(state.phase.value, search_start, by))
         if woken:
             self._wake()
@@ -654,5 +672,5 @@ class VehicleMission:
     def _emit_latency(self) -> None:
         if self.latencies:
             ms = np.array(self.latencies) * 1e3
-            self.emit("latency", n=len(ms), p50_ms=round(float(np.percentile(ms, 50)), 4),
+            self.emit("latency", n=len(ms), direct=self.answer.answered, p50_ms=round(float(np.percentile(ms, 50)), 4),
                       p99_ms=round(float(np.percentile(ms, 99)), 4))  # fmt: skip

@@ -35,6 +35,11 @@ class MavlinkSensorSource(SensorSource):
     def active(self) -> int:
         return self._active
 
+    @property
+    def pending(self) -> bool:
+        """Contacts wait for the next :meth:`take`."""
+        return bool(self._pending)
+
     def expected_kind(self) -> str:
         return "CNF" if self._active == self._n - 1 else "DET"
 

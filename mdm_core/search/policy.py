@@ -13,6 +13,7 @@ to draw from; it keeps no clock and does no I/O. One ``step`` call applies, for 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -267,6 +268,52 @@ class SearchPolicy:
         if chosen.size:
             state.waypoint[chosen] = self._next_waypoints(state, chosen, obs.position[redraw], rng)
         return StepOutcome(detected, confirmed, new_confirmations, expired, redraw)
+
+    def step_changes(
+        self,
+        state: PolicyState,
+        lane: int,
+        time: float,
+        position: tuple[float, float],
+        reached: bool,
+        contacts: FloatArray,
+    ) -> bool:
+        """Whether :meth:`step` of the one vehicle ``lane`` (every contact in ``contacts`` (m, 2)
+        seen) would change its state or report anything. On floats, with the comparisons of
+        ``step``: a live vehicle near a target it confirmed reads it every telemetry tick, and
+        a step that only finds it known is most of a sped-up companion's CPU there."""
+        if reached:
+            return True
+        level = int(state.level[lane])
+        blind = state.blind_until[lane]
+        if time >= blind and blind != -np.inf:  # the step ends the blind period
+            return True
+        if level > 0 and time >= state.entered[lane] + self._lifetimes[level]:  # falls back
+            return True
+        if len(contacts) == 0:
+            return False
+        if level < self.n_levels - 1:  # a detection level: ignored, or a detection
+            if time < blind:
+                return False
+            if self.config.detection_memory == "disc":
+                radius = float(self._radii[level])
+                if self._nearest2(state, lane, position) < radius * radius:
+                    return False
+            if self.config.detection_memory != "exact":
+                return True
+        known = self.config.memory_radius**2  # a NaN distance is not known, as in step
+        return not all(self._nearest2(state, lane, (c[0], c[1])) <= known for c in contacts)
+
+    def _nearest2(self, state: PolicyState, lane: int, point: tuple[float, float]) -> float:
+        """:meth:`memory_distance2` of one point of one lane, on floats (a NaN wins, as in
+        ``np.minimum``)."""
+        best = np.inf
+        for north, east in state.memory[lane, : state.memory_count[lane]]:
+            dn, de = point[0] - north, point[1] - east
+            d = dn * dn + de * de
+            if not (math.isnan(best) or d >= best):
+                best = d
+        return float(best)
 
     def _next_waypoints(
         self, state: PolicyState, lanes: IntArray, position: FloatArray, rng: np.random.Generator

@@ -38,5 +38,6 @@ def test_restarted_core_ignores_targets_confirmed_before() -> None:
 def test_no_step_needed_without_news() -> None:
     core = SearchCore(load_profile("paper-fixed"), seed=3, vehicle=0)
     core.start(np.array([0.0, 0.0]), 0.0, memory=[])
-    assert not core.needs_step(10.0, False, np.zeros((0, 2)))
-    assert core.needs_step(10.0, True, np.zeros((0, 2)))
+    here = np.array([0.0, 0.0])
+    assert not core.needs_step(10.0, here, False, np.zeros((0, 2)))
+    assert core.needs_step(10.0, here, True, np.zeros((0, 2)))
