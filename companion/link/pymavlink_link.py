@@ -59,8 +59,11 @@ UNREAD_STREAMS = (
 """Streams the mission never reads, switched off on a dedicated link (``configure_streams``)."""
 GLOBAL_POSITION_INT = mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT
 """Switched off too, unless the fence watch reads it."""
-_BESIDE_POSITION = frozenset({fast_frames.HEARTBEAT, fast_frames.SYS_STATUS})
-"""What ``_answer`` takes beside the position and the signal (each second of a vehicle's)."""
+_BESIDE_POSITION = frozenset(
+    {fast_frames.HEARTBEAT, fast_frames.SYS_STATUS, fast_frames.DEBUG_VECT}
+)
+"""What ``_answer`` takes beside the position and the signal: each second's HEARTBEAT and
+SYS_STATUS, the sensor's contacts."""
 _DRAIN_MAX = 256
 """Datagrams read at once beyond the one asyncio hands over (see ``PymavlinkLink._drain``)."""
 
@@ -206,9 +209,9 @@ class PymavlinkLink(VehicleLink):
 
     def _answer(self, data: bytes, addr: tuple[str | Any, int]) -> bool:
         """A datagram of the locked vehicle holding one LOCAL_POSITION_NED, the sensor's signal
-        (NAMED_VALUE_FLOAT), HEARTBEAT and SYS_STATUS and nothing else, with no datagram waiting
-        behind it: to the answerer when it says the position only needs steering, the heartbeat
-        and status as events before or after it, in their order. The link's own bookkeeping
+        (NAMED_VALUE_FLOAT), HEARTBEAT, SYS_STATUS and contacts (DEBUG_VECT) and nothing else,
+        with no datagram waiting behind it: to the answerer when it says the position only needs
+        steering, the other messages as events before or after it, in their order. The link's own bookkeeping
         (.tlog, stream rates, the setpoint's time_boot_ms, the autopilot) is :meth:`_receive`'s.
         False: take the events' path (nothing was changed)."""
         answerer, sock = self.answerer, self._sock

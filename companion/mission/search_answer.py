@@ -1,16 +1,18 @@
 """The search phase's common answer, without events: a position in, the pursuit setpoint out.
 
 Between two decisions of the policy, nearly every position the vehicle sends changes nothing
-but where the vehicle is: no contact, the waypoint not reached, C_I not run out, no tick to
-log, the mission time not over. For those positions the decision loop's path (the link's events,
-the batch, the policy's check) costs about twice what answering them needs, and at a 100x
-speed-up that is most of a companion's CPU. The link hands such a position here
-(``VehicleLink.answerer``) when its datagram holds nothing but it, the sensor's signal and the
-vehicle's HEARTBEAT or SYS_STATUS: :meth:`SearchAnswer.ready` says whether the mission would
-only steer, and :meth:`SearchAnswer.answer` does what the decision loop does then, step for step
-(the same state changes, records and setpoint; tests/companion/test_search_answer.py flies a
-vehicle both ways). Anything else (a contact, a waypoint reached, a tick, another phase, a
-second datagram waiting) takes the decision loop's path as before.
+but where the vehicle is: the waypoint not reached, C_I not run out, no tick to log, the mission
+time not over, no contact or only contacts the policy rules out (a target the vehicle confirmed
+itself, read again). For those positions the decision loop's path (the link's events, the
+batch, the policy's check) costs about twice what answering them needs, and at a 100x speed-up
+that is most of a companion's CPU. The link hands such a position here
+(``VehicleLink.answerer``) when its datagram holds nothing but it, the sensor's signal and
+contacts and the vehicle's HEARTBEAT or SYS_STATUS: :meth:`SearchAnswer.ready` says whether the
+mission would only steer, and :meth:`SearchAnswer.answer` does what the decision loop does
+then, step for step (the same state changes, records and setpoint;
+tests/companion/test_search_answer.py flies a vehicle both ways). Anything else (a contact the
+policy acts on, a waypoint reached, a tick, another phase, a second datagram waiting) takes the
+decision loop's path as before.
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from companion import guidance
 from companion.link.messages import LinkEvent, LocalPosition
@@ -71,7 +75,8 @@ class SearchAnswer:
         self.plan = None
 
     def ready(self, vehicle_time: float, north: float, east: float) -> bool:
-        """Whether the decision loop, given this position, would do nothing but steer."""
+        """Whether the decision loop, given this position, would do nothing but steer (and
+        drop the contacts waiting, ruled out by the policy)."""
         try:
             return self._ready(vehicle_time, north, east)
         except Exception as exc:  # as an error of the decision loop: it ends the loop
@@ -86,12 +91,16 @@ class SearchAnswer:
         t = m.clock.peek(vehicle_time)
         if t is None or t - m._last_tick >= TICK_S or m.end_reason is not None:
             return False
-        if parts[1].pending or t >= parts[0].deadline:
-            return False
         start = m.search_start
         if start is not None and t - start >= m.config.search_duration:
             return False
-        return math.hypot(north - plan[2], east - plan[3]) > m.guide.acceptance_radius
+        if math.hypot(north - plan[2], east - plan[3]) <= m.guide.acceptance_radius:
+            return False  # reached
+        contacts = parts[1].waiting()
+        if len(contacts) == 0:
+            return t < parts[0].deadline
+        # contacts that change nothing (a target the vehicle confirmed itself, read again)
+        return not parts[0].needs_step(t, np.array([north, east]), False, contacts)
 
     def answer(
         self,
@@ -126,6 +135,7 @@ class SearchAnswer:
         m, plan = self.m, self.plan
         assert plan is not None
         m._note_position(pos)
+        m.sensors.take()  # ruled out by ready, as the policy would
         m.max_search_speed = max(m.max_search_speed, math.hypot(pos.vn, pos.ve))
         m._send(guidance.pursuit_xy(pos.north, pos.east, pos.down, plan[0], plan[1], m.guide,
                                     m.fence, m._period), pos)  # fmt: skip

@@ -35,10 +35,9 @@ class MavlinkSensorSource(SensorSource):
     def active(self) -> int:
         return self._active
 
-    @property
-    def pending(self) -> bool:
-        """Contacts wait for the next :meth:`take`."""
-        return bool(self._pending)
+    def waiting(self) -> FloatArray:
+        """What the next :meth:`take` gives (the contacts stay)."""
+        return np.array(self._pending, dtype=float) if self._pending else np.zeros((0, 2))
 
     def expected_kind(self) -> str:
         return "CNF" if self._active == self._n - 1 else "DET"
@@ -62,9 +61,7 @@ class MavlinkSensorSource(SensorSource):
         self._pending.append((event.north, event.east))
 
     def take(self) -> FloatArray:
-        if not self._pending:
-            return np.zeros((0, 2))
-        out = np.array(self._pending, dtype=float)
+        out = self.waiting()
         self._pending.clear()
         return out
 
