@@ -33,7 +33,8 @@ before the COMMAND_ACK, but sends it from its text queue, which can come out aft
 
 
 class PositionAnswerer(Protocol):
-    """Takes a position that came alone, without the events' path (mission/search_answer.py)."""
+    """Takes a position that only needs steering, without the events' path
+    (mission/search_answer.py)."""
 
     def ready(self, vehicle_time: float, north: float, east: float) -> bool:
         """Whether this position (vehicle s, profile frame) only needs steering."""
@@ -78,8 +79,8 @@ class VehicleLink(ABC):
         """Takes the events instead of ``events`` once set (the mission's decision loop): each
         batch read in one callback, at once, without a queue and a task switch per position."""
         self.answerer: PositionAnswerer | None = None
-        """Set with ``listener`` in the search: a backend may hand it a position that came alone
-        (with at most the sensor's signal) instead of publishing events, when ``ready`` says so."""
+        """Set with ``listener`` by the decision loop: a backend may hand it a position (with the
+        other events of its datagram) instead of publishing them, when ``ready`` says so."""
         self.autopilot = None
         self.streams = StreamWatch()
         self.heard: set[int] = set()

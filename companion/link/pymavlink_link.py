@@ -210,10 +210,10 @@ class PymavlinkLink(VehicleLink):
     def _answer(self, data: bytes, addr: tuple[str | Any, int]) -> bool:
         """A datagram of the locked vehicle holding one LOCAL_POSITION_NED, the sensor's signal
         (NAMED_VALUE_FLOAT), HEARTBEAT, SYS_STATUS and contacts (DEBUG_VECT) and nothing else,
-        with no datagram waiting behind it: to the answerer when it says the position only needs
-        steering, the other messages as events before or after it, in their order. The link's own bookkeeping
-        (.tlog, stream rates, the setpoint's time_boot_ms, the autopilot) is :meth:`_receive`'s.
-        False: take the events' path (nothing was changed)."""
+        with no datagram waiting behind it: to the answerer when it says the position only
+        needs steering, the other messages as events before or after it, in their order. The
+        link's own bookkeeping (.tlog, stream rates, the setpoint's time_boot_ms, the
+        autopilot) is :meth:`_receive`'s. False: take the events' path (nothing was changed)."""
         answerer, sock = self.answerer, self._sock
         if (answerer is None or sock is None or self._signing is not None or self._pending
                 or self.alignment is not None or addr != self._remote):  # fmt: skip

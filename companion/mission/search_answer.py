@@ -112,8 +112,8 @@ class SearchAnswer:
         """What the decision loop does with the events of a datagram when :meth:`ready` holds
         for its position ``pos``: the events ``before`` it, then the steering (the vehicle's
         clock and period, its position, the pursuit setpoint), then the events ``after`` it.
-        When an event before it changed the mission (a mode, a low battery), the position takes
-        the decision loop's way. ``signal``, the sensor's reading, is only read by a policy step
+        When an event before it changed the mission (a mode, a low battery, a contact), the
+        position takes the decision loop's way. ``signal``, the sensor's reading, is only read by a policy step
         (never here), so where it came in the datagram does not matter."""
         m = self.m
         try:

@@ -672,5 +672,6 @@ class VehicleMission:
     def _emit_latency(self) -> None:
         if self.latencies:
             ms = np.array(self.latencies) * 1e3
-            self.emit("latency", n=len(ms), direct=self.answer.answered, p50_ms=round(float(np.percentile(ms, 50)), 4),
+            self.emit("latency", n=len(ms), direct=self.answer.answered,
+                      p50_ms=round(float(np.percentile(ms, 50)), 4),
                       p99_ms=round(float(np.percentile(ms, 99)), 4))  # fmt: skip
