@@ -23,7 +23,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from companion import guidance
 from companion.link.messages import LinkEvent, LocalPosition
 from companion.mission.phase import Phase
 from companion.mission.search_core import SearchCore
@@ -137,8 +136,7 @@ class SearchAnswer:
         m._note_position(pos)
         m.sensors.take()  # ruled out by ready, as the policy would
         m.max_search_speed = max(m.max_search_speed, math.hypot(pos.vn, pos.ve))
-        m._send(guidance.pursuit_xy(pos.north, pos.east, pos.down, plan[0], plan[1], m.guide,
-                                    m.fence, m._period), pos)  # fmt: skip
+        m.pursue(pos, plan[0], plan[1])
         m._wake()
         self.answered += 1
 

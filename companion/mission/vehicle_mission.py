@@ -505,14 +505,18 @@ class VehicleMission:
             self.request_end("all targets")
         if self.end_reason is not None:
             return
-        if self.config.setpoints == "position":
-            wp = self.fence.clamp(self.core.waypoint)
-            sp = NedSetpoint(float(wp[0]), float(wp[1]), -self.guide.altitude, 0.0, 0.0, 0.0)
-        else:
-            wp = self.core.waypoint
-            self.answer.steer_to(float(wp[0]), float(wp[1]), (float(goal[0]), float(goal[1])))
-            sp = guidance.pursuit(here, pos.down, wp, self.guide, self.fence, self._period)
-        self._send(sp, pos)
+        if self.config.setpoints == "position":  # (goal: the fenced waypoint of now)
+            sp = NedSetpoint(float(goal[0]), float(goal[1]), -self.guide.altitude, 0.0, 0.0, 0.0)
+            self._send(sp, pos)
+            return
+        wn, we = (float(c) for c in self.core.waypoint)
+        self.answer.steer_to(wn, we, (float(goal[0]), float(goal[1])))
+        self.pursue(pos, wn, we)
+
+    def pursue(self, pos: LocalPosition, north: float, east: float) -> None:
+        """The search's velocity setpoint from ``pos`` towards the waypoint (north, east)."""
+        self._send(guidance.pursuit_xy(pos.north, pos.east, pos.down, north, east, self.guide,
+                                       self.fence, self._period), pos)  # fmt: skip
 
     def _send(self, sp: NedSetpoint, pos: LocalPosition) -> None:
         self.link.send_setpoint(sp, self.config.setpoints)
