@@ -51,7 +51,8 @@ class EmulatorConfig:
     """Hold sim time at each telemetry tick until every vehicle flown in the external mode
     (OFFBOARD / GUIDED) by a streaming client has answered that tick's telemetry: a loaded
     host then slows the sim instead of letting the vehicles fly on stale setpoints. A
-    client silent for ``lockstep_wall`` wall s is not waited for (the failsafes act)."""
+    client that leaves a held tick unanswered for ``lockstep_wall`` wall s is not waited for
+    again until its next setpoint (the failsafes act)."""
     lockstep_wall: float = 0.25
     seed: int = 0
     events: Path | None = None

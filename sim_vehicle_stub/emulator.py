@@ -6,10 +6,10 @@ import asyncio
 import contextlib
 import functools
 import logging
-import math
 import socket
 import struct
 import time
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -122,8 +122,9 @@ class Emulator:
         self._stop = asyncio.Event()
         self._held: asyncio.Future[None] | None = None
         """While lockstep holds a tick: resolved by the last answer it waits for."""
-        self._setpoint_wall = [-math.inf] * n
-        """Wall time (monotonic) of each vehicle's last setpoint (lockstep)."""
+        self._silent: set[int] = set()
+        """Vehicles whose client left a held tick unanswered for ``lockstep_wall`` wall s:
+        lockstep does not wait for them again until their next setpoint."""
         self.lockstep_waits = 0
         """Ticks at which lockstep held sim time for a client's setpoint."""
 
@@ -220,7 +221,7 @@ class Emulator:
                 node.stats.malformed += 1
                 log.exception("vehicle %d: error handling %s", node.vehicle.index, msg.get_type())
         if node.vehicle.setpoint is not before:
-            self._setpoint_wall[node.vehicle.index] = time.monotonic()
+            self._silent.discard(node.vehicle.index)
             if self._held is not None and not self._behind():
                 _resolve(self._held)  # the last answer the held tick waited for
         self._flush_state(node)
@@ -271,8 +272,13 @@ class Emulator:
         """A vehicle flown in the external mode whose streaming client has not answered this
         tick's telemetry yet (sim time stands still meanwhile, so an answer has ``t == now``):
         one setpoint per tick, none computed from an older position than the last."""
+        return next(self._unanswered(), None) is not None
+
+    def _unanswered(self) -> Iterator[int]:
+        """The vehicles :meth:`_behind` waits for: flown in the external mode by a client that
+        is not silent, with no setpoint since this tick's telemetry."""
         since = self.clock.now - 1e-6
-        recent = time.monotonic() - self.config.lockstep_wall
+        silent = self._silent
         for node in self.nodes:
             v = node.vehicle
             sp = v.setpoint
@@ -280,14 +286,15 @@ class Emulator:
                 sp is not None
                 and sp.t < since
                 and v.mode.behaviour is Behaviour.EXTERNAL
-                and self._setpoint_wall[v.index] > recent
+                and v.index not in silent
             ):
-                return True
-        return False
+                yield v.index
 
     async def _await_setpoints(self) -> None:
         """Lockstep: hold sim time until every streaming client answered this tick, at most
-        ``lockstep_wall`` wall s (a client that stopped streaming is not waited for)."""
+        ``lockstep_wall`` wall s; the clients still unanswered then are silent (not waited for
+        until their next setpoint). The time-out runs from the hold's start, so a client
+        that answered at once is never taken for silent because another one kept the tick."""
         if not self._behind():
             return
         self.lockstep_waits += 1
@@ -298,6 +305,7 @@ class Emulator:
             while self._behind() and not self._stop.is_set():
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
+                    self._silent.update(self._unanswered())
                     return
                 held = self._held = loop.create_future()
                 timer = loop.call_later(remaining, _resolve, held)

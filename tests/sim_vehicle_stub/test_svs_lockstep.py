@@ -1,9 +1,13 @@
 """--lockstep: sim time waits at each tick for a client streaming setpoints in OFFBOARD, and
-stops waiting for a client that went quiet for longer than lockstep_wall (wall s)."""
+stops waiting for a client that left a held tick unanswered for lockstep_wall (wall s), and
+only for that client."""
 
 from __future__ import annotations
 
+import threading
 import time
+from collections.abc import Callable
+from typing import Any
 
 import pytest
 
@@ -34,3 +38,91 @@ def test_lockstep_holds_sim_time_for_a_streaming_client_only() -> None:
         time.sleep(1.0)  # the silence under test, with the next line's 1 s
         c.pump(1.0)  # quiet for longer: not waited for any more (10x: ~10 sim s per wall s)
         assert emu.clock.now - held > 3.0
+
+
+def _ack_or_position(m: Any) -> bool:
+    return Client._ack_for_us(m, 176) or m.get_type() == "LOCAL_POSITION_NED"
+
+
+class _Answerer(threading.Thread):
+    """A client on its own thread: into OFFBOARD, then one setpoint (and a heartbeat) per
+    position received, as a companion does, until ``quiet`` is set; the positions answered are
+    in ``client.log``."""
+
+    def __init__(self, port: int, sysid: int, delay: float = 0.0) -> None:
+        super().__init__(daemon=True)
+        self.delay = delay
+        """Wall s between a position and its answer."""
+        self.client = Client(port, sysid)
+        self.offboard = threading.Event()
+        self.quiet = threading.Event()
+        self.done = threading.Event()
+        self.stall: Callable[[], object] | None = None
+        """Called at the first position left unanswered once ``quiet`` is set."""
+
+    def run(self) -> None:
+        c = self.client
+        try:
+            assert c.pump(5, lambda m: m.get_type() == "HEARTBEAT") is not None
+            c.heartbeat()
+            assert c.command(400, 1) == 0
+            # Flat out, a setpoint ages a sim second in a few wall ms: send it with the command.
+            c.velocity(0, 0, -1.0)
+            c.conn.mav.command_long_send(c.sysid, 1, 176, 0, 1, 6, 0, 0, 0, 0, 0)
+            ack = c.pump(2.0, _ack_or_position)
+            while ack is not None and ack.get_type() != "COMMAND_ACK":
+                c.heartbeat()
+                c.velocity(0, 0, -1.0)
+                ack = c.pump(2.0, _ack_or_position)
+            assert ack is not None
+            assert ack.result == 0
+            self.offboard.set()
+            c.log.clear()
+            while True:
+                if c.pump(0.05, lambda m: m.get_type() == "LOCAL_POSITION_NED") is not None:
+                    if self.quiet.is_set():
+                        if self.stall is not None:
+                            self.stall()
+                        break
+                    time.sleep(self.delay)
+                    c.heartbeat()
+                    c.velocity(0, 0, -1.0)
+        finally:
+            self.done.set()
+
+
+@pytest.mark.timeout(60)
+def test_a_late_emulator_still_waits_for_the_clients_that_answered() -> None:
+    """Two clients answer every tick, flat out, client 1 20 wall ms after each position. Client
+    2 goes quiet in OFFBOARD (a companion that ended, or is starved), and 0.1 wall s into the
+    tick held for it the emulator's own loop is held off the CPU for 0.35 wall s (a busy host).
+    The hold times out; from then on only vehicle 2 is not waited for (its failsafe acts):
+    client 1, which answered the held tick, gets every tick and its vehicle stays in OFFBOARD.
+    (Before, lockstep judged a client silent by the wall time since its last setpoint: after
+    the late time-out client 1's answer looked stale too, sim time ran on for the 20 ms
+    client 1 took to answer, and vehicle 1 fell back on the setpoint-loss failsafe.)"""
+    cfg = make_config(2, 25360, personas=("px4", "px4"), speedup=None, lockstep=True)
+    with running_emulator(cfg) as emu:
+        a, b = _Answerer(25360, 1, delay=0.02), _Answerer(25361, 2)
+        a.start()
+        b.start()
+        assert a.offboard.wait(15)
+        assert b.offboard.wait(15)
+        time.sleep(0.5)
+        assert a.client.log, "client 1 answers ticks"
+        assert b.client.log, "client 2 answers ticks"
+        loop = emu._task.get_loop() if emu._task is not None else None
+        assert loop is not None
+        # Client 2 leaves a tick unanswered; 0.1 wall s into the tick's hold, when client 1
+        # has long answered it, the emulator's loop is held off the CPU for 0.35 wall s.
+        b.stall = lambda: loop.call_soon_threadsafe(loop.call_later, 0.1, time.sleep, 0.35)
+        b.quiet.set()
+        assert b.done.wait(5)
+        time.sleep(1.5)
+        a.quiet.set()
+        assert a.done.wait(5)
+        b.client.pump(0.5)
+        assert a.client.mode() == PX4_OFFBOARD
+        assert b.client.mode() != PX4_OFFBOARD  # vehicle 2 was not waited for: failsafe
+        a.client.close()
+        b.client.close()
