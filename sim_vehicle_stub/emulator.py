@@ -122,6 +122,8 @@ class Emulator:
         self._stop = asyncio.Event()
         self._held: asyncio.Future[None] | None = None
         """While lockstep holds a tick: resolved by the last answer it waits for."""
+        self._waiting: set[int] = set()
+        """While lockstep holds a tick: the vehicles it still waits for."""
         self._silent: set[int] = set()
         """Vehicles whose client left a held tick unanswered for ``lockstep_wall`` wall s:
         lockstep does not wait for them again until their next setpoint."""
@@ -220,10 +222,16 @@ class Emulator:
             except Exception:  # never let one message take the emulator down
                 node.stats.malformed += 1
                 log.exception("vehicle %d: error handling %s", node.vehicle.index, msg.get_type())
-        if node.vehicle.setpoint is not before:
-            self._silent.discard(node.vehicle.index)
-            if self._held is not None and not self._behind():
-                _resolve(self._held)  # the last answer the held tick waited for
+        v = node.vehicle
+        answered = v.setpoint is not before
+        if answered:
+            self._silent.discard(v.index)
+        waiting, held = self._waiting, self._held
+        if (held is not None and v.index in waiting
+                and (answered or v.mode.behaviour is not Behaviour.EXTERNAL)):  # fmt: skip
+            waiting.discard(v.index)
+            if not waiting:
+                _resolve(held)  # the last answer the held tick waited for
         self._flush_state(node)
 
     def _flush_state(self, node: VehicleNode) -> None:
@@ -268,15 +276,11 @@ class Emulator:
             elif k == 0:
                 await asyncio.sleep(0)
 
-    def _behind(self) -> bool:
-        """A vehicle flown in the external mode whose streaming client has not answered this
-        tick's telemetry yet (sim time stands still meanwhile, so an answer has ``t == now``):
-        one setpoint per tick, none computed from an older position than the last."""
-        return next(self._unanswered(), None) is not None
-
     def _unanswered(self) -> Iterator[int]:
-        """The vehicles :meth:`_behind` waits for: flown in the external mode by a client that
-        is not silent, with no setpoint since this tick's telemetry."""
+        """The vehicles lockstep waits for: flown in the external mode by a client that is not
+        silent, with no setpoint since this tick's telemetry (sim time stands still meanwhile,
+        so an answer has ``t == now``): one setpoint per tick, none computed from an older
+        position than the last."""
         since = self.clock.now - 1e-6
         silent = self._silent
         for node in self.nodes:
@@ -295,26 +299,30 @@ class Emulator:
         ``lockstep_wall`` wall s; the clients still unanswered then are silent (not waited for
         until their next setpoint). The time-out runs from the hold's start, so a client
         that answered at once is never taken for silent because another one kept the tick."""
-        if not self._behind():
+        waiting = set(self._unanswered())
+        if not waiting:
             return
         self.lockstep_waits += 1
         deadline = time.monotonic() + self.config.lockstep_wall
         loop = asyncio.get_running_loop()
         # One future and one timer per wait (asyncio.wait_for would wrap a task around it).
         try:
-            while self._behind() and not self._stop.is_set():
+            while waiting and not self._stop.is_set():
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
-                    self._silent.update(self._unanswered())
+                    self._silent.update(waiting)
                     return
+                self._waiting = waiting  # _deliver takes each answer off
                 held = self._held = loop.create_future()
                 timer = loop.call_later(remaining, _resolve, held)
                 try:
                     await held
                 finally:
                     timer.cancel()
+                waiting = set(self._unanswered())  # a vehicle may have joined meanwhile
         finally:
             self._held = None
+            self._waiting = set()
 
     def _tick(self, dt: float) -> None:
         t = self.clock.now
