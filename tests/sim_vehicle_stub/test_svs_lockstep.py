@@ -57,7 +57,7 @@ class _Answerer(threading.Thread):
         self.offboard = threading.Event()
         self.quiet = threading.Event()
         self.done = threading.Event()
-        self.stall: Callable[[], object] | None = None
+        self.at_quiet: Callable[[Client], object] | None = None
         """Called at the first position left unanswered once ``quiet`` is set."""
 
     def run(self) -> None:
@@ -81,8 +81,8 @@ class _Answerer(threading.Thread):
             while True:
                 if c.pump(0.05, lambda m: m.get_type() == "LOCAL_POSITION_NED") is not None:
                     if self.quiet.is_set():
-                        if self.stall is not None:
-                            self.stall()
+                        if self.at_quiet is not None:
+                            self.at_quiet(c)
                         break
                     time.sleep(self.delay)
                     c.heartbeat()
@@ -115,7 +115,7 @@ def test_a_late_emulator_still_waits_for_the_clients_that_answered() -> None:
         assert loop is not None
         # Client 2 leaves a tick unanswered; 0.1 wall s into the tick's hold, when client 1
         # has long answered it, the emulator's loop is held off the CPU for 0.35 wall s.
-        b.stall = lambda: loop.call_soon_threadsafe(loop.call_later, 0.1, time.sleep, 0.35)
+        b.at_quiet = lambda _: loop.call_soon_threadsafe(loop.call_later, 0.1, time.sleep, 0.35)
         b.quiet.set()
         assert b.done.wait(5)
         time.sleep(1.5)
@@ -124,5 +124,34 @@ def test_a_late_emulator_still_waits_for_the_clients_that_answered() -> None:
         b.client.pump(0.5)
         assert a.client.mode() == PX4_OFFBOARD
         assert b.client.mode() != PX4_OFFBOARD  # vehicle 2 was not waited for: failsafe
+        a.client.close()
+        b.client.close()
+
+
+@pytest.mark.timeout(60)
+def test_a_vehicle_switched_out_of_offboard_is_not_waited_for() -> None:
+    """Client 2 answers a tick by switching its vehicle to POSCTL instead of sending a setpoint
+    (a companion ending its search): the held tick goes on as soon as the others answered, not
+    after ``lockstep_wall`` (here 30 wall s)."""
+    cfg = make_config(2, 25370, personas=("px4", "px4"), speedup=None, lockstep=True,
+                      lockstep_wall=30.0)  # fmt: skip
+    with running_emulator(cfg) as emu:
+        a, b = _Answerer(25370, 1), _Answerer(25371, 2)
+        a.start()
+        b.start()
+        assert a.offboard.wait(15)
+        assert b.offboard.wait(15)
+        time.sleep(0.5)  # both answer ticks in OFFBOARD
+        b.at_quiet = lambda c: c.conn.mav.command_long_send(2, 1, 176, 0, 1, 3, 0, 0, 0, 0, 0)
+        b.quiet.set()
+        assert b.done.wait(5)
+        a.client.log.clear()
+        time.sleep(1.5)
+        a.quiet.set()
+        assert a.done.wait(5)
+        assert len(a.client.log) > 100, "sim time stood still: the tick waited for vehicle 2"
+        assert emu.lockstep_waits > 100
+        b.client.pump(0.5)
+        assert b.client.mode() == 0x30000  # POSCTL, by the command
         a.client.close()
         b.client.close()
