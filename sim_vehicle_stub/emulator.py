@@ -311,6 +311,9 @@ class Emulator:
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
                     self._silent.update(waiting)
+                    for i in sorted(waiting):
+                        self.events.write(self.clock.now, "lockstep_silent", vehicle=i,
+                                          wall=self.config.lockstep_wall)  # fmt: skip
                     return
                 self._waiting = waiting  # _deliver takes each answer off
                 held = self._held = loop.create_future()

@@ -4,9 +4,11 @@ only for that client."""
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -92,7 +94,7 @@ class _Answerer(threading.Thread):
 
 
 @pytest.mark.timeout(60)
-def test_a_late_emulator_still_waits_for_the_clients_that_answered() -> None:
+def test_a_late_emulator_still_waits_for_the_clients_that_answered(tmp_path: Path) -> None:
     """Two clients answer every tick, flat out, client 1 20 wall ms after each position. Client
     2 goes quiet in OFFBOARD (a companion that ended, or is starved), and 0.1 wall s into the
     tick held for it the emulator's own loop is held off the CPU for 0.35 wall s (a busy host).
@@ -101,7 +103,9 @@ def test_a_late_emulator_still_waits_for_the_clients_that_answered() -> None:
     (Before, lockstep judged a client silent by the wall time since its last setpoint: after
     the late time-out client 1's answer looked stale too, sim time ran on for the 20 ms
     client 1 took to answer, and vehicle 1 fell back on the setpoint-loss failsafe.)"""
-    cfg = make_config(2, 25360, personas=("px4", "px4"), speedup=None, lockstep=True)
+    events = tmp_path / "events.jsonl"
+    cfg = make_config(2, 25360, personas=("px4", "px4"), speedup=None, lockstep=True,
+                      events=events)  # fmt: skip
     with running_emulator(cfg) as emu:
         a, b = _Answerer(25360, 1, delay=0.02), _Answerer(25361, 2)
         a.start()
@@ -119,6 +123,7 @@ def test_a_late_emulator_still_waits_for_the_clients_that_answered() -> None:
         b.quiet.set()
         assert b.done.wait(5)
         time.sleep(1.5)
+        a_quiet = emu.clock.now  # client 1 goes quiet too: its vehicle's hold times out
         a.quiet.set()
         assert a.done.wait(5)
         b.client.pump(0.5)
@@ -126,6 +131,9 @@ def test_a_late_emulator_still_waits_for_the_clients_that_answered() -> None:
         assert b.client.mode() != PX4_OFFBOARD  # vehicle 2 was not waited for: failsafe
         a.client.close()
         b.client.close()
+    silent = [e for e in map(json.loads, events.read_text().splitlines())
+              if e["event"] == "lockstep_silent"]  # fmt: skip
+    assert [e["vehicle"] for e in silent if e["t"] < a_quiet] == [1]
 
 
 @pytest.mark.timeout(60)
