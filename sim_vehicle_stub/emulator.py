@@ -9,7 +9,6 @@ import logging
 import socket
 import struct
 import time
-from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -223,12 +222,11 @@ class Emulator:
                 node.stats.malformed += 1
                 log.exception("vehicle %d: error handling %s", node.vehicle.index, msg.get_type())
         v = node.vehicle
-        answered = v.setpoint is not before
-        if answered:
+        if v.setpoint is not before:
             self._silent.discard(v.index)
         waiting, held = self._waiting, self._held
-        if (held is not None and v.index in waiting
-                and (answered or v.mode.behaviour is not Behaviour.EXTERNAL)):  # fmt: skip
+        # An answer, or anything else that ends the wait (a switch out of the external mode)
+        if held is not None and v.index in waiting and not self._waits_for(v):
             waiting.discard(v.index)
             if not waiting:
                 _resolve(held)  # the last answer the held tick waited for
@@ -276,23 +274,22 @@ class Emulator:
             elif k == 0:
                 await asyncio.sleep(0)
 
-    def _unanswered(self) -> Iterator[int]:
-        """The vehicles lockstep waits for: flown in the external mode by a client that is not
+    def _unanswered(self) -> list[int]:
+        """The vehicles lockstep waits for this tick (:meth:`_waits_for`)."""
+        return [node.vehicle.index for node in self.nodes if self._waits_for(node.vehicle)]
+
+    def _waits_for(self, v: Vehicle) -> bool:
+        """Whether lockstep waits for ``v``: flown in the external mode by a client that is not
         silent, with no setpoint since this tick's telemetry (sim time stands still meanwhile,
         so an answer has ``t == now``): one setpoint per tick, none computed from an older
         position than the last."""
-        since = self.clock.now - 1e-6
-        silent = self._silent
-        for node in self.nodes:
-            v = node.vehicle
-            sp = v.setpoint
-            if (
-                sp is not None
-                and sp.t < since
-                and v.mode.behaviour is Behaviour.EXTERNAL
-                and v.index not in silent
-            ):
-                yield v.index
+        sp = v.setpoint
+        return (
+            sp is not None
+            and sp.t < self.clock.now - 1e-6
+            and v.mode.behaviour is Behaviour.EXTERNAL
+            and v.index not in self._silent
+        )
 
     async def _await_setpoints(self) -> None:
         """Lockstep: hold sim time until every streaming client answered this tick, at most
