@@ -44,6 +44,9 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--end-action", choices=("rtl", "land"), help="default: profile site, else rtl")
     p.add_argument("--land-wait", type=float, default=600.0, help="vehicle s to wait to land")
     p.add_argument("--no-tlog", action="store_true", help="do not write the .tlog")
+    p.add_argument("--no-map", action="store_true",
+                   help="draw no map-I.geojson / map-I.png at the end (a fleet draws one map of "
+                        "every vehicle instead)")  # fmt: skip
     p.add_argument("--sensor-source", choices=SENSOR_SOURCES,
                    help="where readings come from (default: the profile's sensor_source.kind)")  # fmt: skip
     p.add_argument("--dedicated-link", action="store_true",
@@ -122,17 +125,17 @@ def run_command(args: argparse.Namespace) -> int:
     if args.backend == "mavsdk":
         reason = _run_mavsdk(fly)
         print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
-        _map(config, reason)
+        _map(config, reason, args.no_map)
         os._exit(_exit_status(reason))  # see _run_mavsdk: never join MAVSDK's blocked threads
     reason = asyncio.run(fly)
     print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
-    _map(config, reason)
+    _map(config, reason, args.no_map)
     return _exit_status(reason)
 
 
-def _map(config: MissionConfig, reason: str) -> None:
-    """The run's map, unless a second signal asked to exit at once."""
-    if reason != STOPPED_BY_SECOND_SIGNAL:
+def _map(config: MissionConfig, reason: str, skip: bool) -> None:
+    """The run's map, unless asked for none or a second signal asked to exit at once."""
+    if not skip and reason != STOPPED_BY_SECOND_SIGNAL:
         map_after_run(config.log_dir, config.profile, [config.vehicle], f"map-{config.vehicle}")
 
 

@@ -76,6 +76,9 @@ def companion_command(o: FleetOptions, vehicle: int, base_port: int) -> list[str
         "--duration", str(o.duration),
         # the fleet, not each companion, waits for the landing (it reads the emulator's log)
         "--land-wait", "0",
+        # one map of every vehicle at the end, drawn by the fleet: twelve companions each
+        # importing matplotlib for their own were 6 of a flat-out run's 25 CPU-s
+        "--no-map",
         *(["--sensor-source", o.sensor_source] if o.sensor_source else []),
         "--dedicated-link",
         *o.mqtt_args,

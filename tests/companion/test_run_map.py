@@ -134,8 +134,9 @@ def test_fleet_writes_a_geojson_that_matches_the_mission_logs_and_a_png(tmp_path
         assert f["geometry"]["coordinates"] == pytest.approx(
             _lon_lat(p["north"], p["east"]), abs=2e-7
         )
-    for name in ("map.png", "map-0.png", "map-1.png"):
-        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+    assert (out / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the fleet's map is the run's only one: its companions (run --no-map) draw none of their own
+    assert sorted(p.name for p in out.glob("map*")) == ["map.geojson", "map.png"]
     # `companion map` redraws the same map from the same logs
     fleet_map = (out / "map.geojson").read_text()
     (out / "map.geojson").unlink()
