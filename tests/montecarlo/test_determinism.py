@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 from distributed import LocalCluster
 
-from mdm_montecarlo.runner import MissionResults, run_missions
+from mdm_montecarlo.runner import MissionResults, job_order, run_many, run_missions
+from mdm_montecarlo.variants import with_method
 from mdm_profiles import MissionProfile, load_profile
 
 RUNS = 120
@@ -85,3 +86,22 @@ def test_block_prefix_is_stable(serial: MissionResults, profile: MissionProfile)
     # Block b depends only on (seed, b): the first two blocks of a shorter batch are the same runs.
     short = run_missions(profile, runs=2 * BLOCK_RUNS, seed=SEED, block_runs=BLOCK_RUNS)
     assert np.array_equal(short.team_times, serial.team_times[: 2 * BLOCK_RUNS])
+
+
+def test_the_first_jobs_of_a_pool_are_one_per_engine_and_change_no_result(
+    profile: MissionProfile,
+) -> None:
+    """Sorted longest first, the swarm rows' jobs all come before the batch engine's: a pool
+    whose workers all started on them would compile both engines' kernels in every worker on
+    a fresh install. One job per engine goes first instead, and results stay the same."""
+    swarm = with_method(profile, "PSO")
+    profiles = [profile, swarm, swarm]
+    jobs = job_order(profiles, 80, 40, 2)
+    assert sorted(jobs) == [(i, b, 40) for i in (0, 1, 2) for b in (0, 1)]
+    assert [i for i, _, _ in jobs] == [1, 0, 1, 2, 2, 0]
+    assert [i for i, _, _ in job_order(profiles, 80, 40, 1)] == [1, 1, 2, 2, 0, 0]
+    alone = [run_missions(p, runs=RUNS, seed=SEED, block_runs=BLOCK_RUNS) for p in profiles[:2]]
+    pooled = run_many(profiles[:2], runs=RUNS, seed=SEED, workers=2, block_runs=BLOCK_RUNS)
+    for one, many in zip(alone, pooled, strict=True):
+        assert np.array_equal(one.team_times, many.team_times)
+        assert one.events == many.events
