@@ -18,12 +18,20 @@ EXE = [sys.executable, "-m", "mdm_montecarlo.cli"]
 _DONE = re.compile(rb"\| *(\d+)/\d+ \[")
 
 
+def _sigint_as_from_a_terminal() -> None:
+    """SIGINT at its default in the command: a shell without job control starts background
+    commands (``cmd &`` in a script) with SIGINT ignored, and the command would inherit that
+    and never see the Ctrl-C this test sends."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _interrupt_after(argv: list[str], runs_done: int) -> tuple[int, str, float]:
     """Start the command, wait until its progress bar shows ``runs_done`` runs finished, send
     SIGINT to its group; returns (exit status, stderr, seconds from SIGINT to exit)."""
     proc = subprocess.Popen(
-        [*EXE, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
-    )
+        [*EXE, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+        preexec_fn=_sigint_as_from_a_terminal,  # noqa: PLW1509 - no threads here
+    )  # fmt: skip
     assert proc.stderr is not None
     seen = b""
     try:
