@@ -77,7 +77,7 @@ def companion_command(o: FleetOptions, vehicle: int, base_port: int) -> list[str
         # the fleet, not each companion, waits for the landing (it reads the emulator's log)
         "--land-wait", "0",
         # one map of every vehicle at the end, drawn by the fleet: twelve companions each
-        # importing matplotlib for their own were 6 of a flat-out run's 25 CPU-s
+        # importing matplotlib for their own were 8-10 of a 300 s run's 25-28 CPU-s
         "--no-map",
         *(["--sensor-source", o.sensor_source] if o.sensor_source else []),
         "--dedicated-link",

@@ -30,7 +30,7 @@ def _interrupt_after(argv: list[str], runs_done: int) -> tuple[int, str, float]:
     SIGINT to its group; returns (exit status, stderr, seconds from SIGINT to exit)."""
     proc = subprocess.Popen(
         [*EXE, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
-        preexec_fn=_sigint_as_from_a_terminal,  # noqa: PLW1509 - no threads here
+        preexec_fn=_sigint_as_from_a_terminal,  # noqa: PLW1509 - one signal call in the child
     )  # fmt: skip
     assert proc.stderr is not None
     seen = b""
