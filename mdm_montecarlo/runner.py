@@ -75,9 +75,14 @@ class RunInterruptedError(Exception):
         self.partial = partial
 
 
+def is_swarm(profile: MissionProfile) -> bool:
+    """Whether the profile's rows run on the time-stepped swarm engine (PSO/SPSO/ARPSO)."""
+    return profile.policy.kind in SWARM_KINDS
+
+
 def simulate_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
     """One block of runs: the event-driven engine, or the time-stepped one for PSO/SPSO/ARPSO."""
-    if profile.policy.kind in SWARM_KINDS:
+    if is_swarm(profile):
         return run_swarm_block(profile, seed, block, n_runs)
     return run_block(profile, seed, block, n_runs)
 
@@ -93,7 +98,7 @@ def _relative_cost(profile: MissionProfile) -> float:
     """Rough CPU cost of one run (ordering only): swarms step every update interval; moving
     targets cost about twice fixed ones."""
     mission = profile.mission
-    if profile.policy.kind in SWARM_KINDS:
+    if is_swarm(profile):
         return 4.0 * mission.duration / 1000.0
     return 2.0 if profile.target_motion is not None else 1.0
 
@@ -114,7 +119,7 @@ def job_order(
     jobs.sort(key=lambda job: _relative_cost(profiles[job[0]]) * job[2], reverse=True)
     firsts: dict[bool, int] = {}
     for k, (i, _, _) in enumerate(jobs):
-        firsts.setdefault(profiles[i].policy.kind in SWARM_KINDS, k)
+        firsts.setdefault(is_swarm(profiles[i]), k)
     front = sorted(firsts.values())[: max(workers, 1)]
     return [jobs[k] for k in front] + [job for k, job in enumerate(jobs) if k not in front]
 

@@ -55,6 +55,16 @@ def make_config(n: int, base_port: int, **overrides: Any) -> EmulatorConfig:
 @contextmanager
 def running_emulator(config: EmulatorConfig) -> Iterator[Emulator]:
     """Run an emulator on a background thread's event loop for the duration of the block."""
+    with emulator_and_loop(config) as (emu, _):
+        yield emu
+
+
+@contextmanager
+def emulator_and_loop(
+    config: EmulatorConfig,
+) -> Iterator[tuple[Emulator, asyncio.AbstractEventLoop]]:
+    """:func:`running_emulator`, with the event loop it runs on (for a test that schedules
+    something on the emulator's own thread)."""
     loop = asyncio.new_event_loop()
     ready = threading.Event()
     holder: dict[str, Emulator] = {}
@@ -76,7 +86,7 @@ def running_emulator(config: EmulatorConfig) -> Iterator[Emulator]:
     assert ready.wait(10), "emulator did not start"
     emu = holder["emu"]
     try:
-        yield emu
+        yield emu, loop
     finally:
         asyncio.run_coroutine_threadsafe(emu.stop(), loop).result(10)
         loop.call_soon_threadsafe(loop.stop)

@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from tests.emulator_harness import Client, make_config, running_emulator
+from tests.emulator_harness import Client, emulator_and_loop, make_config, running_emulator
 
 PX4_OFFBOARD = 0x60000
 
@@ -106,7 +106,7 @@ def test_a_late_emulator_still_waits_for_the_clients_that_answered(tmp_path: Pat
     events = tmp_path / "events.jsonl"
     cfg = make_config(2, 25360, personas=("px4", "px4"), speedup=None, lockstep=True,
                       events=events)  # fmt: skip
-    with running_emulator(cfg) as emu:
+    with emulator_and_loop(cfg) as (emu, loop):
         a, b = _Answerer(25360, 1, delay=0.02), _Answerer(25361, 2)
         a.start()
         b.start()
@@ -115,8 +115,6 @@ def test_a_late_emulator_still_waits_for_the_clients_that_answered(tmp_path: Pat
         time.sleep(0.5)
         assert a.client.log, "client 1 answers ticks"
         assert b.client.log, "client 2 answers ticks"
-        loop = emu._task.get_loop() if emu._task is not None else None
-        assert loop is not None
         # Client 2 leaves a tick unanswered; 0.1 wall s into the tick's hold, when client 1
         # has long answered it, the emulator's loop is held off the CPU for 0.35 wall s.
         b.at_quiet = lambda _: loop.call_soon_threadsafe(loop.call_later, 0.1, time.sleep, 0.35)
