@@ -2,8 +2,8 @@
 
     .venv/bin/python benchmarks/host_speed.py [--rounds 3]
 
-The shared virtual machines these benchmarks run on differ from day to day, and within an hour,
-by up to 2x; a figure of another benchmark says little without this beside it. Printed per
+The shared virtual machines these benchmarks run on differ from day to day by 2x and more, and
+within an hour; a figure of another benchmark says little without this beside it. Printed per
 round: the wall time of a pure-Python loop of 10^7 additions (the interpreter's speed), and a
 UDP ping-pong on 127.0.0.1 between two processes (the fleet's pattern: each answer wakes the
 other process): the wall time of a round trip and the CPU time each side spends per datagram
@@ -53,9 +53,9 @@ def ping_pong() -> tuple[float, float, float]:
     ended = os.times()
     here.close()
     there.close()
-    own = after.user + after.system - before.user - before.system
-    echo = ended.children_user + ended.children_system - before.children_user
-    echo -= before.children_system
+    own = after.user + after.system - (before.user + before.system)
+    echo = ended.children_user + ended.children_system
+    echo -= before.children_user + before.children_system
     scale = 1e6 / _ROUND_TRIPS
     return wall * scale, own * scale, echo * scale
 
