@@ -35,6 +35,8 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--profile", required=True, help="profile file or built-in name")
     p.add_argument("--vehicle", type=int, required=True, help="0-based vehicle index")
     p.add_argument("--connect", help="link URL (default udpin:0.0.0.0:BASE_PORT+I)")
+    p.add_argument("--system-id", type=int,
+                   help="the vehicle's MAVLink system id, 1-255 (default: --vehicle + 1)")  # fmt: skip
     p.add_argument("--base-port", type=int, default=VEHICLE_UDP_BASE)
     p.add_argument("--backend", choices=BACKENDS, default="pymavlink")
     p.add_argument("--setpoints", choices=("velocity", "position"), default="velocity")
@@ -98,6 +100,8 @@ def run_command(args: argparse.Namespace) -> int:
     profile = load_profile(args.profile)
     if not 0 <= args.vehicle < profile.fleet.vehicles:
         raise ValueError(f"--vehicle {args.vehicle}: profile has {profile.fleet.vehicles} vehicles")
+    if args.system_id is not None and not 1 <= args.system_id <= 255:
+        raise ValueError(f"--system-id {args.system_id}: must be 1..255 (a MAVLink system id)")
     site = profile.site
     end_action = args.end_action or (site.end_action if site is not None else "rtl")
     config = MissionConfig(
@@ -111,6 +115,7 @@ def run_command(args: argparse.Namespace) -> int:
         battery_min=site.battery_min if site is not None else 20.0,
         land_wait=args.land_wait,
         dedicated_link=args.dedicated_link,
+        target_system=args.system_id,
     )
     port = args.base_port + args.vehicle
     url = args.connect or f"udpin:0.0.0.0:{port}"

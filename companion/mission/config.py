@@ -15,7 +15,7 @@ class MissionConfig:
     """Everything one companion needs besides its link."""
 
     vehicle: int
-    """0-based index; system id is vehicle + 1."""
+    """0-based index in the profile; its system id is ``target_system``, else vehicle + 1."""
     profile: MissionProfile
     setpoints: SetpointKind = "velocity"
     """Velocity setpoints by pursuit guidance, or the waypoint as a position setpoint."""
@@ -45,10 +45,12 @@ class MissionConfig:
     not read may be switched off to save CPU (the fleet's emulator links)."""
     stop_when_all_found: bool = True
     """End when this vehicle has confirmed as many targets as the profile declares real."""
+    target_system: int | None = None
+    """The vehicle's MAVLink system id (1-255) when it is not vehicle + 1 (a real fleet's ids)."""
 
     @property
     def system_id(self) -> int:
-        return self.vehicle + 1
+        return self.target_system if self.target_system is not None else self.vehicle + 1
 
     @property
     def altitude(self) -> float:
