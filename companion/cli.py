@@ -26,6 +26,7 @@ from mavlink_signing import ENV_VAR, load_signing_key
 from mdm_core.ports import VEHICLE_UDP_BASE
 from mdm_profiles import ProfileError, SensorSourceKind, load_profile
 from mdm_profiles.mqtt_spec import MqttSpec
+from mdm_provenance import add_version_flag
 
 log = logging.getLogger("companion")
 
@@ -63,6 +64,7 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
 def build_parser() -> argparse.ArgumentParser:
     """The `companion` command line: `run` and `fleet`."""
     parser = argparse.ArgumentParser(prog="companion", description=__doc__)
+    add_version_flag(parser)
     sub = parser.add_subparsers(dest="command", required=True)
     _run_parser(sub)
     add_fleet_parser(sub)

@@ -9,10 +9,12 @@ import sys
 from dataclasses import asdict
 
 from mavlink_conformance.checks import run_checks
+from mdm_provenance import add_version_flag
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="mavlink-conformance", description=__doc__)
+    add_version_flag(p)
     p.add_argument("address", help="pymavlink address, e.g. udpin:0.0.0.0:14540 or tcp:HOST:5760")
     p.add_argument("--sysid", type=int, help="vehicle system id (default: first autopilot heard)")
     p.add_argument("--timeout", type=float, default=5.0, help="per-step wait, wall seconds")

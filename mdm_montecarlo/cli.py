@@ -23,6 +23,7 @@ from mdm_montecarlo.tables import MeasuredRow, format_table, measured_rows
 from mdm_montecarlo.variants import with_method
 from mdm_profiles import MissionProfile, ProfileError, load_profile
 from mdm_profiles.overrides import apply_overrides
+from mdm_provenance import add_version_flag
 
 INTERRUPTED = 130
 """Exit status after Ctrl-C (128 + SIGINT, as a shell reports it)."""
@@ -72,6 +73,7 @@ def _common(p: argparse.ArgumentParser) -> None:
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="mdm-montecarlo", description=__doc__)
+    add_version_flag(parser)
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="one profile and policy: a table row")
     run.add_argument(

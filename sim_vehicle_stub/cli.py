@@ -17,6 +17,7 @@ from mavlink_signing import ENV_VAR, load_signing_key
 from mdm_core.ports import GCS_UDP, TCP_BASE, VEHICLE_OWN_UDP_BASE, VEHICLE_UDP_BASE
 from mdm_profiles import ProfileError, builtin_profile, builtin_profiles, load_profile
 from mdm_profiles.schema import MissionProfile
+from mdm_provenance import add_version_flag
 from sim_vehicle_stub.config import EmulatorConfig
 from sim_vehicle_stub.personas import persona_names
 
@@ -47,6 +48,7 @@ def _personas(text: str) -> tuple[str, ...]:
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="sim-vehicle", description=__doc__)
+    add_version_flag(p)
     p.add_argument("--profile", default="paper-fixed", help="built-in name or YAML path")
     p.add_argument("-n", "--vehicles", type=int, help="fleet size (default: the profile's)")
     p.add_argument(

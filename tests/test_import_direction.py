@@ -16,11 +16,12 @@ REPO = Path(__file__).resolve().parents[1]
 ALLOWED: dict[str, set[str]] = {
     "mdm_profiles": set(),
     "mavlink_signing": set(),
+    "mdm_provenance": set(),
     "mdm_core": {"mdm_profiles"},
-    "companion": {"mdm_core", "mdm_profiles", "mavlink_signing"},
-    "sim_vehicle_stub": {"mdm_core", "mdm_profiles", "mavlink_signing"},
-    "mdm_montecarlo": {"mdm_core", "mdm_profiles"},
-    "mavlink_conformance": {"mavlink_signing"},
+    "companion": {"mdm_core", "mdm_profiles", "mavlink_signing", "mdm_provenance"},
+    "sim_vehicle_stub": {"mdm_core", "mdm_profiles", "mavlink_signing", "mdm_provenance"},
+    "mdm_montecarlo": {"mdm_core", "mdm_profiles", "mdm_provenance"},
+    "mavlink_conformance": {"mavlink_signing", "mdm_provenance"},
 }
 
 
