@@ -7,6 +7,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from mdm_profiles.failsafe import FailsafeSpec
 from mdm_profiles.mqtt_spec import MqttSpec
 from mdm_profiles.sensor_source import SensorSourceSpec
 from mdm_profiles.swarm import SwarmSpec
@@ -222,6 +223,9 @@ class MissionProfile(_Strict):
     mission: MissionSpec = MissionSpec()
     site: SiteSpec | None = Field(default=None, description="Field profiles only.")
     mqtt: MqttSpec | None = Field(default=None, description="Broker for telemetry and commands.")
+    failsafe: FailsafeSpec = Field(
+        default=FailsafeSpec(), description="Bad telemetry and a lost link (wall s)."
+    )
 
     @model_validator(mode="after")
     def _consistent(self) -> MissionProfile:
