@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from companion.fleet.options import default
+from companion.fleet.sitl_team import SITL_KINDS
 from companion.link.factory import BACKENDS
 from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments
@@ -50,4 +51,15 @@ def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
     p.add_argument("--signing-key-file", type=Path,
                    help="MAVLink 2 signing passphrase file for the emulator and every companion "
                    "(default: $MDM_MAVLINK_KEY, inherited; neither: off)")  # fmt: skip
+    p.add_argument("--vehicles-file", type=Path,
+                   help="fly the real (or SITL) vehicles this YAML file lists, no emulator "
+                   "(docs/companion.md, 'Flying real vehicles')")  # fmt: skip
+    p.add_argument("--sitl", choices=SITL_KINDS,
+                   help="start one SITL instance per vehicle at its start point in the "
+                   "profile's site, fly them, stop them at the end (mixed: ArduCopter, PX4, ...)")  # fmt: skip
+    p.add_argument("--sitl-speedup", type=float, default=default("sitl_speedup"),
+                   help="each SITL instance's speed-up (default 1)")  # fmt: skip
+    p.add_argument("--link-timeout", type=float, default=default("link_timeout"),
+                   help="wall s each real vehicle has to answer on its link before the run is "
+                   "refused (default 30; --sitl: at least 60)")  # fmt: skip
     add_mqtt_arguments(p)

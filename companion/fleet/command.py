@@ -32,6 +32,8 @@ def fleet_command(args: argparse.Namespace) -> int:
         quiet=args.quiet or args.json, land_wait=args.land_wait, resume=args.resume,
         mqtt_args=tuple(mqtt_argv(args)), signing_key_file=args.signing_key_file,
         lockstep=args.lockstep, sensor_source=args.sensor_source,
+        vehicles_file=args.vehicles_file, sitl=args.sitl, sitl_speedup=args.sitl_speedup,
+        link_timeout=args.link_timeout,
     )  # fmt: skip
     started = time.perf_counter()
     result = run_fleet(opts)

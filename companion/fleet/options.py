@@ -39,6 +39,15 @@ class FleetOptions:
     $MDM_MAVLINK_KEY)."""
     sensor_source: str | None = None
     """--sensor-source of every companion (None: the profile's sensor_source.kind)."""
+    vehicles_file: Path | None = None
+    """Fly the real (or SITL) vehicles this fleet file lists, no emulator (fleet/vehicles_file.py)."""
+    sitl: str | None = None
+    """Start one SITL instance per vehicle (arducopter, px4, mixed) and fly them, no emulator."""
+    sitl_speedup: float = 1.0
+    """Each SITL instance's speed-up (--sitl only)."""
+    link_timeout: float = 30.0
+    """Wall seconds each real vehicle has to answer on its link before the run is refused
+    (--sitl: at least 60, the instances are still booting)."""
     lockstep: bool = True
     """The emulator holds sim time until every companion answered the last position
     (sim-vehicle --lockstep): a loaded host slows the run instead of the companions skipping

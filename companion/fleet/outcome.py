@@ -64,10 +64,10 @@ def vehicle_end(out: Path, vehicle: int, exit_code: int | None, earlier: str | N
         how = f"{earlier or reason} (earlier run)"
         ok = (earlier or reason) in NORMAL_ENDS
     elif reason is None:
-        how = "no end in its mission log" + _exit_words(exit_code)
+        how = "no end in its mission log" + exit_words(exit_code)
         ok = False
     else:
-        how = reason + _exit_words(exit_code)
+        how = reason + exit_words(exit_code)
         ok = exit_code == 0 and reason in NORMAL_ENDS
     return ProcessEnd(f"vehicle {vehicle}", how, exit_code, first_error(log), str(log), ok, strays)
 
@@ -76,14 +76,14 @@ def emulator_end(out: Path, exit_code: int | None, exited_early: bool) -> Proces
     """The emulator is fine when it ran until the fleet stopped it and then exited cleanly."""
     log = out / "emulator.log"
     if exited_early:
-        how = f"exited on its own before the companions ended{_exit_words(exit_code)}"
+        how = f"exited on its own before the companions ended{exit_words(exit_code)}"
     else:
-        how = "stopped by the fleet" + _exit_words(exit_code)
+        how = "stopped by the fleet" + exit_words(exit_code)
     ok = not exited_early and exit_code == 0
     return ProcessEnd("emulator", how, exit_code, first_error(log), str(log), ok)
 
 
-def _exit_words(code: int | None) -> str:
+def exit_words(code: int | None) -> str:
     if code is None or code == 0:
         return ""
     if code < 0:

@@ -30,7 +30,8 @@ class FleetPlan:
     """A checked run: how many vehicles, which ports, which companions start."""
 
     vehicles: int
-    ports: PortBlock
+    ports: PortBlock | None
+    """None: real vehicles (no emulator, no local port block)."""
     start: tuple[int, ...]
     """Vehicles whose companion starts (all of them unless resuming)."""
     earlier: dict[int, str]
@@ -54,6 +55,8 @@ def check_arguments(o: FleetOptions, profile: MissionProfile) -> int:
         raise FleetInputError(f"--speedup {o.speedup:g}: must be >= 0 (0: flat out)")
     if not o.wall_limit > 0:
         raise FleetInputError(f"wall limit {o.wall_limit:g}: must be > 0 wall s")
+    if not o.link_timeout > 0:
+        raise FleetInputError(f"--link-timeout {o.link_timeout:g}: must be > 0 wall s")
     if not o.land_wait >= 0:
         raise FleetInputError(f"--land-wait {o.land_wait:g}: must be >= 0 sim s")
     return n
@@ -120,10 +123,13 @@ def _resume_plan(
     return start, ended
 
 
-def plan_fleet(o: FleetOptions, profile: MissionProfile) -> FleetPlan:
-    """Check everything in order (arguments, run directory, ports); FleetInputError if not."""
+def plan_fleet(o: FleetOptions, profile: MissionProfile, *, emulator: bool = True) -> FleetPlan:
+    """Check everything in order (arguments, run directory, ports: only for the emulator's
+    vehicles); FleetInputError if not."""
     n = check_arguments(o, profile)
     check_out(o.out, o.resume)
     start, earlier = _resume_plan(o, profile, n) if o.resume else (tuple(range(n)), {})
-    ports = check_base_port(o.base_port, n) if o.base_port is not None else free_port_block(n)
+    ports = None
+    if emulator:
+        ports = check_base_port(o.base_port, n) if o.base_port is not None else free_port_block(n)
     return FleetPlan(vehicles=n, ports=ports, start=start, earlier=earlier)

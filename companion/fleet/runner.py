@@ -10,11 +10,11 @@ import signal
 import subprocess
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 from companion.fleet import processes
 from companion.fleet.options import FleetOptions
-from companion.fleet.outcome import emulator_end, vehicle_end
+from companion.fleet.outcome import emulator_end, exit_words, vehicle_end
 from companion.fleet.preflight import RUN_FILE, FleetPlan, plan_fleet
 from companion.fleet.processes import StopRequests
 from companion.fleet.progress import (
@@ -26,6 +26,8 @@ from companion.fleet.progress import (
     read_progress,
 )
 from companion.fleet.scoring import EMULATOR_EVENTS, FleetResult, score
+from companion.fleet.team import Team, is_real, open_team, team_size
+from companion.fleet.vehicles_file import VehicleEntry
 from companion.link.factory import check_signing_support
 from companion.mission.phase import Phase
 from companion.run_map.cli_args import map_after_run
@@ -62,25 +64,35 @@ def emulator_command(o: FleetOptions, vehicles: int, base_port: int) -> list[str
     ]  # fmt: skip
 
 
-def companion_command(o: FleetOptions, vehicle: int, base_port: int) -> list[str]:
-    """The `companion run` command line of one vehicle."""
+def companion_command(
+    o: FleetOptions, vehicle: int, base_port: int, real: VehicleEntry | None = None
+) -> list[str]:
+    """The `companion run` command line of one vehicle (``real``: a vehicle of a fleet file or
+    of --sitl, on its own link and system id, instead of the emulator's)."""
+    if real is None:
+        # the fleet, not each companion, waits for the landing (it reads the emulator's log)
+        link = ["--base-port", str(base_port), "--land-wait", "0"]
+    else:  # nothing but the vehicle knows when it landed: each companion waits for its own
+        link = ["--connect", real.link, "--system-id", str(real.system_id),
+                "--land-wait", str(o.land_wait)]  # fmt: skip
+    source = real.sensor_source if real is not None and real.sensor_source else o.sensor_source
+    # a fleet file's link may be shared with a ground station; the emulator's and SITL's are not
+    dedicated = real is None or o.sitl is not None
     return [
         sys.executable, "-m", "companion.cli", "run",
         "--profile", o.profile,
         "--vehicle", str(vehicle),
-        "--base-port", str(base_port),
-        "--backend", o.backend,
+        *link,
+        "--backend", (real.backend if real is not None else None) or o.backend,
         "--setpoints", o.setpoints,
         "--seed", str(o.seed),
         "--log-dir", str(o.out),
         "--duration", str(o.duration),
-        # the fleet, not each companion, waits for the landing (it reads the emulator's log)
-        "--land-wait", "0",
         # one map of every vehicle at the end, drawn by the fleet: twelve companions each
         # importing matplotlib for their own were 8-10 of a 300 s run's 25-28 CPU-s
         "--no-map",
-        *(["--sensor-source", o.sensor_source] if o.sensor_source else []),
-        "--dedicated-link",
+        *(["--sensor-source", source] if source else []),
+        *(["--dedicated-link"] if dedicated else []),
         *o.mqtt_args,
         *_signing_args(o),
     ]  # fmt: skip
@@ -104,6 +116,8 @@ class _Stopped:
     at_once: bool = False
     signalled: bool = False
     """The companions got the fleet's first stop signal."""
+    lost: dict[int, str] = field(default_factory=dict)
+    """Real vehicles lost in flight (autopilot process gone, link silent), with the cause."""
 
 
 def run_fleet(o: FleetOptions) -> FleetResult:
@@ -116,14 +130,37 @@ def run_fleet(o: FleetOptions) -> FleetResult:
     profile = load_profile(o.profile)
     # a bad key or a backend that cannot sign fails here, not in every process
     check_signing_support(o.backend, load_signing_key(o.signing_key_file))
-    plan = plan_fleet(o, profile)
+    size = team_size(o, profile)
+    plan = plan_fleet(o if size is None else replace(o, vehicles=size), profile,
+                      emulator=not is_real(o))  # fmt: skip
+    if plan.ports is None:
+        team = open_team(o, profile, plan.vehicles)
+        try:
+            return _run_team(o, profile, plan, team)
+        finally:
+            team.stop()
     _say(f"fleet: {plan.ports.describe()}; logs in {o.out}")
-    _write_run_file(o, profile, plan)
+    return _fly(o, profile, plan, None)
+
+
+def _run_team(o: FleetOptions, profile: MissionProfile, plan: FleetPlan, team: Team) -> FleetResult:
+    for i, e in sorted(team.entries.items()):
+        _say(f"fleet: {e.name()}: {team.autopilots[i]}, disarmed on the ground")
+    _say(f"fleet: {plan.vehicles} real vehicles, no emulator; logs in {o.out}")
+    return _fly(o, profile, plan, team)
+
+
+def _fly(
+    o: FleetOptions, profile: MissionProfile, plan: FleetPlan, team: Team | None
+) -> FleetResult:
+    _write_run_file(o, profile, plan, team)
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    # present from the start, so a run whose emulator never wrote is scored (nothing in range)
-    (o.out / EMULATOR_EVENTS).touch()
-    emulator = processes.start(emulator_command(o, plan.vehicles, plan.ports.base),
-                               o.out / "emulator.log", env, append=o.resume)  # fmt: skip
+    emulator = None
+    if plan.ports is not None:
+        # present from the start, so a run whose emulator never wrote is scored (nothing in range)
+        (o.out / EMULATOR_EVENTS).touch()
+        emulator = processes.start(emulator_command(o, plan.vehicles, plan.ports.base),
+                                   o.out / "emulator.log", env, append=o.resume)  # fmt: skip
     companions: dict[int, subprocess.Popen[bytes]] = {}
     stopped = _Stopped()
     requests = StopRequests()
@@ -131,24 +168,32 @@ def run_fleet(o: FleetOptions) -> FleetResult:
         try:
             for i in plan.start:
                 companions[i] = processes.start(
-                    companion_command(o, i, plan.ports.base), o.out / f"companion-{i}.log", env,
-                    append=o.resume,
+                    companion_command(o, i, plan.ports.base if plan.ports else 0,
+                                      team.entries[i] if team else None),
+                    o.out / f"companion-{i}.log", env, append=o.resume,
                 )  # fmt: skip
-            stopped = _watch(o, profile, plan, companions, emulator, requests)
+            stopped = _watch(o, profile, plan, companions, emulator, requests, team)
         finally:
             if stopped.at_once or any(p.poll() is None for p in companions.values()):
                 _stop_at_once(companions, signalled=stopped.signalled)
-            processes.stop(emulator, 10.0)
+            if emulator is not None:
+                processes.stop(emulator, 10.0)
     return _finish(o, profile, plan, companions, emulator, stopped)
 
 
-def _write_run_file(o: FleetOptions, profile: MissionProfile, plan: FleetPlan) -> None:
+def _write_run_file(o: FleetOptions, profile: MissionProfile, plan: FleetPlan,
+                    team: Team | None) -> None:  # fmt: skip
     run = {
         "profile": profile.name, "profile_arg": o.profile, "vehicles": plan.vehicles,
         "seed": o.seed, "duration": o.duration, "speedup": o.speedup, "backend": o.backend,
-        "persona": o.persona, "base_port": plan.ports.base, "started": time.time(),
-        "resumed_vehicles": list(plan.start) if o.resume else None,
+        "persona": o.persona, "base_port": plan.ports.base if plan.ports else None,
+        "started": time.time(), "resumed_vehicles": list(plan.start) if o.resume else None,
     }  # fmt: skip
+    if team is not None:
+        run |= {"vehicles_file": str(o.vehicles_file) if o.vehicles_file else None,
+                "sitl": o.sitl, "sitl_speedup": o.sitl_speedup if o.sitl else None,
+                "team": [e.model_dump() | {"heard_autopilot": team.autopilots[i]}
+                         for i, e in sorted(team.entries.items())]}  # fmt: skip
     if o.resume:  # keep the first run's description; note the restart beside it
         earlier = json.loads((o.out / RUN_FILE).read_text(encoding="utf-8"))
         run = earlier | {"resumes": [*earlier.get("resumes", []), run]}
@@ -160,13 +205,18 @@ def _watch(
     profile: MissionProfile,
     plan: FleetPlan,
     companions: dict[int, subprocess.Popen[bytes]],
-    emulator: subprocess.Popen[bytes],
+    emulator: subprocess.Popen[bytes] | None,
     requests: StopRequests,
+    team: Team | None,
 ) -> _Stopped:
     """Until every companion has ended (and, after a stop or an operator's land or abort,
-    every vehicle has landed)."""
+    every vehicle has landed: real vehicles' companions wait for their own landing)."""
     started = time.monotonic()
     stopped = _Stopped()
+    grace = _EXIT_GRACE_S
+    if team is not None:  # the companions wait for the landing: vehicle s at the SITL's speed
+        grace += o.land_wait / (o.sitl_speedup if o.sitl else 1.0)
+    silent_since: dict[int, float] = {}
     stop_at = land_by = None
     # Once every companion has ended: whether an operator's land or abort ended a mission.
     operator_landing: bool | None = None
@@ -183,7 +233,9 @@ def _watch(
             stopped.by = stopped.by or requests.signal_name
             stopped.at_once = True
             return stopped
-        if emulator.poll() is not None:
+        if team is not None:
+            _lose_vehicles(o, team, companions, stopped, silent_since, now)
+        if emulator is not None and emulator.poll() is not None:
             log.error("the emulator exited (code %s); see %s", emulator.returncode,
                       o.out / "emulator.log")  # fmt: skip
             stopped.by = stopped.by or "the emulator's exit"
@@ -199,21 +251,30 @@ def _watch(
             stopped.signalled = True
         alive = {i: p for i, p in companions.items() if p.poll() is None}
         if alive:
-            if stop_at is not None and now - stop_at > _EXIT_GRACE_S:
+            if stop_at is not None and now - stop_at > grace:
                 _say(f"fleet: companions of vehicles {sorted(alive)} still running "
-                     f"{_EXIT_GRACE_S:.0f} s after the stop; stopping them at once")  # fmt: skip
+                     f"{grace:.0f} s after the stop; stopping them at once")  # fmt: skip
                 stopped.at_once = True
                 return stopped
             if now - last_look >= 2.0:
                 last_look = now
                 views = read_progress(o.out, plan.vehicles)
                 _end_hung(o, views, alive, done_at, now)
+                # real vehicles whose link is silent while every other companion has ended
+                lost = all(views[i].phase == Phase.LINK_LOST.value for i in alive)
+                for i in alive:
+                    if lost:
+                        silent_since.setdefault(i, now)
+                    else:
+                        silent_since.pop(i, None)
                 if not o.quiet:
                     line = _progress(o, profile, plan, companions, views, real)
                     if line != last_line or now - last_print >= 10.0:
                         print(line, flush=True)
                         last_print, last_line = now, line
             continue
+        if emulator is None:  # each real vehicle's companion waited for its own landing
+            return stopped
         if stop_at is None and operator_landing is None:
             # Read once: no mission log changes after its companion has ended.
             operator_landing = bool(operator_ended(o.out, plan.vehicles))
@@ -233,6 +294,37 @@ def _watch(
         elif now > land_by:
             _say(f"fleet: still in the air after {o.land_wait:.0f} sim s: {flying}")
             return stopped
+
+
+def _lose_vehicles(
+    o: FleetOptions,
+    team: Team,
+    companions: dict[int, subprocess.Popen[bytes]],
+    stopped: _Stopped,
+    silent_since: dict[int, float],
+    now: float,
+) -> None:
+    """Real vehicles gone in flight: a SITL instance of this run that exited, or a link silent
+    ``o.link_timeout`` wall s while every other companion had ended. Its companion is stopped at
+    once (no end action can reach a vehicle without a link); the others fly on."""
+    causes: dict[int, str] = {}
+    for member in team.sitl:
+        code = member.process.poll()
+        if code is not None:
+            causes[member.entry.index] = (f"its {member.entry.autopilot} SITL process exited"
+                                          f"{exit_words(code)} (log {member.log})")  # fmt: skip
+    for i, since in silent_since.items():
+        if now - since > o.link_timeout:
+            causes.setdefault(i, f"link lost: no HEARTBEAT on {team.entries[i].link} for "
+                                 f"{o.link_timeout:g} s after every other vehicle ended")  # fmt: skip
+    for i, cause in causes.items():
+        if i in stopped.lost:
+            continue
+        stopped.lost[i] = cause
+        _say(f"fleet: vehicle {i} lost: {cause}; stopping its companion, the others fly on")
+        p = companions.get(i)
+        if p is not None and p.poll() is None:
+            _stop_at_once({i: p}, signalled=False)
 
 
 def _end_hung(
@@ -295,7 +387,7 @@ def _finish(
     profile: MissionProfile,
     plan: FleetPlan,
     companions: dict[int, subprocess.Popen[bytes]],
-    emulator: subprocess.Popen[bytes],
+    emulator: subprocess.Popen[bytes] | None,
     stopped: _Stopped,
 ) -> FleetResult:
     result = score(profile, o.out, plan.vehicles, o.duration,
@@ -305,7 +397,11 @@ def _finish(
                     plan.earlier.get(i))
         for i in range(plan.vehicles)
     ]  # fmt: skip
-    result.ends.append(emulator_end(o.out, emulator.returncode, stopped.emulator_early))
+    for i, cause in stopped.lost.items():
+        result.ends[i] = replace(result.ends[i], how=f"lost: {cause}; {result.ends[i].how}",
+                                 ok=False)  # fmt: skip
+    if emulator is not None:
+        result.ends.append(emulator_end(o.out, emulator.returncode, stopped.emulator_early))
     result.stopped_by = stopped.by
     result.complete = stopped.by is None and all(e.ok for e in result.ends)
     path = o.out / RESULTS
