@@ -4,12 +4,15 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
 from tests import sitl
 from tests.mqtt_harness import clear_retained_of_this_run
+
+if TYPE_CHECKING:
+    from selenium.webdriver.chrome.webdriver import WebDriver
 
 
 def _sitl_factory(kind: sitl.Kind, tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:
@@ -38,6 +41,24 @@ def arducopter(tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:
 def px4(tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:
     """Start stock PX4 SITL (SIH) instances (``px4(home=...)``); as ``arducopter``."""
     yield from _sitl_factory("px4", tmp_path)
+
+
+@pytest.fixture
+def chromium(tmp_path: Path) -> Iterator[WebDriver]:
+    """Headless Chromium (Debian's, through Selenium and /usr/bin/chromedriver) with a fresh
+    profile; skips naming what is missing (fails under CI=true); quit at teardown."""
+    from tests import browser
+
+    why = browser.missing_parts()
+    if why is not None:
+        if browser.in_ci():
+            pytest.fail(f"CI=true and {why}", pytrace=False)
+        pytest.skip(why)
+    driver = browser.start(tmp_path / "chromium-profile")
+    try:
+        yield driver
+    finally:
+        driver.quit()
 
 
 @pytest.fixture(scope="session", autouse=True)
