@@ -1,0 +1,55 @@
+"""The command line of `companion watch` and the --web flags it shares with `companion fleet`
+and `companion map` (no aiohttp here: `companion run` imports this module's neighbours)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from companion.telemetry.mqtt.cli_args import add_mqtt_arguments
+
+DEFAULT_WEB = "127.0.0.1:8765"
+STALE_AFTER_S = 5.0
+
+
+def parse_web(value: str) -> tuple[str, int]:
+    """``PORT``, ``HOST:PORT`` or ``[IPV6]:PORT`` -> (host, port); host 127.0.0.1 if not given."""
+    host, sep, port = value.rpartition(":")
+    if not sep:
+        host = "127.0.0.1"
+    host = host.strip("[]") if host.startswith("[") else host
+    if not host or (":" in host and not value.startswith("[")):
+        raise ValueError(f"--web {value!r}: expected PORT, HOST:PORT or [IPV6]:PORT")
+    if not port.isdigit() or not 0 <= int(port) <= 65535:
+        raise ValueError(f"--web {value!r}: the port must be a number 0-65535 (0: any free one)")
+    return host, int(port)
+
+
+def add_web_arguments(p: argparse.ArgumentParser) -> None:
+    """--web-read-only and --web-token-file (--web itself differs per command)."""
+    p.add_argument("--web-read-only", action="store_true",
+                   help="the page shows the team but sends no commands")  # fmt: skip
+    p.add_argument("--web-token-file", type=Path, metavar="PATH",
+                   help="token for commands, its first line (default: $MDM_WEB_TOKEN; a bind "
+                   "beyond loopback without either gets a random one, printed at start)")  # fmt: skip
+
+
+def web_argv(args: argparse.Namespace) -> list[str]:
+    """The same flags again, for the `companion watch` a fleet starts."""
+    return [*(["--web-read-only"] if args.web_read_only else []),
+            *(["--web-token-file", str(args.web_token_file)] if args.web_token_file else [])]  # fmt: skip
+
+
+def add_watch_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Register `companion watch`."""
+    p = sub.add_parser("watch", help="a live web page of a team from its MQTT topics")
+    p.add_argument("--profile", default="paper-fixed", help="the profile the team flies")
+    p.add_argument("--web", default=DEFAULT_WEB, metavar="[HOST:]PORT",
+                   help=f"where the page is served (default {DEFAULT_WEB}; port 0: any free)")  # fmt: skip
+    p.add_argument("--vehicles", type=int, help="team size shown (default: the profile's)")
+    p.add_argument("--show-targets", action="store_true",
+                   help="draw the profile's targets (an emulator or virtual-sensor run)")  # fmt: skip
+    p.add_argument("--stale-after", type=float, default=STALE_AFTER_S,
+                   help="wall s without a message after which a vehicle is shown stale")  # fmt: skip
+    add_web_arguments(p)
+    add_mqtt_arguments(p)
