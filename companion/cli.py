@@ -18,8 +18,8 @@ from companion.autopilots import FlightMode
 from companion.fleet.cli_args import add_fleet_parser
 from companion.fly import REFUSED, STOPPED_BY_SECOND_SIGNAL, check_flight, fly
 from companion.link.factory import BACKENDS, Backend, make_link
-from companion.live_web.cli_args import add_watch_parser
 from companion.mission import MissionConfig
+from companion.mission.mission_exit import MissionExit
 from companion.run_map.cli_args import add_map_parser, map_after_run, map_command
 from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
@@ -47,6 +47,9 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--duration", type=float, help="search time, vehicle s (default: profile)")
     p.add_argument("--end-action", choices=("rtl", "land"), help="default: profile site, else rtl")
     p.add_argument("--land-wait", type=float, default=600.0, help="vehicle s to wait to land")
+    p.add_argument("--max-speedup", type=float,
+                   help="vehicle s per wall s the vehicle runs at (a simulator's speed-up): "
+                        "positions whose clock runs faster are dropped (default: unknown)")  # fmt: skip
     p.add_argument("--no-tlog", action="store_true", help="do not write the .tlog")
     p.add_argument("--no-map", action="store_true",
                    help="draw no map-I.geojson / map-I.png at the end (a fleet draws one map of "
@@ -70,7 +73,6 @@ def build_parser() -> argparse.ArgumentParser:
     _run_parser(sub)
     add_fleet_parser(sub)
     add_map_parser(sub)
-    add_watch_parser(sub)
     return parser
 
 
@@ -86,10 +88,6 @@ def main(argv: list[str] | None = None) -> int:
             return run_command(args)
         if args.command == "map":
             return map_command(args)
-        if args.command == "watch":
-            from companion.live_web.commands import watch_command
-
-            return watch_command(args)
         from companion.fleet.command import fleet_command
 
         return fleet_command(args)
@@ -124,6 +122,7 @@ def run_command(args: argparse.Namespace) -> int:
         land_wait=args.land_wait,
         dedicated_link=args.dedicated_link,
         target_system=args.system_id,
+        max_speedup=args.max_speedup,
     )
     port = args.base_port + args.vehicle
     url = args.connect or f"udpin:0.0.0.0:{port}"
@@ -136,14 +135,20 @@ def run_command(args: argparse.Namespace) -> int:
     fly = _fly(config, url, args.backend, tlog=not args.no_tlog, mqtt=mqtt, signing_key=signing_key,
                sensor_source=sensor_source)  # fmt: skip
     if args.backend == "mavsdk":
-        reason = _run_mavsdk(fly)
-        print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
+        reason, end = _run_mavsdk(fly)
+        _say_end(args.vehicle, reason, end)
         _map(config, reason, args.no_map)
-        os._exit(_exit_status(reason))  # see _run_mavsdk: never join MAVSDK's blocked threads
-    reason = asyncio.run(fly)
-    print(f"vehicle {args.vehicle}: mission ended ({reason})", flush=True)
+        os._exit(_exit_status(reason, end))  # see _run_mavsdk: never join MAVSDK's blocked threads
+    reason, end = asyncio.run(fly)
+    _say_end(args.vehicle, reason, end)
     _map(config, reason, args.no_map)
-    return _exit_status(reason)
+    return _exit_status(reason, end)
+
+
+def _say_end(vehicle: int, reason: str, end: MissionExit | None) -> None:
+    """The mission's end reason and, in one line, how the vehicle was left."""
+    how = "" if end is None else f"; exit {end.status}: {end.cause}"
+    print(f"vehicle {vehicle}: mission ended ({reason}){how}", flush=True)
 
 
 def _map(config: MissionConfig, reason: str, skip: bool) -> None:
@@ -152,15 +157,20 @@ def _map(config: MissionConfig, reason: str, skip: bool) -> None:
         map_after_run(config.log_dir, config.profile, [config.vehicle], f"map-{config.vehicle}")
 
 
-def _exit_status(reason: str) -> int:
-    """0 for a mission that ended (including by one signal); 130 when a second signal cut it
-    short: the end action was not seen through; 1 when the companion refused to start."""
-    if reason.startswith(REFUSED):
+def _exit_status(reason: str, end: MissionExit | None) -> int:
+    """130 when a second signal cut the mission short; 1 when the companion refused to start;
+    else the mission's own (:class:`MissionExit`): 0 only when the vehicle was seen landed and
+    disarmed, or the end action accepted where ``--land-wait 0`` asked not to wait."""
+    if reason == STOPPED_BY_SECOND_SIGNAL:
+        return 130
+    if reason.startswith(REFUSED) or end is None:
         return 1
-    return 130 if reason == STOPPED_BY_SECOND_SIGNAL else 0
+    return end.status
 
 
-def _run_mavsdk(coro: Coroutine[Any, Any, str]) -> str:
+def _run_mavsdk(
+    coro: Coroutine[Any, Any, tuple[str, MissionExit | None]],
+) -> tuple[str, MissionExit | None]:
     """Run without waiting for the default executor at the end: a MAVSDK call still blocked in
     its native library after the vehicle went away would otherwise keep the process alive."""
     loop = asyncio.new_event_loop()
@@ -183,7 +193,7 @@ def _dump_tasks() -> None:
 async def _fly(
     config: MissionConfig, url: str, backend: Backend, *, tlog: bool, mqtt: MqttSpec | None,
     signing_key: bytes | None, sensor_source: SensorSourceKind,
-) -> str:  # fmt: skip
+) -> tuple[str, MissionExit | None]:  # fmt: skip
     link = make_link(
         backend,
         url=url,
@@ -199,7 +209,8 @@ async def _fly(
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.add_signal_handler(sig, flight.stop)
         loop.add_signal_handler(signal.SIGUSR1, _dump_tasks)
-        return await flight.ended()
+        reason = await flight.ended()
+        return reason, flight.mission.exit
 
 
 if __name__ == "__main__":

@@ -21,6 +21,7 @@ from companion.link.local_frame import LocalFrame
 from companion.link.messages import GlobalPosition, LinkEvent, LocalPosition
 from companion.link.outcome import CommandResult, Outcome, denied
 from companion.link.streams import StreamNeed, StreamWatch
+from companion.link.telemetry_guard import TelemetryGuard
 from companion.link.vehicle_frame import FrameAlignment
 
 log = logging.getLogger(__name__)
@@ -83,6 +84,8 @@ class VehicleLink(ABC):
         other events of its datagram) instead of publishing them, when ``ready`` says so."""
         self.autopilot = None
         self.streams = StreamWatch()
+        self.guard = TelemetryGuard()
+        """The check of every position taken (telemetry_guard.py); the mission sets its limits."""
         self.heard: set[int] = set()
         """System ids heard on this link (any sender), for the 'waiting for system N' line."""
         self._texts: deque[tuple[float, int, str]] = deque(maxlen=32)
@@ -174,28 +177,36 @@ class VehicleLink(ABC):
         self.alignment = FrameAlignment(profile)
 
     def _local(
-        self, t: float, x: float, y: float, z: float, vx: float, vy: float, vz: float,
-        received: float,
+        self, component: int, t: float, x: float, y: float, z: float, vx: float, vy: float,
+        vz: float, received: float,
     ) -> LocalPosition | None:  # fmt: skip
-        """A LOCAL_POSITION_NED as an event in the profile's frame (None while unaligned)."""
+        """A LOCAL_POSITION_NED as an event in the profile's frame (None while unaligned, and
+        for what ``guard`` drops)."""
         a = self.alignment
-        if a is None:
-            return LocalPosition(t, x, y, z, vx, vy, vz, received)
-        if a.origin is None:
+        if a is not None and a.origin is None:
             return None
-        return LocalPosition(t, x + a.north, y + a.east, z, vx, vy, vz, received)
+        north, east = (x, y) if a is None else (x + a.north, y + a.east)
+        if not self.guard.local(component, t, north, east, z, vx, vy, vz, received):
+            return None
+        return LocalPosition(t, north, east, z, vx, vy, vz, received)
 
     def _global(
-        self, t: float, lat: float, lon: float, relative_alt: float
+        self, component: int, t: float, lat: float, lon: float, relative_alt: float
     ) -> GlobalPosition | None:
-        """A GLOBAL_POSITION_INT as an event (only when flying in the profile's frame)."""
+        """A GLOBAL_POSITION_INT as an event (only when flying in the profile's frame; None
+        for what ``guard`` drops)."""
         a = self.alignment
         if a is None:
             return None
         self.streams.note("GLOBAL_POSITION_INT", t)
         if lat == 0.0 and lon == 0.0:  # no position yet (ArduPilot before its EKF origin)
             return None
-        n, e, _ = a.profile.to_local(lat, lon, a.profile.alt)
+        n = e = math.nan
+        if math.isfinite(lat) and math.isfinite(lon) and abs(lat) <= 90.0 and abs(lon) <= 180.0:
+            n, e, _ = a.profile.to_local(lat, lon, a.profile.alt)
+        if not self.guard.global_position(component, t, lat, lon, relative_alt, n, e,
+                                          time.perf_counter()):  # fmt: skip
+            return None
         return GlobalPosition(t, lat, lon, relative_alt, n, e)
 
     def _note_origin(self, lat: float, lon: float, alt: float) -> None:

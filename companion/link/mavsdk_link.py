@@ -169,12 +169,12 @@ class MavsdkLink(VehicleLink):
         if name == "LOCAL_POSITION_NED":
             self.streams.note(name, f["time_boot_ms"] / 1000.0)
             return self._local(
-                f["time_boot_ms"] / 1000.0, f["x"], f["y"], f["z"], f["vx"], f["vy"], f["vz"],
-                received,
+                component, f["time_boot_ms"] / 1000.0, float(f["x"]), float(f["y"]),
+                float(f["z"]), float(f["vx"]), float(f["vy"]), float(f["vz"]), received,
             )  # fmt: skip
         if name == "GLOBAL_POSITION_INT":
-            return self._global(f["time_boot_ms"] / 1000.0, f["lat"] * 1e-7, f["lon"] * 1e-7,
-                                f["relative_alt"] * 1e-3)  # fmt: skip
+            return self._global(component, f["time_boot_ms"] / 1000.0, f["lat"] * 1e-7,
+                                f["lon"] * 1e-7, f["relative_alt"] * 1e-3)  # fmt: skip
         if name == "GPS_GLOBAL_ORIGIN":
             self._note_origin(f["latitude"] * 1e-7, f["longitude"] * 1e-7, f["altitude"] * 1e-3)
             return None

@@ -224,7 +224,7 @@ class PymavlinkLink(VehicleLink):
             return False
         position: tuple[int, float, float, float, float, float, float] | None = None
         signal = None
-        at, rare = 0, []
+        at, component, rare = 0, 0, []
         for i, (msg_id, system, frame) in enumerate(frames):
             if system != self.target_system:
                 return False
@@ -233,7 +233,7 @@ class PymavlinkLink(VehicleLink):
                     return False
                 position = cast(tuple[int, float, float, float, float, float, float],
                                 fast_frames.unpack(msg_id, frame))  # fmt: skip
-                at = i
+                at, component = i, frame[6]
             elif msg_id == fast_frames.NAMED_VALUE_FLOAT:
                 _, value, name = fast_frames.unpack(msg_id, frame)
                 if name == b"SENS_SIG":
@@ -245,6 +245,9 @@ class PymavlinkLink(VehicleLink):
         if position is None:
             return False
         t, x, y, z, vx, vy, vz = position
+        guard = self.guard
+        if not guard.plausible_local(component, t / 1000.0, x, y, z, vx, vy, vz, received):
+            return False  # the events' path drops and counts it
         if not answerer.ready(t / 1000.0, x, y):
             return False
         try:  # another datagram waiting: the batch acts on the newest position only
@@ -262,6 +265,7 @@ class PymavlinkLink(VehicleLink):
         for i, msg_id, frame in rare:
             if (event := self._event(msg_id, frame, received)) is not None:
                 (before if i < at else after).append(event)
+        guard.local(component, t / 1000.0, x, y, z, vx, vy, vz, received)  # taken: plausible
         self._time_ms = t
         self.streams.note("LOCAL_POSITION_NED", t / 1000.0)
         pos = LocalPosition(t / 1000.0, x, y, z, vx, vy, vz, received)
@@ -305,9 +309,11 @@ class PymavlinkLink(VehicleLink):
         f = fast_frames.unpack(msg_id, frame)
         if msg_id == fast_frames.LOCAL_POSITION_NED:
             t, x, y, z, vx, vy, vz = cast(tuple[int, float, float, float, float, float, float], f)
-            self._time_ms = t
             self.streams.note("LOCAL_POSITION_NED", t / 1000.0)
-            return self._local(t / 1000.0, x, y, z, vx, vy, vz, received)
+            local = self._local(frame[6], t / 1000.0, x, y, z, vx, vy, vz, received)
+            if local is not None:
+                self._time_ms = t
+            return local
         if msg_id == fast_frames.NAMED_VALUE_FLOAT:
             t, value, raw = cast(tuple[int, float, bytes], f)
             return SensorSignal(t / 1000.0, value) if _text(raw) == "SENS_SIG" else None
@@ -400,14 +406,15 @@ class PymavlinkLink(VehicleLink):
     def _translate(self, msg: Any, received: float) -> LinkEvent | None:
         kind = msg.get_type()
         if kind == "LOCAL_POSITION_NED":
-            self._time_ms = msg.time_boot_ms
             self.streams.note(kind, msg.time_boot_ms / 1000.0)
-            return self._local(
-                msg.time_boot_ms / 1000.0, msg.x, msg.y, msg.z, msg.vx, msg.vy, msg.vz, received
-            )
+            local = self._local(msg.get_srcComponent(), msg.time_boot_ms / 1000.0, msg.x, msg.y,
+                                msg.z, msg.vx, msg.vy, msg.vz, received)  # fmt: skip
+            if local is not None:
+                self._time_ms = msg.time_boot_ms
+            return local
         if kind == "GLOBAL_POSITION_INT":
-            return self._global(msg.time_boot_ms / 1000.0, msg.lat * 1e-7, msg.lon * 1e-7,
-                                msg.relative_alt * 1e-3)  # fmt: skip
+            return self._global(msg.get_srcComponent(), msg.time_boot_ms / 1000.0,
+                                msg.lat * 1e-7, msg.lon * 1e-7, msg.relative_alt * 1e-3)  # fmt: skip
         if kind == "GPS_GLOBAL_ORIGIN":
             self._note_origin(msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3)
             return None

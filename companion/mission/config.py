@@ -43,6 +43,10 @@ class MissionConfig:
     dedicated_link: bool = False
     """The link carries only this companion (no ground station on it): streams the mission does
     not read may be switched off to save CPU (the fleet's emulator links)."""
+    max_speedup: float | None = None
+    """Vehicle seconds per wall second the vehicle's clock may run (the speed-up asked of a
+    simulator, with its margin): positions whose clock leaps further are dropped. None: not
+    known; a leap of more than 5 vehicle s is taken only when 3 positions in a row agree."""
     stop_when_all_found: bool = True
     """End when this vehicle has confirmed as many targets as the profile declares real."""
     target_system: int | None = None

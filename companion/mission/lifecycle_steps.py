@@ -37,6 +37,7 @@ from companion.mission.lifecycle_events import (
     TakeoffSent,
     TransitEnded,
 )
+from companion.mission.mission_exit import MissionExit
 from companion.mission.phase import Phase
 from companion.telemetry import events
 
@@ -324,21 +325,48 @@ class LifecycleSteps:
 
     async def _fly_end_action(self) -> Landed:
         m, action = self.m, self.m.state.end_action
+        name = action.value.upper()
         result = await self.link.set_mode(action)
         if not result:
             log.error("vehicle %d refused %s: %s", self.config.vehicle, action.value,
                       result.describe())  # fmt: skip
         if self.config.land_wait <= 0:
+            if m.exit is None:
+                m.exit = (MissionExit(0, f"{name} accepted; not waiting for the landing")
+                          if result else MissionExit(1, f"{name} refused: {result.describe()}"))  # fmt: skip
             return Landed()
         log.info("vehicle %d: %s; waiting up to %g vehicle s until it lands and disarms",
-                 self.config.vehicle, action.value.upper(), self.config.land_wait)  # fmt: skip
-        if await m.until(lambda: m.heartbeat is not None and not m.heartbeat.armed,
-                         self.config.land_wait):  # fmt: skip
+                 self.config.vehicle, name, self.config.land_wait)  # fmt: skip
+        how = await self._await_landing()
+        if m.exit is not None:  # the link was given up meanwhile
+            return Landed()
+        if how == "landed":
             log.info("vehicle %d: landed and disarmed", self.config.vehicle)
+            m.exit = MissionExit(0, f"{name}: landed and disarmed")
         else:
-            log.error("vehicle %d: still armed %g vehicle s after %s", self.config.vehicle,
-                      self.config.land_wait, action.value.upper())  # fmt: skip
+            m.exit = MissionExit(1, f"{how} after {name}, still armed {m.where()}")
+            log.error("vehicle %d: %s", self.config.vehicle, m.exit.cause)
         return Landed()
+
+    async def _await_landing(self) -> str:
+        """Until the vehicle disarms (``landed``), ``land_wait`` vehicle s pass, or its clock
+        stands still (no valid position) for the failsafe's position_timeout + position_hold
+        wall s; while the link is lost, until the supervision gives it up (``m.exit``)."""
+        m, wait = self.m, self.config.land_wait
+        spec = self.config.profile.failsafe
+        stall = spec.position_timeout + spec.position_hold
+        start, seen, moved = m.clock.now, m.clock.now, time.monotonic()
+        while m.exit is None:
+            if m.heartbeat is not None and not m.heartbeat.armed:
+                return "landed"
+            if m.clock.now - start >= wait:
+                return f"{wait:g} vehicle s"
+            if m.clock.now != seen:
+                seen, moved = m.clock.now, time.monotonic()
+            elif m.phase is not Phase.LINK_LOST and time.monotonic() - moved >= stall:
+                return f"no valid position for {time.monotonic() - moved:.0f} s ({m.clock.now - start:.0f} vehicle s)"
+            await m.wait_changed(0.5)
+        return "link given up"
 
     def _report_speed(self) -> None:
         """A vehicle that kept below the profile's speed says so: an autopilot limit the

@@ -31,6 +31,7 @@ from companion.link.messages import (
     StraySource,
     SystemStatus,
 )
+from companion.link.telemetry_guard import TelemetryLimits
 from companion.mission.config import MissionConfig
 from companion.mission.control import (
     Action,
@@ -55,8 +56,11 @@ from companion.mission.lifecycle_events import (
     Signal,
 )
 from companion.mission.lifecycle_steps import LifecycleSteps
+from companion.mission.mission_exit import MissionExit, where
 from companion.mission.phase import Phase
+from companion.mission.position_failsafe import PositionFailsafe
 from companion.mission.search_answer import TICK_S, SearchAnswer
+from companion.mission.setpoint_guard import SetpointGuard
 from companion.mission.swarm_core import SwarmCore, SwarmExchange
 from companion.mission.vehicle_clock import VehicleClock
 from companion.mission.vehicle_fence import VehicleFence
@@ -72,6 +76,11 @@ COM_OF_LOSS_T (1 s stock, read from SITL) without setpoints; the newest position
 that HOLD by one 10 Hz period, so 0.8 still sees every fall-back, while a shorter gap (a loaded
 host descheduling us for 0.17 wall s at 3x gave 0.5) no longer turns a pilot's HOLD into one."""
 _OPEN_BACKOFF_MAX_S = 8.0
+_LINK_LINE_S = 5.0
+"""Wall seconds between two 'link lost, waiting' lines."""
+_RATE_MARGIN = 1.5
+"""The vehicle clock may run this much faster than the speed-up asked (a simulator catching up
+after a stall of its host)."""
 _TEXT_LEVEL = {0: logging.ERROR, 1: logging.ERROR, 2: logging.ERROR, 3: logging.ERROR,
                4: logging.WARNING, 5: logging.INFO, 6: logging.INFO}  # fmt: skip
 """MAV_SEVERITY -> log level for the vehicle's STATUSTEXT (7, debug, is logged at DEBUG)."""
@@ -161,6 +170,20 @@ class VehicleMission:
         )
         self.lifecycle = LifecycleSteps(self)
         self.answer = SearchAnswer(self)
+        failsafe = profile.failsafe
+        rate = None if config.max_speedup is None else config.max_speedup * _RATE_MARGIN
+        link.guard.limits = TelemetryLimits(
+            max_speed=max(profile.fleet.speed * failsafe.speed_margin, 10.0), max_rate=rate
+        )
+        self.setpoint_guard = SetpointGuard(
+            self.guide, self.fence, config.setpoints, max(profile.fleet.altitude_step / 2, 1.0)
+        )
+        self.position_failsafe = PositionFailsafe(self)
+        self.exit: MissionExit | None = None
+        """How the companion ends (set by the end action's wait, the link's loss, or at the
+        end of :meth:`run`); recorded as the log's ``exit``."""
+        self.home: tuple[float, float] | None = None
+        """Where the vehicle was first seen on the ground (profile frame)."""
         """The search's common answer without the decision loop's events (search_answer.py)."""
 
     # -- public ----------------------------------------------------------------------------
@@ -185,8 +208,31 @@ class VehicleMission:
                 life.add_done_callback(lambda _: [t.cancel() for t in loops])
         finally:
             self._emit_latency()
+            self._record_exit()
             await self.link.close()
         return self.end_reason or "stopped"
+
+    def _record_exit(self) -> None:
+        """The ``exit`` record: set by the end's wait or the link's loss, else from what the
+        vehicle was last seen doing."""
+        if self.exit is None:
+            hb = self.heartbeat
+            if hb is None:
+                self.exit = MissionExit(1, "the vehicle was never heard")
+            elif hb.armed:
+                ap = self.link.autopilot
+                mode = ap.mode_name(hb.custom_mode) if ap is not None else "?"
+                self.exit = MissionExit(1, f"left armed in {mode}, {self.where()}")
+            else:
+                self.exit = MissionExit(0, "disarmed on the ground")
+            failsafe = self.position_failsafe.cause
+            if failsafe is not None:
+                self.exit = MissionExit(1, f"failsafe ({failsafe}); {self.exit.cause}")
+        self.record(events.Exit(self.exit.status, self.exit.cause))
+
+    def where(self) -> str:
+        """Where the vehicle was last seen, for the exit's line."""
+        return where(self.position, self.home)
 
     def request_end(self, reason: str) -> None:
         """End the search and fly the end action (operator signal, mission time, battery)."""
@@ -423,6 +469,8 @@ class VehicleMission:
         self._received_time = max(self._received_time, pos.time)
         prev = self.position
         t = self.clock.update(pos.time)
+        if self.home is None and -pos.down < 1.0:
+            self.home = (pos.north, pos.east)
         if prev is not None and pos.time > prev.time:
             self._period += 0.2 * (min(pos.time - prev.time, 1.0) - self._period)
         self.position = pos
@@ -519,10 +567,25 @@ class VehicleMission:
                                        self.fence, self._period), pos)  # fmt: skip
 
     def _send(self, sp: NedSetpoint, pos: LocalPosition) -> None:
+        safe, why = self.setpoint_guard.safe(sp)
+        if why is not None:
+            self._refused_setpoint(*why)
+            if safe is None:
+                return
+            sp = safe
         self.link.send_setpoint(sp, self.config.setpoints)
         self._setpoint_time = pos.time
         if len(self.latencies) < 200_000:
             self.latencies.append(time.perf_counter() - pos.received)
+
+    def _refused_setpoint(self, kind: str, detail: str) -> None:
+        """A setpoint the last check refused: a bug, logged with its cause (the 1st, 10th,
+        100th ... of each kind) and replaced by a hold."""
+        n = self.setpoint_guard.refused[kind]
+        if n == 10 ** (len(str(n)) - 1):
+            log.error("vehicle %d: setpoint not sent (%s; %d so far): a bug; sent a hold instead",
+                      self.config.vehicle, detail, n)  # fmt: skip
+            self.record(events.SetpointRefused(kind, detail, n))
 
     async def _open_link(self) -> bool:
         """Open the link, retrying with backoff while the endpoint is not up (an autopilot
@@ -546,9 +609,11 @@ class VehicleMission:
     # -- link supervision ------------------------------------------------------------------
 
     async def _supervise(self) -> None:
-        backoff = 0.5
+        backoff, next_line = 0.5, 0.0
+        wait = self.config.profile.failsafe.link_wait
         while True:
             await asyncio.sleep(0.25)
+            self.position_failsafe.check(time.perf_counter())
             if self.heartbeat is None or self.phase is Phase.DONE:
                 continue
             silent = time.perf_counter() - self._last_heartbeat_wall
@@ -561,6 +626,13 @@ class VehicleMission:
                             self.config.vehicle, silent)  # fmt: skip
                 self.feed(LinkLost())
                 self.record(events.LinkState("lost", round(silent, 1)))
+            if silent >= wait:
+                self._give_up_link(silent)
+                return
+            if time.perf_counter() >= next_line:
+                next_line = time.perf_counter() + _LINK_LINE_S
+                log.warning("vehicle %d: link lost for %.0f s; waiting up to %g s for it",
+                            self.config.vehicle, silent, wait)  # fmt: skip
             await asyncio.sleep(backoff * (1 + random.random()))  # jittered backoff
             backoff = min(backoff * 2, 8.0)
             try:
@@ -575,6 +647,24 @@ class VehicleMission:
                     self.record(events.LinkState("restored"))
                     self._after_link_restored(resume)
                     break
+
+    def _give_up_link(self, silent: float) -> None:
+        """The link stayed lost for the profile's ``failsafe.link_wait``: the mission ends
+        (exit status 1), saying what the vehicle was last seen doing and where."""
+        hb, ap = self.heartbeat, self.link.autopilot
+        armed = hb is not None and hb.armed
+        if self.state.control.ending:
+            doing = f"{self.state.end_action.value.upper()} under way"
+        elif hb is not None and ap is not None:
+            doing = f"in {ap.mode_name(hb.custom_mode)}"
+        else:
+            doing = "mode unknown"
+        cause = (f"link lost while {'armed' if armed else 'disarmed'} (no heartbeat for "
+                 f"{silent:.0f} s), {doing} {self.where()}")  # fmt: skip
+        log.error("vehicle %d: %s; not waiting longer", self.config.vehicle, cause)
+        self.exit = MissionExit(1, cause)
+        self.request_end("link lost")
+        self._wake()
 
     def _after_link_restored(self, before: Phase) -> None:
         hb, ap = self.heartbeat, self.link.autopilot

@@ -87,13 +87,47 @@ class End:
     found: int
 
 
+@dataclass(frozen=True)
+class TelemetryDropped:
+    """Positions the telemetry check dropped (companion/link/telemetry_guard.py), per cause,
+    since the last such record (rate-limited)."""
+
+    NAME: ClassVar[str] = "telemetry_dropped"
+    cause: str
+    count: int
+    total: int
+    """Dropped for this cause since the start."""
+
+
+@dataclass(frozen=True)
+class SetpointRefused:
+    """A setpoint the last check refused (a bug upstream) and replaced by a hold
+    (companion/mission/setpoint_guard.py); rate-limited per cause."""
+
+    NAME: ClassVar[str] = "setpoint_refused"
+    cause: str
+    detail: str
+    count: int
+    """Refused for this cause since the start."""
+
+
+@dataclass(frozen=True)
+class Exit:
+    """How the companion ends: its exit status and the cause in one line."""
+
+    NAME: ClassVar[str] = "exit"
+    status: int
+    cause: str
+
+
 DurableEvent = (
     Start | PhaseChange | Level | Detection | Confirmation | Fallback | ModeChange | LinkState | End
-)
+    | TelemetryDropped | SetpointRefused | Exit
+)  # fmt: skip
 DURABLE: dict[str, type[DurableEvent]] = {
     cls.NAME: cls
     for cls in (Start, PhaseChange, Level, Detection, Confirmation, Fallback, ModeChange,
-                LinkState, End)
+                LinkState, End, TelemetryDropped, SetpointRefused, Exit)
 }  # fmt: skip
 """Event name -> class; these records are fsync'ed."""
 

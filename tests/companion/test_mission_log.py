@@ -56,6 +56,9 @@ def test_every_durable_event_reads_back_as_written(tmp_path: Path) -> None:
         events.LinkState("lost", 3.2),
         events.LinkState("restored"),
         events.End("mission time", 1),
+        events.TelemetryDropped("non-finite", 3, 7),
+        events.SetpointRefused("speed", "speed 30 m/s above the profile's 20", 1),
+        events.Exit(1, "link lost while armed"),
     ]
     assert {type(e) for e in written} == set(events.DURABLE.values())
     path = tmp_path / "mission-0.jsonl"

@@ -1,0 +1,29 @@
+"""How a companion ends: exit status 0 only when the vehicle was seen landed and disarmed (or
+the end action was accepted where the run asked not to wait for the landing); anything else is
+1, with the cause in one line that says where the vehicle was left."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from companion.link.messages import LocalPosition
+
+
+@dataclass(frozen=True)
+class MissionExit:
+    status: int
+    cause: str
+
+
+def where(pos: LocalPosition | None, home: tuple[float, float] | None) -> str:
+    """``at 30 m, 1.2 km from home`` (the last valid position; home: where it was first seen
+    on the ground)."""
+    if pos is None:
+        return "position never known"
+    alt = f"at {-pos.down:.0f} m"
+    if home is None:
+        return f"{alt}, at ({pos.north:.0f}, {pos.east:.0f}) m (home not seen)"
+    d = math.hypot(pos.north - home[0], pos.east - home[1])
+    far = f"{d / 1000:.1f} km" if d >= 1000 else f"{d:.0f} m"
+    return f"{alt}, {far} from home"
