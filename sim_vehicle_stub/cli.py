@@ -72,6 +72,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tcp-base", type=int, default=TCP_BASE)
     p.add_argument("--gcs", action="store_true", help="all vehicles also to UDP gcs-port")
     p.add_argument("--gcs-port", type=int, default=GCS_UDP)
+    p.add_argument("--gcs-host", help="where --gcs sends (default: --host)")
     p.add_argument("--speedup", type=_speedup, default=1.0, help="sim/wall ratio; 0 or max")
     p.add_argument("--sim-step", type=float, default=0.05, help="physics step, sim s")
     p.add_argument("--telemetry-hz", type=float, default=10.0, help="streams, per sim s")
@@ -110,6 +111,7 @@ def config_from_args(args: argparse.Namespace) -> EmulatorConfig:
         tcp_base=args.tcp_base,
         gcs=args.gcs,
         gcs_port=args.gcs_port,
+        gcs_host=args.gcs_host,
         speedup=args.speedup,
         sim_step=args.sim_step,
         telemetry_hz=args.telemetry_hz,

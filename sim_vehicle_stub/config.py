@@ -41,6 +41,8 @@ class EmulatorConfig:
     """TCP server of vehicle i on tcp_base + 10 i."""
     gcs: bool = False
     gcs_port: int = GCS_UDP
+    gcs_host: str | None = None
+    """Where the --gcs output goes (None: ``host``)."""
     speedup: float | None = 1.0
     """Sim seconds per wall second; None runs as fast as possible."""
     sim_step: float = 0.05

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import functools
+import ipaddress
 import logging
 import socket
 import struct
@@ -142,9 +143,12 @@ class Emulator:
         cfg = self.config
         loop = asyncio.get_running_loop()
         if cfg.gcs:
+            gcs_host = cfg.gcs_host or cfg.host
+            # a socket bound to loopback cannot send beyond it
+            gcs_bind = cfg.bind_host if ipaddress.ip_address(gcs_host).is_loopback else "0.0.0.0"
             _, gcs = await loop.create_datagram_endpoint(
-                lambda: GcsEndpoint(self.nodes, self._deliver, (cfg.host, cfg.gcs_port)),
-                local_addr=(cfg.bind_host, 0),
+                lambda: GcsEndpoint(self.nodes, self._deliver, (gcs_host, cfg.gcs_port)),
+                local_addr=(gcs_bind, 0),
             )
             self.gcs = gcs
         for i, node in enumerate(self.nodes):

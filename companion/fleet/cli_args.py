@@ -8,6 +8,7 @@ from pathlib import Path
 from companion.fleet.options import default
 from companion.fleet.sitl_team import SITL_KINDS
 from companion.link.factory import BACKENDS
+from companion.live_web.cli_args import add_web_arguments
 from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments
 
@@ -62,4 +63,11 @@ def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
     p.add_argument("--link-timeout", type=float, default=default("link_timeout"),
                    help="wall s each real vehicle has to answer on its link before the run is "
                    "refused (default 30; --sitl: at least 60)")  # fmt: skip
+    p.add_argument("--web", metavar="[HOST:]PORT",
+                   help="serve the live page of the run there (needs MQTT: --mqtt; "
+                   "docs/live_web.md)")  # fmt: skip
+    add_web_arguments(p)
+    p.add_argument("--gcs", metavar="udpout:HOST:PORT",
+                   help="the emulator also sends every vehicle's MAVLink to this ground "
+                   "station (QGroundControl, MAVProxy)")  # fmt: skip
     add_mqtt_arguments(p)

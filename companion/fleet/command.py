@@ -7,9 +7,11 @@ import json
 import time
 from pathlib import Path
 
+from companion.fleet.gcs import parse_gcs
 from companion.fleet.options import FleetOptions
 from companion.fleet.runner import run_fleet
 from companion.fleet.summary import exit_status, summary_lines
+from companion.live_web.cli_args import parse_web, web_argv
 from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
 from mdm_core.search.pso import VARIANTS
 from mdm_profiles import load_profile
@@ -25,6 +27,12 @@ def fleet_command(args: argparse.Namespace) -> int:
             f"profile {profile.name!r}: policy.kind {profile.policy.kind!r} shares the swarm's "
             "bests over MQTT; configure a broker (--mqtt HOST[:PORT] or the profile's mqtt:)"
         )
+    web = _web_argv(args, mqtt_spec(args, profile.mqtt) is not None)
+    if args.gcs is not None:
+        parse_gcs(args.gcs)
+        if args.vehicles_file is not None or args.sitl is not None:
+            raise ValueError("--gcs forwards the emulator's vehicles; SITL and real vehicles have "
+                             "their own ground-station ports (docs/live_web.md, 'Ground station')")  # fmt: skip
     opts = FleetOptions(
         profile=args.profile, out=out, vehicles=args.vehicles, speedup=args.speedup,
         duration=args.duration, backend=args.backend, persona=args.persona,
@@ -33,7 +41,7 @@ def fleet_command(args: argparse.Namespace) -> int:
         mqtt_args=tuple(mqtt_argv(args)), signing_key_file=args.signing_key_file,
         lockstep=args.lockstep, sensor_source=args.sensor_source,
         vehicles_file=args.vehicles_file, sitl=args.sitl, sitl_speedup=args.sitl_speedup,
-        link_timeout=args.link_timeout,
+        link_timeout=args.link_timeout, web=web, gcs=args.gcs,
     )  # fmt: skip
     started = time.perf_counter()
     result = run_fleet(opts)
@@ -43,3 +51,16 @@ def fleet_command(args: argparse.Namespace) -> int:
     else:
         print("\n" + "\n".join(summary_lines(result, out, wall)))
     return exit_status(result)
+
+
+def _web_argv(args: argparse.Namespace, mqtt: bool) -> tuple[str, ...]:
+    """The `companion watch` flags of --web (checked here, before anything starts)."""
+    if args.web is None:
+        if args.web_read_only or args.web_token_file:
+            raise ValueError("--web-read-only and --web-token-file need --web [HOST:]PORT")
+        return ()
+    parse_web(args.web)
+    if not mqtt:
+        raise ValueError("--web shows the team from its MQTT topics and commands it over them: "
+                         "give --mqtt HOST[:PORT] (or a profile with an mqtt: section)")  # fmt: skip
+    return ("--web", args.web, *web_argv(args))

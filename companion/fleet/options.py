@@ -48,6 +48,12 @@ class FleetOptions:
     link_timeout: float = 30.0
     """Wall seconds each real vehicle has to answer on its link before the run is refused
     (--sitl: at least 60, the instances are still booting)."""
+    web: tuple[str, ...] = ()
+    """The `companion watch` flags of the live page started beside the run (--web ...); empty:
+    none."""
+    gcs: str | None = None
+    """``udpout:HOST:PORT``: the emulator also sends every vehicle's MAVLink there (a ground
+    station); the companions then leave the vehicles' streams on."""
     lockstep: bool = True
     """The emulator holds sim time until every companion answered the last position
     (sim-vehicle --lockstep): a loaded host slows the run instead of the companions skipping

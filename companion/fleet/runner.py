@@ -13,6 +13,7 @@ import time
 from dataclasses import dataclass, field, replace
 
 from companion.fleet import processes
+from companion.fleet.gcs import emulator_gcs_args
 from companion.fleet.options import FleetOptions
 from companion.fleet.outcome import emulator_end, exit_words, vehicle_end
 from companion.fleet.preflight import RUN_FILE, FleetPlan, plan_fleet
@@ -28,6 +29,7 @@ from companion.fleet.progress import (
 from companion.fleet.scoring import EMULATOR_EVENTS, FleetResult, score
 from companion.fleet.team import Team, is_real, open_team, team_size
 from companion.fleet.vehicles_file import VehicleEntry
+from companion.fleet.web_page import start_page
 from companion.link.factory import check_signing_support
 from companion.mission.phase import Phase
 from companion.run_map.cli_args import map_after_run
@@ -60,6 +62,7 @@ def emulator_command(o: FleetOptions, vehicles: int, base_port: int) -> list[str
         "--events", str(o.out / EMULATOR_EVENTS),
         # flat out, the emulator would outrun the companions at unscaled failsafe time-outs
         *(["--lockstep"] if o.lockstep or o.speedup <= 0 else []),
+        *emulator_gcs_args(o.gcs),
         *_signing_args(o),
     ]  # fmt: skip
 
@@ -77,7 +80,7 @@ def companion_command(
                 "--land-wait", str(o.land_wait)]  # fmt: skip
     source = real.sensor_source if real is not None and real.sensor_source else o.sensor_source
     # a fleet file's link may be shared with a ground station; the emulator's and SITL's are not
-    dedicated = real is None or o.sitl is not None
+    dedicated = (real is None or o.sitl is not None) and o.gcs is None
     return [
         sys.executable, "-m", "companion.cli", "run",
         "--profile", o.profile,
@@ -155,6 +158,7 @@ def _fly(
 ) -> FleetResult:
     _write_run_file(o, profile, plan, team)
     env = dict(os.environ, PYTHONUNBUFFERED="1")
+    page = start_page(o, plan.vehicles, emulated=plan.ports is not None, env=env)
     emulator = None
     if plan.ports is not None:
         # present from the start, so a run whose emulator never wrote is scored (nothing in range)
@@ -178,6 +182,8 @@ def _fly(
                 _stop_at_once(companions, signalled=stopped.signalled)
             if emulator is not None:
                 processes.stop(emulator, 10.0)
+            if page is not None:
+                processes.stop(page, 5.0)
     return _finish(o, profile, plan, companions, emulator, stopped)
 
 
