@@ -17,13 +17,14 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from mdm_montecarlo.result_files import append_provenance, case_columns, write_result_files
 from mdm_montecarlo.runner import MissionResults, RunInterruptedError, run_many
 from mdm_montecarlo.study import TABLES, Case, Row, study_rows
 from mdm_montecarlo.tables import MeasuredRow, format_table, measured_rows
 from mdm_montecarlo.variants import with_method
 from mdm_profiles import MissionProfile, ProfileError, load_profile
 from mdm_profiles.overrides import apply_overrides
-from mdm_provenance import add_version_flag
+from mdm_provenance import add_version_flag, collect
 
 INTERRUPTED = 130
 """Exit status after Ctrl-C (128 + SIGINT, as a shell reports it)."""
@@ -80,7 +81,14 @@ def _parser() -> argparse.ArgumentParser:
         "--profile", required=True, help="profile file or built-in name (paper-fixed, ...)"
     )
     run.add_argument(
-        "--method", help="US, BS, LS, PSO, SPSO, ARPSO or MDM:L1+L2 (default: the profile's policy)"
+        "--method",
+        help="US, BS, LS, PSO, SPSO, ARPSO, MDM (the profile's levels) or MDM:L1+L2 "
+        "(default: the profile's policy)",
+    )
+    run.add_argument(
+        "--out",
+        help="folder for results.csv, the per-run samples and provenance.json "
+        "(default reports/run-<UTC date>-<time>)",
     )
     _common(run)
     rep = sub.add_parser("reproduce", help="every table of section IV beside the paper's numbers")
@@ -148,6 +156,8 @@ def _run(args: argparse.Namespace) -> int:
     profile = apply_overrides(load_profile(args.profile), args.set)
     if args.method:
         profile = with_method(profile, args.method)
+    out = Path(args.out or time.strftime("reports/run-%Y%m%d-%H%M%S", time.gmtime()))
+    _check_writable(out)
     start = time.perf_counter()
     try:
         res = _simulate([profile], args, profile.name)[0]
@@ -178,11 +188,17 @@ def _run(args: argparse.Namespace) -> int:
     rows = measured_rows([Row("run", case, None)], {case: res})
     _emit(rows, args.json)
     if note:
-        print(f"mdm-montecarlo: {note}", file=sys.stderr)
+        print(f"mdm-montecarlo: {note}", file=sys.stderr)  # and no files: not a full row
         return INTERRUPTED
+    from mdm_montecarlo.report import write_csv  # matplotlib's import: only once it is needed
+
+    write_csv(out / "results.csv", rows)
+    record = collect(seed=args.seed, started=args.started, command_line=args.command_line)
+    write_result_files(out, [({**case_columns(case), "profile": profile.name}, res)], record)
     if not args.json:
         print(
-            f"{res.runs} runs in {time.perf_counter() - start:.1f} s (seed {args.seed})",
+            f"{res.runs} runs in {time.perf_counter() - start:.1f} s (seed {args.seed}); "
+            f"results, samples and provenance in {out}",
             file=sys.stderr,
         )
     return 0
@@ -239,6 +255,9 @@ def _reproduce(args: argparse.Namespace) -> int:
     from mdm_montecarlo.report import write_report  # see _import_report
 
     path = write_report(out, rows, measured, results, header, workers=_workers(args.workers))
+    record = collect(seed=args.seed, started=args.started, command_line=args.command_line)
+    write_result_files(out, [(case_columns(c), res) for c, res in results.items()], record)
+    append_provenance(path, record)
     if partial:
         print(f"mdm-montecarlo: interrupted; {partial}, partial report: {path}", file=sys.stderr)
         return INTERRUPTED
@@ -263,6 +282,8 @@ def main(argv: list[str] | None = None) -> int:
     # not walked by the collector passes of the interpreter's shutdown (~0.3 s of the end).
     atexit.register(gc.freeze)
     args = _parser().parse_args(argv)
+    args.started = time.perf_counter()  # the provenance's wall time counts from here
+    args.command_line = sys.argv if argv is None else ["mdm-montecarlo", *argv]
     try:
         return _run(args) if args.command == "run" else _reproduce(args)
     except (ProfileError, ValueError) as exc:

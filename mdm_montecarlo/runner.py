@@ -25,6 +25,12 @@ class MissionResults:
     seed: int
     team_times: NDArray[np.float64]
     """(runs, targets) earliest confirmation of each target by any vehicle; inf if never."""
+    first_vehicle: NDArray[np.int64]
+    """(runs, targets) the vehicle (0-based) that made that earliest confirmation; -1 if none."""
+    run_block: NDArray[np.int64]
+    """(runs,) the block of each run: its random streams are SeedSequence([seed, block])."""
+    run_in_block: NDArray[np.int64]
+    """(runs,) each run's place in its block (its lanes' rows in the block's streams)."""
     events: int
     sim_seconds: float
     followed: int | None = None
@@ -235,10 +241,15 @@ def _run_jobs(
 def _collect(profile: MissionProfile, seed: int, results: list[BlockResult]) -> MissionResults:
     results = sorted(results, key=lambda r: r.first_block)
     per_vehicle = np.concatenate([r.per_vehicle for r in results], axis=0)
+    team = metrics.team_times(per_vehicle)
+    sizes = [r.per_vehicle.shape[0] for r in results]
     return MissionResults(
         profile=profile,
         seed=seed,
-        team_times=metrics.team_times(per_vehicle),
+        team_times=team,
+        first_vehicle=np.where(np.isfinite(team), per_vehicle.argmin(axis=1), -1),
+        run_block=np.repeat([r.first_block for r in results], sizes).astype(np.int64),
+        run_in_block=np.concatenate([np.arange(n, dtype=np.int64) for n in sizes]),
         events=sum(r.events for r in results),
         sim_seconds=sum(r.sim_seconds for r in results),
         followed=None

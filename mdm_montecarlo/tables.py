@@ -5,8 +5,11 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
+import numpy as np
+
 from mdm_core import metrics
 from mdm_montecarlo.runner import MissionResults
+from mdm_montecarlo.samples import run_outcomes
 from mdm_montecarlo.study import TNC_TOLERANCE, TS_TOLERANCE, VARIANTS, Case, Row
 
 
@@ -64,11 +67,11 @@ def measured_rows(rows: list[Row], results: dict[Case, MissionResults]) -> list[
     """One MeasuredRow per study row; AISE/AISC of single-sensor rows against their table's MDM."""
     stats: dict[Case, tuple[metrics.Summary, metrics.Summary, int]] = {}
     for case, res in results.items():
-        ts_values, capped_runs = res.ts()
+        runs = run_outcomes(res)  # the per-run samples the report writes
         stats[case] = (
-            metrics.Summary.of(res.tnc),
-            metrics.Summary.of(ts_values),
-            int(capped_runs.sum()),
+            metrics.Summary.of(runs.tnc),
+            metrics.Summary.of(np.empty(0) if runs.ts is None else runs.ts),
+            0 if runs.ts_capped is None else int(runs.ts_capped.sum()),
         )
     mdm_of: dict[tuple[str, str, int], Case] = {}
     for row in rows:

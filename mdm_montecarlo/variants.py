@@ -10,7 +10,8 @@ SWARM_METHODS = ("PSO", "SPSO", "ARPSO")
 
 
 def parse_method(text: str) -> tuple[str, tuple[str, ...]]:
-    """'LS' -> ('sss', ('LS',)); 'MDM:LS+BS' -> ('mdm', ('LS', 'BS')); 'PSO' -> ('pso', ('US',)).
+    """'LS' -> ('sss', ('LS',)); 'MDM:LS+BS' -> ('mdm', ('LS', 'BS')); 'PSO' -> ('pso', ('US',));
+    'MDM' alone -> ('mdm', ()): the profile's own MDM levels (``with_method`` fills them in).
 
     The swarm methods explore with US (the single-sensor uniform step) until they have a best.
     """
@@ -19,13 +20,15 @@ def parse_method(text: str) -> tuple[str, tuple[str, ...]]:
         return "sss", (text,)
     if text in SWARM_METHODS:
         return text.lower(), ("US",)
+    if text == "MDM":
+        return "mdm", ()
     if text.startswith("MDM:"):
         names = tuple(text[4:].split("+"))
         if names and all(n in METHODS for n in names):
             return "mdm", names
     raise ValueError(
         f"unknown method {text!r}; allowed: US, BS, LS, PSO, SPSO, ARPSO, "
-        "or MDM:<L1>+<L2>[+...] with L in US/BS/LS"
+        "MDM (the profile's levels) or MDM:<L1>+<L2>[+...] with L in US/BS/LS"
     )
 
 
@@ -40,6 +43,13 @@ def with_method(
     """
     kind, names = parse_method(method)
     current = profile.policy
+    if kind == "mdm" and not names:
+        if current.kind != "mdm":
+            raise ValueError(
+                f"{method}: the profile's policy is {current.kind!r}, not MDM; name the levels, "
+                "e.g. MDM:LS+BS"
+            )
+        names = tuple(lv.distribution for lv in current.levels)
     step1 = delta1 if delta1 is not None else current.levels[0].step
     if kind != "mdm":
         levels = [LevelSpec(distribution=names[0], step=step1, step_law=current.levels[0].step_law)]

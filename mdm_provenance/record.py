@@ -64,9 +64,16 @@ def cpu_seconds() -> float:
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
 
-def collect(*, seed: int | None, started: float, cpu_started: float = 0.0) -> Provenance:
+def collect(
+    *,
+    seed: int | None,
+    started: float,
+    cpu_started: float = 0.0,
+    command_line: list[str] | None = None,
+) -> Provenance:
     """The record for a result finished now; ``started`` is the ``time.perf_counter()`` at
-    which the command began, ``cpu_started`` the :func:`cpu_seconds` then."""
+    which the command began, ``cpu_started`` the :func:`cpu_seconds` then, ``command_line``
+    the command as given (default: this process's ``sys.argv``)."""
     commit, dirty = _git_state()
     model, flags = _cpu()
     return Provenance(
@@ -79,7 +86,7 @@ def collect(*, seed: int | None, started: float, cpu_started: float = 0.0) -> Pr
         cpu_model=model,
         cpu_vector_flags=flags,
         seed=seed,
-        command_line=list(sys.argv),
+        command_line=list(sys.argv if command_line is None else command_line),
         wall_s=round(time.perf_counter() - started, 3),
         cpu_s=round(cpu_seconds() - cpu_started, 3),
     )

@@ -20,13 +20,13 @@ def _json_rows(capsys: pytest.CaptureFixture[str]) -> list[dict[str, object]]:
     return [json.loads(line) for line in out.splitlines() if line.strip()]
 
 
-def test_run_json_row_has_paper_columns_runs_and_capped(capsys: pytest.CaptureFixture[str]) -> None:
-    code = main(["run", "--profile", "paper-fixed", "--method", "US", "--runs", "12"])
-    assert code == 0
+def test_run_json_row_has_paper_columns_runs_and_capped(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["run", "--profile", "paper-fixed", "--method", "US", "--runs", "12"]
+    assert main([*argv, "--out", str(tmp_path / "table")]) == 0
     capsys.readouterr()
-    assert (
-        main(["run", "--profile", "paper-fixed", "--method", "US", "--runs", "12", "--json"]) == 0
-    )
+    assert main([*argv, "--out", str(tmp_path / "json"), "--json"]) == 0
     (row,) = _json_rows(capsys)
     for column in (*PAPER_COLUMNS, "ts_mean_s", "ts_std_s", "runs", "capped"):
         assert column in row, column
@@ -55,10 +55,13 @@ def test_reproduce_applies_set_to_every_row_and_writes_the_report(
     assert list((tmp_path / "levy").glob("*.png"))
 
 
-def test_swarm_rows_have_no_completion_time(capsys: pytest.CaptureFixture[str]) -> None:
+def test_swarm_rows_have_no_completion_time(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     # Runs stopped at the mission duration (as reproduce does for PSO) have no T_S, not
     # "every run capped".
     argv = ["run", "--profile", "paper-fixed", "--method", "PSO", "--runs", "8", "--json"]
+    argv += ["--out", str(tmp_path)]
     assert main([*argv, "--set", "mission.ts_cap=1000"]) == 0
     (row,) = _json_rows(capsys)
     assert (row["ts_mean_s"], row["ts_std_s"], row["capped"], row["aisc_pct"]) == (None,) * 4
