@@ -46,7 +46,6 @@ block, so results are identical for any number of workers.
 
 from __future__ import annotations
 
-import math
 from collections import deque
 from dataclasses import dataclass
 from typing import Any
@@ -57,11 +56,13 @@ from numpy.typing import NDArray
 from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.pso import Best, SwarmConfig, forget
 from mdm_core.search.swarm_iteration import BestOf, explore
-from mdm_core.world import Scenario, TargetTracks, first_entry_time
+from mdm_core.world import Scenario
 from mdm_montecarlo import swarm_kernels as kernels
 from mdm_montecarlo.compiled_tracks import compiled_tracks
 from mdm_montecarlo.compiled_waypoints import CompiledWaypoints
 from mdm_montecarlo.engine import BlockResult, block_rngs
+from mdm_montecarlo.swarm_sensors import SwarmSensors
+from mdm_montecarlo.waypoint_swarm import run_waypoint_swarm_block
 from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]
@@ -81,116 +82,6 @@ class Message:
     known: NDArray[np.float32]
     """(runs, vehicles, targets) 1 where the sender knows the target to be confirmed, else 0
     (float32: receivers count the senders that know a target with a matrix product)."""
-
-
-@dataclass(frozen=True)
-class _Sensors:
-    """The targets as the vehicles of a block sense them; the vehicles of a run share them."""
-
-    tracks: TargetTracks
-    runs: IntArray
-    """Every run of the block, 0 .. runs - 1."""
-    real: BoolArray
-    """(targets,) True for real targets (the only ones that can be confirmed)."""
-    appear: FloatArray
-    """(targets,) appearance times, s."""
-    confirm_radius: float
-    signal_radius: float
-    dt: float
-    """Update interval, s."""
-
-    def motion(self, t: float) -> _Targets:
-        """Every run's targets at time t."""
-        target, velocity = self.tracks.motion(self.runs, np.full(len(self.runs), t))
-        return _Targets(target, velocity, t, self.dt * _length_bound(velocity))
-
-    def sense(
-        self,
-        targets: _Targets,
-        position: FloatArray,
-        known: BoolArray,
-        fitness: FloatArray,
-        source: IntArray,
-        nearest: FloatArray,
-    ) -> None:
-        """Every vehicle's fitness and its source (mdm_core.search.pso.signal_fitness) at
-        ``position`` (runs, vehicles, 2), in place: the signal sensor's strongest exp(-d / R)
-        of a present target within R that the vehicle does not know to be confirmed (as
-        mdm_core.world.contacts reads it); strengths are computed only for the pairs nearer
-        than R (a superset from the squared distances). ``nearest``: every vehicle's smallest
-        squared distance to a real target, for confirm."""
-        radius = self.signal_radius
-        kernels.sense(
-            targets.position,
-            position,
-            self.appear,
-            targets.t,
-            radius,
-            radius * radius * _NEAR,
-            known,
-            self.real,
-            fitness,
-            source,
-            nearest,
-        )
-
-    def confirm(
-        self,
-        targets: _Targets,
-        position: FloatArray,
-        nearest: FloatArray,
-        step: FloatArray,
-        longest: float,
-        first: FloatArray,
-        known: BoolArray,
-    ) -> tuple[IntArray, IntArray]:
-        """Confirm the real targets whose disc the segments ``position`` -> ``position + step``
-        (runs, vehicles, 2), flown from targets.t to targets.t + dt, enter: ``first`` and
-        ``known`` (runs, vehicles, targets) are updated in place. ``nearest``: from
-        sense(targets, position, ...); ``longest``: the largest absolute coordinate of a step.
-        Returns the (run, target) of every confirmation.
-
-        The closed form (mdm_core.world.first_entry_time) is solved only for the
-        vehicle x target pairs that can meet in the interval: those no farther apart than
-        confirm_radius + the longest step + the farthest a target moves in dt.
-        """
-        t = targets.t
-        travel = math.sqrt(2.0) * longest + targets.travel
-        # The slack covers the rounding of the closed form; it only adds pairs to solve.
-        reach = self.confirm_radius + travel + _SLACK
-        run, lane, index = kernels.open_pairs(
-            targets.position, position, nearest, reach * reach, self.real, known
-        )
-        pairs = len(run)
-        if pairs == 0:
-            return run, index
-        entry = first_entry_time(
-            position[run, lane],
-            step[run, lane] / self.dt,
-            np.full(pairs, self.dt),
-            targets.position[run, index][:, None, :],
-            targets.velocity[run, index][:, None, :],
-            np.full(pairs, self.confirm_radius),
-            np.ones((pairs, 1), dtype=bool),
-            (self.appear[index] - t)[:, None],
-        )[:, 0]
-        hit = entry <= self.dt
-        run, lane, index = run[hit], lane[hit], index[hit]
-        first[run, lane, index] = np.minimum(first[run, lane, index], t + entry[hit])
-        known[run, lane, index] = True
-        return run, index
-
-
-@dataclass(frozen=True)
-class _Targets:
-    """Every run's targets at one time: (runs, targets, 2) positions and velocities, both
-    holding until the next node of their tracks."""
-
-    position: FloatArray
-    velocity: FloatArray
-    t: float
-    travel: float
-    """dt x a bound of the targets' speeds: at most how far one moves in an interval."""
 
 
 @dataclass
@@ -270,17 +161,6 @@ def _take_sent(table: NDArray[Any], runs: IntArray, got: BoolArray, sent: NDArra
     table[runs] = np.where(got, sent[runs][:, None, :], table[runs])
 
 
-_SLACK = 1.0
-"""Metres added to the reach of a confirmation step (rounding margin, far above it)."""
-_NEAR = 1.0 + 1e-9
-"""Relative margin on R^2 so that the pairs nearer than R are all kept despite rounding."""
-
-
-def _length_bound(vectors: FloatArray) -> float:
-    """An upper bound of the lengths of vectors (..., 2): sqrt(2) x the largest coordinate."""
-    return math.sqrt(2.0) * float(np.abs(vectors).max(initial=0.0))
-
-
 def _nonzero(mask: BoolArray) -> tuple[IntArray, IntArray, IntArray]:
     """np.nonzero of a 3-D mask, from its flat indices (several times faster when sparse)."""
     rest, k = np.divmod(np.flatnonzero(mask), mask.shape[2])
@@ -294,7 +174,10 @@ def run_swarm_block(
     """Simulate ``n_runs`` missions of a pso/spso/arpso profile (block ``block`` of ``seed``).
 
     keep_inbox: keep the per-receiver inbox even where every message arrives at once and none
-    is lost (same results, slower; the module's docstring)."""
+    is lost (same results, slower; the module's docstring). A swarm that iterates per waypoint
+    (``policy.swarm.iteration: waypoint``) runs on mdm_montecarlo.waypoint_swarm."""
+    if profile.policy.swarm.iteration == "waypoint":
+        return run_waypoint_swarm_block(profile, seed, block, n_runs)
     scenario = Scenario.from_profile(profile)
     config = swarm_config(profile)
     spec = profile.policy.swarm
@@ -307,7 +190,7 @@ def run_swarm_block(
     speed = profile.fleet.speed
     targets = scenario.targets
     real = ~targets.false_mask
-    sensors = _Sensors(
+    sensors = SwarmSensors(
         tracks=compiled_tracks(
             scenario, n_runs, rng_targets, max(profile.mission.ts_cap, profile.mission.duration)
         ),
@@ -324,6 +207,10 @@ def run_swarm_block(
 
     first = np.full((*shape, m), np.inf)
     known = np.zeros((*shape, m), dtype=bool)
+    # What the sensor leaves out and what the bests are forgotten by (nothing: all False).
+    nothing = np.zeros_like(known)
+    unread = nothing if spec.read_confirmed else known
+    forget_by = known if spec.after_confirmation == "forget" else nothing
     own = Best(position.copy(), np.zeros(shape), np.full(shape, -1, dtype=np.intp))
     inbox = _Inbox.empty(shape, n_vehicles)
     # The last reading, its source and the squared distance to the nearest real target.
@@ -349,7 +236,7 @@ def run_swarm_block(
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
     targets_now = sensors.motion(0.0)
     # Only the distances: the first reading is taken after the first step.
-    sensors.sense(targets_now, position, known, np.zeros(shape), source, nearest)
+    sensors.sense(targets_now, position, unread, np.zeros(shape), source, nearest)
     step = np.zeros((*shape, 2))
     guided = np.zeros(shape, dtype=bool)
     # SPSO: the swarm bests the informants' refresh found for the next iteration.
@@ -398,9 +285,9 @@ def run_swarm_block(
 
         # Fitness: the signal sensor, targets known to be confirmed left out.
         targets_now = sensors.motion(t)
-        sensors.sense(targets_now, position, known, current, source, nearest)
+        sensors.sense(targets_now, position, unread, current, source, nearest)
         previous_best = kernels.read_into_best(
-            own.position, own.fitness, own.source, known, position, current, source
+            own.position, own.fitness, own.source, forget_by, position, current, source
         )
 
         if broadcast:
@@ -416,9 +303,9 @@ def run_swarm_block(
             got = (rng.random((*shape, n_vehicles)) >= spec.message_drop) & others
             if len(outbox) > delay:
                 inbox.deliver(outbox[0], got, known)
-        kernels.forget_known(own.fitness, own.source, known)
+        kernels.forget_known(own.fitness, own.source, forget_by)
         if not broadcast:
-            inbox.forget(known)
+            inbox.forget(forget_by)
         if config.variant == "spso":
             social, social_fitness = _refresh_informants(
                 rng, own, heard, links, social_fitness, best_of, spec.informants

@@ -73,12 +73,15 @@ def sensor_for_level(profile: MissionProfile, level: int) -> int:
 
 
 def signal_radius(profile: MissionProfile) -> float:
-    """Range of the swarm's signal sensor: ``policy.swarm.signal_radius``, or by default the
-    detection sensor's r_1 (the first sensor). Section IV: the swarms' sensor gives "a signal
-    with strength proportional to the distance from the target"; read only within r_2 it would
-    confirm the target at once and no best would ever form."""
-    chosen = profile.policy.swarm.signal_radius
-    return chosen if chosen is not None else profile.sensors[0].radius
+    """Range of the swarm's signal sensor: ``policy.swarm.signal_radius``, or else the radius
+    of ``policy.swarm.signal_sensor``: the detection sensor's r_1 (the first sensor) or the
+    confirmation sensor's r_2 (the last). Section IV: the swarms' sensor gives "a signal with
+    strength proportional to the distance from the target" (docs/model.md, "Social-cognitive
+    baselines")."""
+    spec = profile.policy.swarm
+    if spec.signal_radius is not None:
+        return spec.signal_radius
+    return profile.sensors[0 if spec.signal_sensor == "detection" else -1].radius
 
 
 def swarm_config(profile: MissionProfile) -> SwarmConfig:
