@@ -22,6 +22,7 @@ from companion.mission import MissionConfig
 from companion.mission.mission_exit import MissionExit
 from companion.run_map.cli_args import add_map_parser, map_after_run, map_command
 from companion.sensors.factory import SENSOR_SOURCES
+from companion.site_files.cli_args import add_profile_parser
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
 from mavlink_signing import ENV_VAR, load_signing_key
 from mdm_core.ports import VEHICLE_UDP_BASE
@@ -73,6 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     _run_parser(sub)
     add_fleet_parser(sub)
     add_map_parser(sub)
+    add_profile_parser(sub)
     return parser
 
 
@@ -88,6 +90,10 @@ def main(argv: list[str] | None = None) -> int:
             return run_command(args)
         if args.command == "map":
             return map_command(args)
+        if args.command == "profile":
+            from companion.site_files.commands import profile_command
+
+            return profile_command(args)
         from companion.fleet.command import fleet_command
 
         return fleet_command(args)

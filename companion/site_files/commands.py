@@ -1,0 +1,60 @@
+"""`companion profile import` (a fence drawn in QGroundControl, Google Earth or a GIS into a
+profile) and `companion profile export` (a profile's fence, area, start points and targets out
+for them)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from companion.site_files.fence_polygon import SiteFileError
+from companion.site_files.geojson_file import write_geojson
+from companion.site_files.kml_file import write_kml
+from companion.site_files.plan_file import write_plan
+from companion.site_files.profile_from_fence import FenceImport, profile_with_fence
+from companion.site_files.read_fence import read_fence_file
+from companion.site_files.site_layers import site_layers
+from mdm_profiles import load_profile, write_profile
+
+
+def profile_command(args: argparse.Namespace) -> int:
+    """`companion profile import|export`."""
+    if args.profile_command == "import":
+        return _import(args)
+    return _export(args)
+
+
+def _import(args: argparse.Namespace) -> int:
+    base_name = args.base or args.into
+    if args.base is None and not Path(args.into).is_file():
+        raise SiteFileError(f"--into {args.into}: no such profile; give --base (a profile file "
+                            "or a built-in name such as field-duebendorf) to start from")  # fmt: skip
+    base = load_profile(base_name)
+    fence = read_fence_file(args.file)
+    how = FenceImport(args.margin, args.keep_area, args.targets, args.alt)
+    profile = profile_with_fence(base, fence, str(args.file), how)
+    write_profile(profile, args.into)
+    o, a = profile.origin, profile.area
+    print(f"fence: {len(fence.vertices)} vertices from {args.file}")
+    print(f"origin: {o.lat:.7f}, {o.lon:.7f}, {o.alt:g} m AMSL; area: {a.north:g} m north x "
+          f"{a.east:g} m east{' (kept)' if args.keep_area else ''}")  # fmt: skip
+    print(f"wrote {args.into}")
+    return 0
+
+
+def _export(args: argparse.Namespace) -> int:
+    outputs = [(args.plan, "plan"), (args.kml, "kml"), (args.geojson, "geojson")]
+    if all(path is None for path, _ in outputs):
+        raise SiteFileError("companion profile export: give --plan, --kml and/or --geojson")
+    layers = site_layers(load_profile(args.profile), args.seed)
+    for path, kind in outputs:
+        if path is None:
+            continue
+        if kind == "plan":
+            write_plan(layers, path, args.firmware)
+        elif kind == "kml":
+            write_kml(layers, path)
+        else:
+            write_geojson(layers, path)
+        print(f"wrote {path}")
+    return 0

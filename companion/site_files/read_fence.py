@@ -1,0 +1,27 @@
+"""A site file's fence, whichever of the formats it is in (by its name's suffix)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from companion.site_files.fence_polygon import FencePolygon, SiteFileError
+from companion.site_files.formats import SUFFIXES
+from companion.site_files.geojson_file import read_geojson
+from companion.site_files.kml_file import read_kml
+from companion.site_files.plan_file import read_plan
+
+READERS = {".plan": read_plan, ".kml": read_kml, ".geojson": read_geojson, ".json": read_geojson}
+
+
+def read_fence_file(path: Path) -> FencePolygon:
+    """The fence drawn in ``path``: a QGroundControl .plan, a KML or a GeoJSON file."""
+    suffix = path.suffix.lower()
+    if suffix == ".kmz":
+        raise SiteFileError(f"{path}: a KMZ (zip) file: unzip it and import its doc.kml")
+    reader = READERS.get(suffix)
+    if reader is None:
+        raise SiteFileError(f"{path}: not a site file this reads ({', '.join(SUFFIXES)}): "
+                            f"{suffix or 'no suffix'}")  # fmt: skip
+    if not path.is_file():
+        raise SiteFileError(f"{path}: no such file")
+    return reader(path)
