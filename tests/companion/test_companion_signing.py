@@ -17,6 +17,8 @@ from companion.link.pymavlink_link import PymavlinkLink
 from mavlink_signing import passphrase_to_secret
 from tests.emulator_harness import make_config, running_emulator
 
+pytestmark = pytest.mark.usefixtures("fleet_processes")
+
 PASSPHRASE = "companion-signing-test"
 
 

@@ -24,6 +24,8 @@ from tests.emulator_harness import free_udp_base
 from tests.profile_files import sensors, write_profile_with
 from tests.waiting import wait_until
 
+pytestmark = pytest.mark.usefixtures("fleet_processes")
+
 BIND_OFFSET = 100
 """The emulator binds vehicle i's port at base + BIND_OFFSET + i (a pilot talks to it there)."""
 

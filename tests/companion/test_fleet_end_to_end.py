@@ -12,6 +12,8 @@ import pytest
 from companion.fleet.runner import FleetOptions, run_fleet
 from mdm_profiles import load_profile
 
+pytestmark = pytest.mark.usefixtures("fleet_processes")
+
 MATRIX = [
     pytest.param("pymavlink", "px4", id="pymavlink-px4"),
     pytest.param("mavsdk", "ardupilot", id="mavsdk-ardupilot", marks=pytest.mark.slow),

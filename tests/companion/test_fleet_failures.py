@@ -14,6 +14,8 @@ from companion.fleet.runner import run_fleet
 from companion.fleet.summary import exit_status
 from tests.fleet_cli import run_fleet_cli, small_profile
 
+pytestmark = pytest.mark.usefixtures("fleet_processes")
+
 
 @pytest.mark.timeout(120)
 def test_vehicles_that_never_climb_fail_the_run(tmp_path: Path) -> None:

@@ -16,6 +16,8 @@ from companion.fleet.ports import free_port_block
 from companion.fleet.preflight import RUN_FILE
 from tests.fleet_cli import small_profile
 
+pytestmark = pytest.mark.usefixtures("fleet_processes")
+
 
 def _refused(capsys: pytest.CaptureFixture[str], *args: str) -> str:
     code = main(["fleet", "--quiet", *args])

@@ -16,6 +16,8 @@ from companion.telemetry import read_log
 from tests.fleet_cli import processes_naming, run_fleet_cli, small_profile, start_fleet
 from tests.waiting import wait_until
 
+pytestmark = pytest.mark.usefixtures("fleet_processes")
+
 
 def _search_start(log: Path) -> float | None:
     return read_log(log).search_start

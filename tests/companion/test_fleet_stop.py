@@ -18,6 +18,8 @@ from companion.telemetry import events, read_log, read_records
 from tests.fleet_cli import processes_naming, small_profile, start_fleet
 from tests.waiting import wait_until
 
+pytestmark = pytest.mark.usefixtures("fleet_processes")
+
 
 def _searching(out: Path, vehicles: int) -> bool:
     for i in range(vehicles):

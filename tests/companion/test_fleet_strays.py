@@ -15,6 +15,8 @@ from companion.telemetry import events, read_log
 from tests.fleet_cli import small_profile
 from tests.waiting import wait_until
 
+pytestmark = pytest.mark.usefixtures("fleet_processes")
+
 
 def _searching(log: Path) -> bool:
     return any(e.phase == "search" for e in read_log(log).of(events.PhaseChange))

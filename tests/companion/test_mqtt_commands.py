@@ -20,6 +20,8 @@ from tests.mqtt_harness import Subscriber, publish, retained_topics
 from tests.profile_files import write_profile_with
 from tests.waiting import wait_until
 
+pytestmark = pytest.mark.usefixtures("fleet_processes", "mqtt_broker")
+
 
 @pytest.mark.timeout(120)
 def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> None:

@@ -16,6 +16,8 @@ from tests.mqtt_harness import Subscriber, retained_topics
 from tests.profile_files import sensors, write_profile_with
 from tests.waiting import wait_until
 
+pytestmark = pytest.mark.usefixtures("fleet_processes", "mqtt_broker")
+
 
 def mqtt_events(sub: Subscriber, prefix: str, vehicle: int) -> list[dict[str, Any]]:
     """The vehicle's events, first copy of each seq (QoS 1 may deliver twice), arrival order."""

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +19,8 @@ from tests.mqtt_harness import Broker, Subscriber, publish
 from tests.profile_files import levels, write_profile_with
 from tests.waiting import wait_until
 
+pytestmark = pytest.mark.usefixtures("fleet_processes")
+
 # False targets all over the area: detections, level switches and fallbacks keep coming,
 # and the one real target (50 m confirmation radius, in a corner) is not found in the test.
 PREFIX = "mdm/outage"
@@ -25,7 +28,9 @@ OUTAGE = 30.0
 
 
 @pytest.mark.timeout(180)
-def test_events_survive_a_30_s_broker_outage_complete_and_in_order(tmp_path: Path) -> None:
+def test_events_survive_a_30_s_broker_outage_complete_and_in_order(
+    mosquitto: Callable[..., Broker], tmp_path: Path
+) -> None:
     # One real target in a corner and four false ones: a long search, many events.
     real = [{"north": 2950.0, "east": 2950.0}]
     false = [
@@ -36,7 +41,7 @@ def test_events_survive_a_30_s_broker_outage_complete_and_in_order(tmp_path: Pat
                                  targets=real + false,
                                  policy={"levels": levels(600.0, 300.0, 30.0)})  # fmt: skip
     out = tmp_path / "run"
-    broker = Broker(tmp_path / "broker")
+    broker = mosquitto()
     broker.start()
     sub = Subscriber(broker.port, f"{PREFIX}/#", tmp_path / "sub.txt", persistent=True)
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import subprocess
 import threading
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -16,6 +17,8 @@ from companion.telemetry import events, read_log, read_records
 from tests.mqtt_harness import Broker, Subscriber, publish
 from tests.profile_files import levels, sensors, write_profile_with
 from tests.waiting import wait_until
+
+pytestmark = pytest.mark.usefixtures("fleet_processes")
 
 ACL = Path(__file__).resolve().parents[2] / "docker" / "mosquitto" / "acl"
 PREFIX = "mdm/secure"
@@ -29,7 +32,9 @@ def _password_file(path: Path) -> None:
 
 
 @pytest.mark.timeout(120)
-def test_only_the_operator_commands_and_vehicles_publish_only_their_own(tmp_path: Path) -> None:
+def test_only_the_operator_commands_and_vehicles_publish_only_their_own(
+    mosquitto: Callable[..., Broker], tmp_path: Path
+) -> None:
     passwd = tmp_path / "passwd"
     _password_file(passwd)
     (tmp_path / "uav0.pw").write_text(PASSWORDS["uav0"] + "\n")
@@ -39,8 +44,8 @@ def test_only_the_operator_commands_and_vehicles_publish_only_their_own(tmp_path
         sensors=sensors(500.0, 50.0), policy={"levels": levels(600.0, 300.0, 30.0)},
     )  # fmt: skip
     out = tmp_path / "run"
-    broker = Broker(tmp_path / "broker", security=f"allow_anonymous false\n"
-                    f"password_file {passwd}\nacl_file {ACL}\n")  # fmt: skip
+    broker = mosquitto(security=f"allow_anonymous false\n"
+                       f"password_file {passwd}\nacl_file {ACL}\n")  # fmt: skip
     broker.start()
     op = {"user": "operator", "password": PASSWORDS["operator"]}
     sub = Subscriber(broker.port, "mdm/#", tmp_path / "sub.txt", user="operator",

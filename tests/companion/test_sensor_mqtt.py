@@ -22,6 +22,8 @@ from tests.mqtt_harness import Subscriber, publish
 from tests.profile_files import levels, write_profile_with
 from tests.waiting import wait_until
 
+pytestmark = pytest.mark.usefixtures("fleet_processes", "mqtt_broker")
+
 
 @pytest.mark.timeout(120)
 def test_mqtt_detections_switch_the_level_and_confirm(tmp_path: Path) -> None:

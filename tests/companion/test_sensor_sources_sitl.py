@@ -66,7 +66,7 @@ def _stop(p: subprocess.Popen[bytes]) -> None:
 
 
 def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
-    arducopter: Callable[..., sitl.SitlInstance], tmp_path: Path
+    arducopter: Callable[..., sitl.SitlInstance], mqtt_broker: int, tmp_path: Path
 ) -> None:
     # Two searches on one boot: a random first search can take 5 vehicle minutes, which drains
     # the stock pack below the companion's 20 % end; the second flight is about the sensors.
@@ -117,7 +117,7 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
         topic = f"{prefix}/uav{inst.index}/detections"
         modes_before = len(obs.snapshot().modes)
         flights.append(_run(mqtt, profile, inst, "--sensor-source", "mqtt", "--mqtt",
-                            "127.0.0.1:1883", "--mqtt-prefix", prefix))  # fmt: skip
+                            f"127.0.0.1:{mqtt_broker}", "--mqtt-prefix", prefix))  # fmt: skip
         wait_until(
             lambda: any(r.get("phase") == "search" for r in events(mqtt)),
             200.0,
@@ -127,7 +127,7 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
         frame = LocalFrame(*HOME)
         lat, lon, _ = frame.to_geodetic(400.0, 450.0, 0.0)
         detection = {"time": time.time(), "sensor": "detection", "lat": lat, "lon": lon}
-        assert publish(1883, topic, json.dumps(detection)).returncode == 0
+        assert publish(mqtt_broker, topic, json.dumps(detection)).returncode == 0
         wait_until(
             lambda: any(r["event"] == "level" and r["level"] == 1 for r in events(mqtt)),
             20.0,
@@ -136,7 +136,7 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
         )
         confirm = {"time": time.time(), "sensor": "confirmation", "north": 400.0, "east": 450.0,
                    "confidence": 0.9}  # fmt: skip
-        assert publish(1883, topic, json.dumps(confirm)).returncode == 0
+        assert publish(mqtt_broker, topic, json.dumps(confirm)).returncode == 0
         wait_until(
             landed_after_rtl, 300.0, "mqtt: confirmed, RTL, landed, disarmed", context=context(mqtt)
         )

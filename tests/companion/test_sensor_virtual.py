@@ -17,6 +17,8 @@ from sim_vehicle_stub.emulator import Emulator
 from tests.emulator_harness import free_udp_base
 from tests.profile_files import levels, sensors, write_profile_with
 
+pytestmark = pytest.mark.usefixtures("fleet_processes")
+
 
 @pytest.mark.parametrize("name", ["paper-dynamic-false", "paper-popup-false"])
 def test_virtual_targets_are_the_emulators_for_the_same_seed(name: str) -> None:

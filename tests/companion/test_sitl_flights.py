@@ -127,7 +127,7 @@ def _figures(name: str, trace: Trace, started: float) -> None:
 @pytest.mark.parametrize("backend", ["pymavlink", "mavsdk"])
 @pytest.mark.parametrize("ap", AUTOPILOTS)
 def test_flies_through_takeover_kill_and_restart(
-    ap: Autopilot, backend: str, request: pytest.FixtureRequest, tmp_path: Path
+    ap: Autopilot, backend: str, sitl_start: Callable[..., sitl.SitlInstance], tmp_path: Path
 ) -> None:
     """Started before the autopilot, flies a search; a pilot's mode pauses it and the guided
     mode resumes it; killed (ArduCopter holds in GUIDED, PX4's offboard-loss failsafe takes
@@ -136,7 +136,6 @@ def test_flies_through_takeover_kill_and_restart(
     MAVSDK's restarted companion ends at mission time and a SIGINT during that RTL does not cut
     it short. MAVSDK on ArduPilot takes off before its Offboard stream starts (a setpoint
     stream cancels an ArduCopter takeoff)."""
-    start = request.getfixturevalue(ap.kind)
     started = time.monotonic()
     index = sitl.free_index(ap.kind)
     profile = _profile(tmp_path / "sitl-small.yaml", vehicles=index + 1)
@@ -154,7 +153,7 @@ def test_flies_through_takeover_kill_and_restart(
                 f"'{line}' before the autopilot starts",
                 context=comp.output,
             )
-        inst = start(speedup=ap.speedup, index=index)
+        inst = sitl_start(ap.kind, speedup=ap.speedup, index=index)
         obs = Observer(inst.observer_url, inst.sysid)
         ob = obs
 

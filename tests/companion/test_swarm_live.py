@@ -17,6 +17,8 @@ from companion.telemetry import read_records
 from mdm_profiles import builtin_profile, write_profile
 from mdm_profiles.overrides import apply_overrides
 
+pytestmark = pytest.mark.usefixtures("fleet_processes", "mqtt_broker")
+
 VEHICLES = 3
 
 

@@ -26,6 +26,8 @@ from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
 from tests.profile_files import sensors, write_profile_with
 
+pytestmark = pytest.mark.usefixtures("fleet_processes", "mqtt_broker")
+
 VEHICLES = 3
 TARGET = (600.0, 1900.0)
 SIGNAL_RADIUS = 900.0

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import asyncio
-from pathlib import Path
+from collections.abc import Callable
 
 import numpy as np
+import pytest
 
 from companion.telemetry.mqtt.channel import MqttChannel
 from companion.telemetry.mqtt.settings import MqttSettings
@@ -17,9 +18,12 @@ from tests.waiting import wait_until_async
 PREFIX = "mdm/test"
 
 
-def test_a_peer_best_reaches_the_other_vehicle_and_wins_swarm_best(tmp_path: Path) -> None:
-    with Broker(tmp_path / "broker") as broker:
-        asyncio.run(_exchange(broker.port))
+@pytest.mark.asyncio
+async def test_a_peer_best_reaches_the_other_vehicle_and_wins_swarm_best(
+    mosquitto: Callable[..., Broker],
+) -> None:
+    with mosquitto() as broker:
+        await _exchange(broker.port)
 
 
 async def _exchange(port: int) -> None:
@@ -67,9 +71,12 @@ async def _exchange(port: int) -> None:
         await asyncio.gather(*tasks, return_exceptions=True)
 
 
-def test_delay_holds_a_report_back_and_drop_one_loses_every_report(tmp_path: Path) -> None:
-    with Broker(tmp_path / "broker") as broker:
-        asyncio.run(_degraded(broker.port))
+@pytest.mark.asyncio
+async def test_delay_holds_a_report_back_and_drop_one_loses_every_report(
+    mosquitto: Callable[..., Broker],
+) -> None:
+    with mosquitto() as broker:
+        await _degraded(broker.port)
 
 
 async def _degraded(port: int) -> None:

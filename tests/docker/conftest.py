@@ -10,6 +10,7 @@ import pytest
 from tests.docker import engine
 from tests.docker.engine import ROOT, docker
 from tests.docker.stack import BROKER_IMAGE
+from tests.services import missing
 
 IMAGE = "mdm-search:latest"
 BUILD_STAGE = "mdm-search-build:latest"
@@ -22,11 +23,12 @@ def _timed(what: str, *args: str) -> None:
 
 
 @pytest.fixture(scope="session")
-def images() -> None:
-    """mdm-search and the Debian-packaged broker, built on the local Debian base."""
+def docker_images() -> None:
+    """mdm-search and the Debian-packaged broker, built on the local Debian base, once per
+    session (every docker test uses these two images)."""
     reason = engine.missing_engine()
     if reason is not None:
-        pytest.skip(reason)
+        missing(reason)
     start = time.monotonic()
     base = engine.ensure_base_image()
     print(f"base image {base}: {time.monotonic() - start:.1f} s")

@@ -26,7 +26,7 @@ MISSION_WALL_S = 240.0
 
 
 @pytest.fixture
-def stack(images: None, tmp_path: Path) -> Iterator[Stack]:
+def stack(docker_images: None, tmp_path: Path) -> Iterator[Stack]:
     with project("compose.yaml", tmp_path, list(range(VEHICLES)), free_port(),
                  {"MDM_SPEEDUP": SPEEDUP}) as stack:  # fmt: skip
         yield stack

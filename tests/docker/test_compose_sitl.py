@@ -56,16 +56,19 @@ mission: {{duration: 60.0, ts_cap: 600.0}}
 
 
 @pytest.fixture(params=["arducopter", "px4"])
-def instances(request: pytest.FixtureRequest) -> list[sitl.SitlInstance]:
+def instances(
+    request: pytest.FixtureRequest, sitl_start: Callable[..., sitl.SitlInstance]
+) -> list[sitl.SitlInstance]:
     """Two instances of the autopilot, homed at the profile's origin (ArduCopter's home takes
     a heading too)."""
-    start: Callable[..., sitl.SitlInstance] = request.getfixturevalue(request.param)
     home = ",".join(map(str, HOME if request.param == "px4" else (*HOME, 0)))
-    return [start(speedup=SPEEDUP, home=home) for _ in range(2)]
+    return [sitl_start(request.param, speedup=SPEEDUP, home=home) for _ in range(2)]
 
 
 @pytest.fixture
-def stack(images: None, instances: list[sitl.SitlInstance], tmp_path: Path) -> Iterator[Stack]:
+def stack(
+    docker_images: None, instances: list[sitl.SitlInstance], tmp_path: Path
+) -> Iterator[Stack]:
     profiles = tmp_path / "profiles"
     _profile(profiles, vehicles=max(i.index for i in instances) + 1)
     settings = {"MDM_PROFILES": str(profiles),

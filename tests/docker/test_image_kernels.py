@@ -21,7 +21,7 @@ ENGINE_KERNELS = (
 
 
 @pytest.mark.timeout(900)
-def test_a_fresh_container_loads_every_kernel_from_the_image(images: None) -> None:
+def test_a_fresh_container_loads_every_kernel_from_the_image(docker_images: None) -> None:
     # 20 runs per row, not the build's 1: blocks of another size must not need other kernels
     done = docker(
         "run", "--rm", "-e", "NUMBA_DEBUG_CACHE=1", IMAGE,
@@ -41,7 +41,7 @@ def test_a_fresh_container_loads_every_kernel_from_the_image(images: None) -> No
 
 
 @pytest.mark.timeout(300)
-def test_a_fresh_emulator_container_loads_its_kernels_from_the_image(images: None) -> None:
+def test_a_fresh_emulator_container_loads_its_kernels_from_the_image(docker_images: None) -> None:
     done = docker(
         "run", "--rm", "-e", "NUMBA_DEBUG_CACHE=1", IMAGE,
         "sim-vehicle", "--vehicles", "3", "--speedup", "max", "--duration", "20",

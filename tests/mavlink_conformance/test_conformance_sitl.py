@@ -55,12 +55,11 @@ def _streams(url: str, sysid: int, seconds: float, *, ready: bool = False) -> se
 @pytest.mark.parametrize("autopilot", ["arducopter", "px4"])
 def test_conformance_passes_stock_sitl_and_leaves_it_running_as_it_was(
     autopilot: str,
-    request: pytest.FixtureRequest,
+    sitl_start: Callable[..., SitlInstance],
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    factory: Callable[..., SitlInstance] = request.getfixturevalue(autopilot)
     speedup = SPEEDUP[autopilot]
-    inst = factory(**({"speedup": speedup} if speedup else {}))
+    inst = sitl_start(autopilot, **({"speedup": speedup} if speedup else {}))
     url = inst.companion_url
     before = _streams(url, inst.sysid, 3.0, ready=True)
     code = conformance_main([url, "--sysid", str(inst.sysid), "--timeout", "5"])

@@ -6,6 +6,7 @@ model, not the autopilots' jerk-limited controllers). docs/protocol.md has the m
 
 from __future__ import annotations
 
+import functools
 import logging
 from collections.abc import Callable
 from dataclasses import asdict
@@ -50,9 +51,9 @@ def _fly(kind: str, url: str, sysid: int, wall_timeout: float) -> Record:
 @pytest.mark.timeout(600)
 @pytest.mark.parametrize("autopilot", ["arducopter", "px4"])
 def test_emulator_persona_flies_the_script_like_the_real_autopilot(
-    autopilot: str, request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch
+    autopilot: str, sitl_start: Callable[..., SitlInstance], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    factory: Callable[..., SitlInstance] = request.getfixturevalue(autopilot)
+    factory = functools.partial(sitl_start, autopilot)
     speedup = SPEEDUP[autopilot]
     base = free_udp_base(1)
     cfg = make_config(1, base, personas=(PERSONA[autopilot],), speedup=speedup)

@@ -1,0 +1,104 @@
+"""Fixtures for the services a test needs from outside the package: the MQTT broker (the one on
+127.0.0.1:1883, or one of the test's own), headless Chromium, and the processes of a fleet. Each
+skips naming what is missing (fails under ``CI=true``: tests/services.py); their names give the
+test its marker (tests/markers.py)."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import signal
+import socket
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from selenium import webdriver
+from selenium.webdriver.chrome.options import Options
+from selenium.webdriver.chrome.service import Service
+
+from tests.fleet_cli import processes_naming
+from tests.mqtt_harness import Broker
+from tests.services import missing
+from tests.waiting import wait_until
+
+MQTT_PORT = 1883
+_INSTALL_MOSQUITTO = "README 'Tests': `sudo apt-get install mosquitto mosquitto-clients`"
+
+
+def _need_mqtt_clients() -> None:
+    for tool in ("mosquitto_sub", "mosquitto_pub"):
+        if shutil.which(tool) is None:
+            missing(f"no {tool} on PATH ({_INSTALL_MOSQUITTO})")
+
+
+@pytest.fixture(scope="session")
+def mqtt_broker() -> int:
+    """The Mosquitto broker on 127.0.0.1:1883 (the user's, or the one ``.ci/run`` starts), with
+    the mosquitto_sub / mosquitto_pub clients tests watch it with; its port."""
+    _need_mqtt_clients()
+    with socket.socket() as s:
+        if s.connect_ex(("127.0.0.1", MQTT_PORT)) != 0:
+            missing(f"no MQTT broker listens on 127.0.0.1:{MQTT_PORT} ({_INSTALL_MOSQUITTO})")
+    return MQTT_PORT
+
+
+@pytest.fixture
+def mosquitto(tmp_path: Path) -> Iterator[Callable[..., Broker]]:
+    """Brokers of the test's own: ``mosquitto(name, security=...)`` makes a ``Broker`` (not yet
+    started) in ``tmp_path/name`` on a free port; every one is stopped at teardown."""
+    if shutil.which("mosquitto") is None:
+        missing(f"no mosquitto on PATH ({_INSTALL_MOSQUITTO})")
+    _need_mqtt_clients()
+    made: list[Broker] = []
+
+    def make(name: str = "broker", **options: Any) -> Broker:
+        broker = Broker(tmp_path / name, **options)
+        made.append(broker)
+        return broker
+
+    yield make
+    for broker in made:
+        broker.stop()
+
+
+@pytest.fixture
+def chromium() -> Iterator[webdriver.Chrome]:
+    """A headless Chromium (``chromium`` and ``chromedriver`` from PATH, as Debian's chromium and
+    chromium-driver packages put them in /usr/bin) driven through Selenium; nothing is
+    downloaded. Quit at teardown."""
+    browser, driver = shutil.which("chromium"), shutil.which("chromedriver")
+    if browser is None or driver is None:
+        missing(
+            "no chromium or chromedriver on PATH (`sudo apt-get install chromium chromium-driver`)"
+        )
+    options = Options()
+    options.binary_location = browser
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage"):
+        options.add_argument(arg)
+    session = webdriver.Chrome(options=options, service=Service(executable_path=driver))
+    try:
+        yield session
+    finally:
+        session.quit()
+
+
+@pytest.fixture
+def fleet_processes(tmp_path: Path) -> Iterator[Path]:
+    """For a test that runs a fleet (``companion fleet``, or an emulator and companions of its
+    own) with its files in ``tmp_path``: yields ``tmp_path``. At teardown no process naming
+    ``tmp_path`` may be left: any still alive after 5 s is killed and the test errors naming
+    it, so that a failed test does not leave a fleet flying on the shared cores."""
+    yield tmp_path
+    try:
+        wait_until(lambda: processes_naming(str(tmp_path)), 5.0, "the test's processes gone",
+                   until=lambda left: not left)  # fmt: skip
+    except AssertionError:
+        left = processes_naming(str(tmp_path))
+        for pid in left:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+        if left:
+            pytest.fail(f"processes left running by the test (killed): {left}", pytrace=False)
