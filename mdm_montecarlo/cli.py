@@ -17,6 +17,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from mdm_montecarlo.compare_command import add_compare_parser, compare_command
 from mdm_montecarlo.result_files import append_provenance, case_columns, write_result_files
 from mdm_montecarlo.runner import MissionResults, RunInterruptedError, run_many
 from mdm_montecarlo.study import TABLES, Case, Row, study_rows
@@ -99,6 +100,7 @@ def _parser() -> argparse.ArgumentParser:
         "--out", default="reports/section-iv", help="report folder (default reports/section-iv)"
     )
     _common(rep)
+    add_compare_parser(sub, _common)
     return parser
 
 
@@ -285,7 +287,8 @@ def main(argv: list[str] | None = None) -> int:
     args.started = time.perf_counter()  # the provenance's wall time counts from here
     args.command_line = sys.argv if argv is None else ["mdm-montecarlo", *argv]
     try:
-        return _run(args) if args.command == "run" else _reproduce(args)
+        commands = {"run": _run, "reproduce": _reproduce, "compare": compare_command}
+        return commands[args.command](args)
     except (ProfileError, ValueError) as exc:
         print(f"mdm-montecarlo: {exc}", file=sys.stderr)
         return 2
