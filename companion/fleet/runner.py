@@ -13,6 +13,7 @@ import time
 from dataclasses import dataclass, field, replace
 
 from companion.fleet import processes
+from companion.fleet.flight_checks import flight_checks
 from companion.fleet.gcs import emulator_gcs_args
 from companion.fleet.options import FleetOptions
 from companion.fleet.outcome import emulator_end, exit_words, vehicle_end
@@ -408,6 +409,7 @@ def _finish(
                                  ok=False)  # fmt: skip
     if emulator is not None:
         result.ends.append(emulator_end(o.out, emulator.returncode, stopped.emulator_early))
+    result.flight_checks = flight_checks(profile, o.out, plan.vehicles)
     result.stopped_by = stopped.by
     result.complete = stopped.by is None and all(e.ok for e in result.ends)
     path = o.out / RESULTS

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from companion.fleet.flight_checks import FlightCheck
 from companion.fleet.outcome import ProcessEnd
 from companion.telemetry import events
 from companion.telemetry.mission_log import read_log, read_records
@@ -63,6 +64,8 @@ class FleetResult:
     """What stopped the run early (SIGINT, SIGTERM, wall limit, the emulator), if anything."""
     ends: list[ProcessEnd] = field(default_factory=list)
     """How every companion and the emulator ended."""
+    flight_checks: list[FlightCheck] = field(default_factory=list)
+    """Per vehicle: its altitude layer kept, its share of search time near the fence."""
 
     def as_json(self) -> dict[str, Any]:
         out = asdict(self)

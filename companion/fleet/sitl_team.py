@@ -29,6 +29,10 @@ _SCRIPT = {"arducopter": "start-arducopter", "px4": "start-px4"}
 _MAX_INDEX = 9
 """PX4 instance I sends its offboard link to UDP 14540+I; I = 10 would be the GCS port 14550."""
 _BIND_S = 30.0
+ARDUCOPTER_PACK_MAH = 20000
+"""BATT_CAPACITY of each ArduCopter instance: SITL's stock 3300 mAh ends a search of a few
+minutes on the profile's battery_min (29 % after 300 s at Duebendorf); a rehearsal is about the
+mission, so the pack is big enough for the search to end it (PX4 SIH's battery is left stock)."""
 
 
 @dataclass
@@ -169,9 +173,14 @@ def _start(
 ) -> SitlVehicle:
     workdir = out / f"sitl-{vehicle}"
     workdir.mkdir(parents=True, exist_ok=True)
-    heading = ",0" if kind == "arducopter" else ""
     cmd = [str(folder / _SCRIPT[kind]), str(index), "--dir", str(workdir),
-           "--home", home + heading, "--speedup", f"{speedup:g}"]  # fmt: skip
+           "--speedup", f"{speedup:g}"]  # fmt: skip
+    if kind == "arducopter":
+        pack = workdir / "rehearsal.parm"
+        pack.write_text(f"BATT_CAPACITY {ARDUCOPTER_PACK_MAH}\n")
+        cmd += ["--home", f"{home},0", "--defaults", str(pack)]
+    else:
+        cmd += ["--home", home]
     log = out / f"sitl-{vehicle}.log"
     # its own process group, and SIGTERM when the fleet dies without stopping it
     process = processes.start(cmd, log, dict(os.environ), append=False)

@@ -6,6 +6,7 @@ import math
 import signal
 from pathlib import Path
 
+from companion.fleet.flight_checks import NEAR_FENCE_M
 from companion.fleet.outcome import ProcessEnd
 from companion.fleet.scoring import FleetResult
 
@@ -41,6 +42,17 @@ def _table(ends: list[ProcessEnd]) -> list[str]:
     return rows
 
 
+def _check_lines(r: FleetResult) -> list[str]:
+    """Each vehicle's share of search time near the fence; any vehicle that left its layer."""
+    shares = [(c.vehicle, c.near_fence) for c in r.flight_checks if c.near_fence is not None]
+    lines = []
+    if shares:
+        each = ", ".join(f"{i}: {share:.0%}" for i, share in shares)
+        lines.append(f"  search time within {NEAR_FENCE_M:g} m of the fence, per vehicle: {each}")
+    lines += [f"  LAYER: {p}" for c in r.flight_checks if (p := c.problem()) is not None]
+    return lines
+
+
 def summary_lines(r: FleetResult, out: Path, wall: float) -> list[str]:
     """What the run found and how every process ended, as printed after the run."""
     searched = (
@@ -70,6 +82,7 @@ def summary_lines(r: FleetResult, out: Path, wall: float) -> list[str]:
         )
         lines.append(f"  NOT COMPLETE ({why}); the figures above cover what was flown:")
         lines.extend(_table(r.ends))
+    lines.extend(_check_lines(r))
     for e in r.ends:
         for stray in e.strays:
             lines.append(f"  stray: {e.name} heard another sender with its system id, "
