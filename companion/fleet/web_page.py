@@ -10,7 +10,7 @@ from companion.fleet import processes
 from companion.fleet.options import FleetOptions
 
 WEB_LOG = "web.log"
-_START_S = 20.0
+_START_S = 60.0
 """Wall seconds the page has to print its address before the run is refused."""
 
 

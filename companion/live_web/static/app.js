@@ -210,7 +210,7 @@ function connect() {
   const proto = location.protocol === "https:" ? "wss:" : "ws:";
   socket = new WebSocket(`${proto}//${location.host}/ws`);
   socket.onopen = () => {
-    $("link").textContent = "live"; $("link").className = "good";
+    $("link").textContent = scene.replay ? "replay" : "live"; $("link").className = "good";
     if (scene.replay) seek(Number($("slider").value));
   };
   socket.onclose = () => { $("link").textContent = "disconnected: retrying"; $("link").className = "bad"; setTimeout(connect, 1000); };
