@@ -21,6 +21,7 @@ from mdm_montecarlo.compare_command import add_compare_parser, compare_command
 from mdm_montecarlo.result_files import append_provenance, case_columns, write_result_files
 from mdm_montecarlo.runner import MissionResults, RunInterruptedError, run_many
 from mdm_montecarlo.study import TABLES, Case, Row, study_rows
+from mdm_montecarlo.sweep_command import add_sweep_parser, sweep_command
 from mdm_montecarlo.tables import MeasuredRow, format_table, measured_rows
 from mdm_montecarlo.variants import with_method
 from mdm_profiles import MissionProfile, ProfileError, load_profile
@@ -101,6 +102,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     _common(rep)
     add_compare_parser(sub, _common)
+    add_sweep_parser(sub, _common)
     return parser
 
 
@@ -287,7 +289,12 @@ def main(argv: list[str] | None = None) -> int:
     args.started = time.perf_counter()  # the provenance's wall time counts from here
     args.command_line = sys.argv if argv is None else ["mdm-montecarlo", *argv]
     try:
-        commands = {"run": _run, "reproduce": _reproduce, "compare": compare_command}
+        commands = {
+            "run": _run,
+            "reproduce": _reproduce,
+            "compare": compare_command,
+            "sweep": sweep_command,
+        }
         return commands[args.command](args)
     except (ProfileError, ValueError) as exc:
         print(f"mdm-montecarlo: {exc}", file=sys.stderr)

@@ -100,24 +100,38 @@ def _table(
     return pa.concat_tables(pieces, promote_options="permissive")
 
 
+def sample_tables(configs: Sequence[tuple[ConfigColumns, MissionResults]]) -> dict[str, pa.Table]:
+    """The runs and confirmations tables of the configurations (by file stem); every config
+    mapping needs the same keys."""
+    return {
+        name: _table([(config, columns_of(res)) for config, res in configs])
+        for name, columns_of in ((RUNS, run_columns), (CONFIRMATIONS, confirmation_columns))
+    }
+
+
+def write_tables(
+    folder: Path, tables: Mapping[str, pa.Table], provenance: Mapping[str, object]
+) -> list[Path]:
+    """Each table as STEM.parquet (the provenance in its schema metadata) and STEM.csv."""
+    import pyarrow.csv as pa_csv
+    import pyarrow.parquet as pq
+
+    written = []
+    meta = {PROVENANCE_KEY: json.dumps(dict(provenance), default=str).encode()}
+    for name, table in tables.items():
+        pq.write_table(table.replace_schema_metadata(meta), folder / f"{name}.parquet")
+        pa_csv.write_csv(table, folder / f"{name}.csv")
+        written += [folder / f"{name}.parquet", folder / f"{name}.csv"]
+    return written
+
+
 def write_samples(
     folder: Path,
     configs: Sequence[tuple[ConfigColumns, MissionResults]],
     provenance: Mapping[str, object],
 ) -> list[Path]:
-    """Write samples-runs and samples-confirmations, each .parquet (the provenance in its
-    schema metadata) and .csv, into ``folder``; every config mapping needs the same keys."""
-    import pyarrow.csv as pa_csv
-    import pyarrow.parquet as pq
-
-    written = []
-    for name, columns_of in ((RUNS, run_columns), (CONFIRMATIONS, confirmation_columns)):
-        table = _table([(config, columns_of(res)) for config, res in configs])
-        meta = {PROVENANCE_KEY: json.dumps(dict(provenance), default=str).encode()}
-        pq.write_table(table.replace_schema_metadata(meta), folder / f"{name}.parquet")
-        pa_csv.write_csv(table, folder / f"{name}.csv")
-        written += [folder / f"{name}.parquet", folder / f"{name}.csv"]
-    return written
+    """samples-runs and samples-confirmations (.parquet and .csv) of the configurations."""
+    return write_tables(folder, sample_tables(configs), provenance)
 
 
 def read_runs(folder: Path) -> pa.Table:
