@@ -1,6 +1,6 @@
-"""A profile that flies inside an imported fence: ``site.geofence`` replaced, and the origin and
-search area derived from the fence (its bounding rectangle in the local north/east frame, grown
-by a margin) or kept as they are."""
+"""A profile that flies inside an imported fence: ``site.geofence`` replaced (clockwise), and the
+origin and search area derived from the fence (its bounding rectangle in the local north/east
+frame, grown by a margin) or kept as they are."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from pydantic import ValidationError
 from companion.fence_from_profile import guidance_fence
 from companion.link.local_frame import LocalFrame
 from companion.site_files.fence_polygon import FencePolygon, SiteFileError
+from companion.site_files.site_layers import clockwise
 from mdm_profiles import MissionProfile
 from mdm_profiles.loader import describe_errors
 
@@ -88,7 +89,9 @@ def profile_with_fence(base: MissionProfile, fence: FencePolygon, source: str,
     profile is validated as a loaded one is, and its fence must take the guidance's inset."""
     data = base.model_dump(mode="json")
     site = data.get("site") or {"name": ""}
-    site["geofence"] = [{"lat": lat, "lon": lon} for lat, lon in fence.vertices]
+    # clockwise, as QGC's plans and field-duebendorf hold it: a fence read from any format
+    # gives the same profile
+    site["geofence"] = [{"lat": lat, "lon": lon} for lat, lon in clockwise(fence.vertices)]
     data["site"] = site
     alt = base.origin.alt if how.alt is None else how.alt
     if not how.keep_area:

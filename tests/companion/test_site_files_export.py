@@ -48,6 +48,7 @@ def test_export_then_import_gives_the_same_fence(tmp_path: Path, kind: str) -> N
                  str(again), "--targets", "frame"]) == 0  # fmt: skip
     before, after = load_profile(profile), load_profile(again)
     assert _fence_metres(before, after) <= 0.1
+    assert after.site == before.site  # the same vertices, clockwise from the same one
     assert after.area == before.area
     assert math.dist((after.origin.lat, after.origin.lon),
                      (before.origin.lat, before.origin.lon)) < 1e-8  # fmt: skip

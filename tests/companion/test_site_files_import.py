@@ -135,6 +135,14 @@ def test_targets_left_outside_the_new_area_are_refused_naming_the_file(
     assert not out.exists()
 
 
+def test_an_imported_fence_is_held_clockwise_from_the_files_first_vertex(tmp_path: Path) -> None:
+    drawn = tmp_path / "ccw.kml"
+    drawn.write_text(_kml([SQUARE[0], *reversed(SQUARE[1:])]))
+    profile = load_profile(_import(tmp_path, drawn, "--targets", "fit"))
+    assert profile.site is not None
+    assert [(p.lat, p.lon) for p in profile.site.geofence] == SQUARE
+
+
 def test_a_kml_polygon_from_google_earth_is_read_in_either_namespace(tmp_path: Path) -> None:
     for namespace in ("http://www.opengis.net/kml/2.2", "http://earth.google.com/kml/2.2"):
         drawn = tmp_path / "drawn.kml"
