@@ -5,6 +5,8 @@ for them)."""
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 from companion.site_files.fence_polygon import SiteFileError
@@ -13,7 +15,7 @@ from companion.site_files.kml_file import write_kml
 from companion.site_files.plan_file import write_plan
 from companion.site_files.profile_from_fence import FenceImport, profile_with_fence
 from companion.site_files.read_fence import read_fence_file
-from companion.site_files.site_layers import site_layers
+from companion.site_files.site_layers import SiteLayers, site_layers
 from mdm_profiles import load_profile, write_profile
 
 
@@ -33,7 +35,10 @@ def _import(args: argparse.Namespace) -> int:
     fence = read_fence_file(args.file)
     how = FenceImport(args.margin, args.keep_area, args.targets, args.alt)
     profile = profile_with_fence(base, fence, str(args.file), how)
-    write_profile(profile, args.into)
+    try:
+        write_profile(profile, args.into)
+    except OSError as exc:
+        raise SiteFileError(f"{args.into}: cannot be written: {exc.strerror or exc}") from exc
     o, a = profile.origin, profile.area
     print(f"fence: {len(fence.vertices)} vertices from {args.file}")
     print(f"origin: {o.lat:.7f}, {o.lon:.7f}, {o.alt:g} m AMSL; area: {a.north:g} m north x "
@@ -47,14 +52,17 @@ def _export(args: argparse.Namespace) -> int:
     if all(path is None for path, _ in outputs):
         raise SiteFileError("companion profile export: give --plan, --kml and/or --geojson")
     layers = site_layers(load_profile(args.profile), args.seed)
+    writers: dict[str, Callable[[SiteLayers, Path], None]] = {
+        "plan": partial(write_plan, firmware=args.firmware),
+        "kml": write_kml,
+        "geojson": write_geojson,
+    }
     for path, kind in outputs:
         if path is None:
             continue
-        if kind == "plan":
-            write_plan(layers, path, args.firmware)
-        elif kind == "kml":
-            write_kml(layers, path)
-        else:
-            write_geojson(layers, path)
+        try:
+            writers[kind](layers, path)
+        except OSError as exc:
+            raise SiteFileError(f"{path}: cannot be written: {exc.strerror or exc}") from exc
         print(f"wrote {path}")
     return 0

@@ -34,7 +34,7 @@ class Candidate:
 @dataclass(frozen=True)
 class FencePolygon:
     """A checked inclusion fence: (lat, lon) vertices in degrees, in the file's order, the
-    closing vertex of a closed ring dropped."""
+    closing vertex of a closed ring and repeats of the vertex before dropped."""
 
     vertices: tuple[tuple[float, float], ...]
 
@@ -66,7 +66,9 @@ def checked_fence(source: str, candidate: Candidate) -> FencePolygon:
             raise SiteFileError(f"{source}: {at}: latitude {lat:g}, longitude {lon:g} out of "
                                 "range (-90..90, -180..180)")  # fmt: skip
         points.append((lat, lon))
-    if len(points) > 1 and points[0] == points[-1]:
+    # a closed ring's last vertex, and a vertex repeated at once (a double click), add nothing
+    points = [p for k, p in enumerate(points) if k == 0 or p != points[k - 1]]
+    while len(points) > 1 and points[-1] == points[0]:
         points.pop()
     if len(set(points)) < 3:
         raise SiteFileError(f"{source}: {where}: a fence needs at least 3 distinct vertices, "

@@ -61,9 +61,9 @@ def read_kml(path: Path) -> FencePolygon:
         raise SiteFileError(f"{source}: a KMZ (zip) file: unzip it and import its doc.kml")
     ns = _root_namespace(source, raw)
     try:
-        kml = KML.parse(path, ns=ns, strict=False, validate=False)
+        kml = KML.parse(path, ns=ns, strict=True, validate=False)
     except Exception as exc:  # fastkml raises ValueError, TypeError or its own KMLParseError
-        raise SiteFileError(f"{source}: KML that cannot be read: {exc}") from exc
+        raise SiteFileError(f"{source}: KML that cannot be read: {str(exc)[:300]}") from exc
     candidates: list[Candidate] = []
     others = 0
     for k, placemark in enumerate(find_all(kml, of_type=Placemark)):

@@ -50,7 +50,8 @@ def _bounds(frame: LocalFrame, fence: FencePolygon) -> tuple[float, float, float
     return min(norths), min(easts), max(norths), max(easts)
 
 
-def _origin(fence: FencePolygon, alt: float, margin: float) -> tuple[LocalFrame, float, float]:
+def _origin(fence: FencePolygon, alt: float, margin: float,
+            source: str) -> tuple[LocalFrame, float, float]:  # fmt: skip
     """The frame whose (0, 0) lies ``margin`` south and west of the fence's bounds, and the
     area's (north, east) extent."""
     frame = LocalFrame(*fence.vertices[0], alt)
@@ -60,7 +61,7 @@ def _origin(fence: FencePolygon, alt: float, margin: float) -> tuple[LocalFrame,
             return frame, north + margin, east + margin
         lat, lon, _ = frame.to_geodetic(south - margin, west - margin, 0.0)
         frame = LocalFrame(lat, lon, alt)
-    raise SiteFileError(f"the origin did not settle within {ORIGIN_TOLERANCE} m")
+    raise SiteFileError(f"{source}: the origin did not settle within {ORIGIN_TOLERANCE} m")
 
 
 def _round_up(value: float) -> float:
@@ -94,10 +95,12 @@ def profile_with_fence(base: MissionProfile, fence: FencePolygon, source: str,
     site["geofence"] = [{"lat": lat, "lon": lon} for lat, lon in clockwise(fence.vertices)]
     data["site"] = site
     alt = base.origin.alt if how.alt is None else how.alt
+    if not math.isfinite(alt):
+        raise SiteFileError(f"--alt {alt}: must be a finite altitude AMSL, m")
     if not how.keep_area:
         if how.margin < 0 or not math.isfinite(how.margin):
             raise SiteFileError(f"--margin {how.margin:g}: must be a finite length >= 0 m")
-        frame, north, east = _origin(fence, alt, how.margin)
+        frame, north, east = _origin(fence, alt, how.margin, source)
         data["origin"] = {"lat": frame.lat, "lon": frame.lon, "alt": alt}
         data["area"] = {"north": _round_up(north), "east": _round_up(east)}
         _move_targets(data, base, frame, how.targets)

@@ -24,4 +24,7 @@ def read_fence_file(path: Path) -> FencePolygon:
                             f"{suffix or 'no suffix'}")  # fmt: skip
     if not path.is_file():
         raise SiteFileError(f"{path}: no such file")
-    return reader(path)
+    try:
+        return reader(path)
+    except OSError as exc:
+        raise SiteFileError(f"{path}: cannot be read: {exc.strerror or exc}") from exc

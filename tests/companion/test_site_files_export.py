@@ -126,6 +126,16 @@ def test_gdal_reads_the_fence_area_starts_and_targets_where_they_are(
     assert false_flags == [str(t.false_target).lower() for t in profile.targets]
 
 
+def test_an_unwritable_output_is_refused_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "no-such-dir" / "d.kml"
+    assert main(["profile", "export", "field-duebendorf", "--kml", str(out)]) == 2
+    assert f"companion: {out}: cannot be written: No such file or directory" in (
+        capsys.readouterr().err
+    )
+
+
 def test_export_needs_an_output(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["profile", "export", "field-duebendorf"]) == 2
     assert "give --plan, --kml and/or --geojson" in capsys.readouterr().err

@@ -167,6 +167,25 @@ def test_of_several_polygons_the_one_marked_fence_is_taken(tmp_path: Path) -> No
     assert read_fence_file(drawn).vertices == tuple(SQUARE)
 
 
+def test_a_vertex_repeated_at_once_is_merged(tmp_path: Path) -> None:
+    drawn = tmp_path / "double-click.plan"
+    drawn.write_text(json.dumps(_plan([_polygon([SQUARE[0], SQUARE[1], SQUARE[1], *SQUARE[2:],
+                                                  SQUARE[0]])])))  # fmt: skip
+    assert read_fence_file(drawn).vertices == tuple(SQUARE)
+
+
+def test_an_unwritable_profile_is_refused_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "no-such-dir" / "p.yaml"
+    argv = ["profile", "import", str(QGC_PLAN), "--base", "field-duebendorf", "--into", str(out),
+            "--targets", "fit"]  # fmt: skip
+    assert main(argv) == 2
+    assert f"companion: {out}: cannot be written: No such file or directory" in (
+        capsys.readouterr().err
+    )
+
+
 def test_every_suffix_offered_has_a_reader() -> None:
     assert tuple(READERS) == SUFFIXES
 
@@ -219,6 +238,8 @@ CONCAVE = [(47.40, 8.64), (47.41, 8.64), (47.405, 8.645), (47.41, 8.65), (47.40,
         ("fence.kmz", "PK\x03\x04", "a KMZ (zip) file"),
         ("fence.txt", "QGC WPL 110", "not a site file this reads (.plan, .kml, .geojson, .json)"),
         ("broken.geojson", "{not json", "not GeoJSON (not JSON"),
+        ("letters.kml", _kml(SQUARE).replace("8.65,47.41", "8.65,abc"),
+         "KML that cannot be read: Invalid coordinates"),
     ],
 )  # fmt: skip
 def test_files_that_are_no_fence_are_refused_naming_file_and_fault(
