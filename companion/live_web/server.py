@@ -9,7 +9,7 @@ import logging
 import math
 import uuid
 from collections.abc import Awaitable, Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any
 from urllib.parse import urlsplit
@@ -43,6 +43,8 @@ class LivePage:
     replay: Replay | None = None
     clock: Callable[[], float] | None = None
     """Wall clock for link ages (time.time)."""
+    sockets: set[web.WebSocketResponse] = field(default_factory=set)
+    """The pages connected now."""
 
     def describe(self) -> dict[str, Any]:
         return self.scene | {
@@ -66,6 +68,13 @@ def make_app(page: LivePage) -> web.Application:
     app.router.add_get("/api/scene", describe)
     app.router.add_get("/ws", lambda r: _socket(page, r))
     app.router.add_post("/api/command", lambda r: _command(page, r))
+
+    async def close_sockets(_: web.Application) -> None:
+        # an open page would otherwise hold the shutdown for its whole timeout
+        for ws in list(page.sockets):
+            await ws.close(code=aiohttp.WSCloseCode.GOING_AWAY, message=b"server shutdown")
+
+    app.on_shutdown.append(close_sockets)
     return app
 
 
@@ -135,9 +144,18 @@ async def _socket(page: LivePage, request: web.Request) -> web.WebSocketResponse
     """Live: a snapshot every PUSH_S. Replay: a snapshot of the asked time per ``{"seek": t}``."""
     ws = web.WebSocketResponse(heartbeat=20.0)
     await ws.prepare(request)
-    if page.replay is not None:
-        await _replay_socket(page.replay, ws)
-        return ws
+    page.sockets.add(ws)
+    try:
+        if page.replay is not None:
+            await _replay_socket(page.replay, ws)
+        else:
+            await _live_socket(page, ws)
+    finally:
+        page.sockets.discard(ws)
+    return ws
+
+
+async def _live_socket(page: LivePage, ws: web.WebSocketResponse) -> None:
     state, clock = page.state, page.clock
     assert state is not None, "a live page has a state"
     assert clock is not None, "a live page has a clock"
@@ -156,7 +174,6 @@ async def _socket(page: LivePage, request: web.Request) -> web.WebSocketResponse
         pass
     finally:
         reader.cancel()
-    return ws
 
 
 async def _replay_socket(replay: Replay, ws: web.WebSocketResponse) -> None:

@@ -15,7 +15,7 @@ from companion.live_web.server import LivePage, make_app
 async def serve(page: LivePage, host: str, port: int, *, token_printed: bool) -> None:
     """Serve ``page`` on ``host:port`` (0: a free port); print its address (with the token
     when it was generated here) on stdout; return after SIGINT or SIGTERM."""
-    runner = web.AppRunner(make_app(page), access_log=None)
+    runner = web.AppRunner(make_app(page), access_log=None, shutdown_timeout=5.0)
     await runner.setup()
     site = web.TCPSite(runner, host, port)
     try:
