@@ -88,42 +88,38 @@ def _position(t: float, north: float) -> LocalPosition:
     return LocalPosition(t, north, 100.0, -30.0, 0.0, 0.0, 0.0, 0.0)
 
 
-def test_of_queued_positions_only_the_newest_is_steered_from(tmp_path: Path) -> None:
-    async def main() -> tuple[list[NedSetpoint], VehicleMission]:
-        link = _Link()
-        config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
-        mission = VehicleMission(config, link, _Sink())
-        # a neutral setpoint for every position acted on
-        mission.state = replace(mission.state, control=enter(mission.control, Phase.PREPARE))
-        for k in range(5):
-            link.events.put_nowait(_position(0.1 * k, 1000.0 + k))
-        link.events.put_nowait(Heartbeat(12, 0, False, 3))
-        mission._handle_queued(_position(0.0, 999.0), link.events)
-        assert link.events.empty()
-        return link.setpoints, mission
-
-    setpoints, mission = asyncio.run(main())
-    assert [sp.north for sp in setpoints] == [1004.0]
+@pytest.mark.asyncio
+async def test_of_queued_positions_only_the_newest_is_steered_from(tmp_path: Path) -> None:
+    link = _Link()
+    config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
+    mission = VehicleMission(config, link, _Sink())
+    # a neutral setpoint for every position acted on
+    mission.state = replace(mission.state, control=enter(mission.control, Phase.PREPARE))
+    for k in range(5):
+        link.events.put_nowait(_position(0.1 * k, 1000.0 + k))
+    link.events.put_nowait(Heartbeat(12, 0, False, 3))
+    mission._handle_queued(_position(0.0, 999.0), link.events)
+    assert link.events.empty()
+    assert [sp.north for sp in link.setpoints] == [1004.0]
     assert mission.position is not None
     assert mission.position.north == 1004.0
     assert mission.heartbeat is not None  # other events are all handled
 
 
-def test_a_lone_position_is_acted_on(tmp_path: Path) -> None:
-    async def main() -> list[NedSetpoint]:
-        link = _Link()
-        config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
-        mission = VehicleMission(config, link, _Sink())
-        mission.state = replace(mission.state, control=enter(mission.control, Phase.PREPARE))
-        mission._handle_queued(_position(0.0, 5.0), link.events)
-        link.events.put_nowait(_position(0.1, 6.0))
-        mission._handle_queued(Heartbeat(12, 0, False, 3), link.events)
-        return link.setpoints
-
-    assert [sp.north for sp in asyncio.run(main())] == [5.0, 6.0]
+@pytest.mark.asyncio
+async def test_a_lone_position_is_acted_on(tmp_path: Path) -> None:
+    link = _Link()
+    config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
+    mission = VehicleMission(config, link, _Sink())
+    mission.state = replace(mission.state, control=enter(mission.control, Phase.PREPARE))
+    mission._handle_queued(_position(0.0, 5.0), link.events)
+    link.events.put_nowait(_position(0.1, 6.0))
+    mission._handle_queued(Heartbeat(12, 0, False, 3), link.events)
+    assert [sp.north for sp in link.setpoints] == [5.0, 6.0]
 
 
-def test_link_reads_every_waiting_datagram_at_once(monkeypatch: Any) -> None:
+@pytest.mark.asyncio
+async def test_link_reads_every_waiting_datagram_at_once(monkeypatch: Any) -> None:
     calls = 0
     original = _Protocol.datagram_received
 
@@ -137,24 +133,20 @@ def test_link_reads_every_waiting_datagram_at_once(monkeypatch: Any) -> None:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
 
-    async def main() -> list[LinkEvent]:
-        link = PymavlinkLink(url=f"udpin:127.0.0.1:{port}", target_system=1)
-        await link.open()
-        mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
-        try:
-            with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as vehicle:
-                for k in range(6):  # all waiting before the loop looks at the socket
-                    msg = mav.local_position_ned_encode(100 * k, float(k), 0.0, -30.0, 0, 0, 0)
-                    vehicle.sendto(msg.pack(mav), ("127.0.0.1", port))
-                await asyncio.sleep(0.05)
-            out = []
-            while not link.events.empty():
-                out.append(link.events.get_nowait())
-            return out
-        finally:
-            await link.close()
-
-    events = asyncio.run(main())
+    link = PymavlinkLink(url=f"udpin:127.0.0.1:{port}", target_system=1)
+    await link.open()
+    mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+    events: list[LinkEvent] = []
+    try:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as vehicle:
+            for k in range(6):  # all waiting before the loop looks at the socket
+                msg = mav.local_position_ned_encode(100 * k, float(k), 0.0, -30.0, 0, 0, 0)
+                vehicle.sendto(msg.pack(mav), ("127.0.0.1", port))
+            await asyncio.sleep(0.05)
+        while not link.events.empty():
+            events.append(link.events.get_nowait())
+    finally:
+        await link.close()
     assert [e.north for e in events if isinstance(e, LocalPosition)] == [
         0.0,
         1.0,
@@ -183,34 +175,28 @@ def _mission(tmp_path: Path, link: _Link) -> VehicleMission:
     return VehicleMission(replace(config, heartbeat_period=0.02), link, _Sink())
 
 
-def test_heartbeats_flow_while_the_loop_runs_and_stop_with_it(tmp_path: Path) -> None:
-    async def main() -> tuple[int, int, int]:
-        link = _BeatingLink()
-        mission = _mission(tmp_path, link)
-        mission.state = replace(mission.state, control=enter(mission.control, Phase.PREPARE))
-        task = asyncio.create_task(mission._decide())
-        await asyncio.sleep(0)
-        first = link.beats  # one at once
-        link.publish([_position(0.1, 7.0)])
-        await asyncio.sleep(0.3)
-        running = link.beats
-        task.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await task
-        await asyncio.sleep(0.1)
-        assert [sp.north for sp in link.setpoints] == [7.0]
-        return first, running, link.beats - running
-
-    first, running, after = asyncio.run(main())
-    assert first == 1
+@pytest.mark.asyncio
+async def test_heartbeats_flow_while_the_loop_runs_and_stop_with_it(tmp_path: Path) -> None:
+    link = _BeatingLink()
+    mission = _mission(tmp_path, link)
+    mission.state = replace(mission.state, control=enter(mission.control, Phase.PREPARE))
+    task = asyncio.create_task(mission._decide())
+    await asyncio.sleep(0)
+    assert link.beats == 1  # one at once
+    link.publish([_position(0.1, 7.0)])
+    await asyncio.sleep(0.3)
+    running = link.beats
     assert running >= 3
-    assert after == 0
+    task.cancel()
+    with contextlib.suppress(asyncio.CancelledError):
+        await task
+    await asyncio.sleep(0.1)
+    assert [sp.north for sp in link.setpoints] == [7.0]
+    assert link.beats == running  # none after the loop stopped
 
 
-def test_a_failing_heartbeat_ends_the_loop_with_its_error(tmp_path: Path) -> None:
-    async def main() -> None:
-        link = _BeatingLink(fail_after=2)
-        await asyncio.wait_for(_mission(tmp_path, link)._decide(), 5.0)
-
+@pytest.mark.asyncio
+async def test_a_failing_heartbeat_ends_the_loop_with_its_error(tmp_path: Path) -> None:
+    link = _BeatingLink(fail_after=2)
     with pytest.raises(OSError, match="socket gone"):
-        asyncio.run(main())
+        await asyncio.wait_for(_mission(tmp_path, link)._decide(), 5.0)
