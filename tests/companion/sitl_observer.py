@@ -44,6 +44,8 @@ class Trace:
     last_position: tuple[float, float] | None = None
     track: list[tuple[float, float, float, int]] = field(default_factory=list)
     """(lat, lon, relative altitude, custom mode) of every position while airborne."""
+    stamps: list[float] = field(default_factory=list)
+    """The observer's monotonic wall time of each ``track`` entry (to line up several vehicles)."""
 
 
 class Observer:
@@ -103,6 +105,7 @@ class Observer:
             if t.last_position is not None and t.alt > 1.0:
                 t.distance += _metres(t.last_position, here)
                 t.track.append((*here, t.alt, t.mode))
+                t.stamps.append(time.monotonic())
             t.last_position = here
             t.max_speed = max(t.max_speed, math.hypot(msg.vx, msg.vy) / 100.0)  # type: ignore[attr-defined]
         elif kind == "EXTENDED_SYS_STATE":
@@ -163,7 +166,7 @@ class Observer:
             t = self.trace
             return Trace(t.armed_ever, t.armed, t.mode, list(t.modes), t.max_alt, t.alt,
                          t.distance, t.max_speed, t.landed_state, list(t.texts), t.last_position,
-                         list(t.track))  # fmt: skip
+                         list(t.track), list(t.stamps))  # fmt: skip
 
     def close(self) -> None:
         self._stop.set()
