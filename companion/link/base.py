@@ -73,6 +73,8 @@ class VehicleLink(ABC):
     alignment: FrameAlignment | None = None
     """Set by :meth:`use_profile_frame`: positions in and position setpoints out are in the
     profile's frame, whatever the vehicle's own local origin."""
+    _origin: tuple[float, float, float] | None = None
+    """The latest GPS_GLOBAL_ORIGIN (lat, lon, alt AMSL), aligned or not."""
 
     def __init__(self) -> None:
         self.events = asyncio.Queue()
@@ -212,6 +214,7 @@ class VehicleLink(ABC):
     def _note_origin(self, lat: float, lon: float, alt: float) -> None:
         """GPS_GLOBAL_ORIGIN: the local frame's origin. Taken only before the alignment is
         set: a jump of the offset in flight would move every commanded point."""
+        self._origin = (lat, lon, alt)
         if self.alignment is not None and not self.alignment.ready:
             self.alignment.from_global_origin(lat, lon, alt)
 
@@ -227,6 +230,21 @@ class VehicleLink(ABC):
         """A profile-frame point in the vehicle's local frame (position setpoints)."""
         a = self.alignment
         return (north, east) if a is None else a.to_vehicle(north, east)
+
+    async def read_origin(self, wait: float = 3.0) -> tuple[float, float, float] | None:
+        """Where the vehicle's local frame starts (lat, lon, alt AMSL) when it is flown in that
+        frame (a profile without ``site``: the run map draws its path there): its
+        GPS_GLOBAL_ORIGIN, asked once with REQUEST_MESSAGE; None when it sends none (the
+        emulator refuses the request: its frame is the profile's)."""
+        if self._origin is None:
+            asked = await self.command_long(
+                mavlink2.MAV_CMD_REQUEST_MESSAGE, float(mavlink2.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN)
+            )
+            if asked.outcome is Outcome.ACCEPTED:
+                deadline = time.monotonic() + wait
+                while self._origin is None and time.monotonic() < deadline:
+                    await asyncio.sleep(0.05)
+        return self._origin
 
     async def learn_origin(self, wait: float = 3.0) -> str | None:
         """Ask for GPS_GLOBAL_ORIGIN (the local frame's origin); without one within ``wait``

@@ -142,6 +142,7 @@ class LifecycleSteps:
         """Geo-referenced profiles: where the vehicle's local frame starts (the link shifts
         positions into the profile's frame from then on); asked again until known."""
         if self.link.alignment is None:
+            self.m.chore(self._note_own_origin())
             return
         while self.m.end_reason is None:
             missing = await self.link.learn_origin()
@@ -155,6 +156,18 @@ class LifecycleSteps:
             log.warning("vehicle %d: origin of its local frame unknown: %s; asking again",
                         self.config.vehicle, missing)  # fmt: skip
             await asyncio.sleep(2.0)
+
+    async def _note_own_origin(self) -> None:
+        """A vehicle flown in its own frame (a profile without ``site``): once it is armed (its
+        origin is set by then), where that frame starts, for the run map (a SITL booted at
+        ArduCopter's default home flies in Australia, not at the profile's default origin)."""
+        m = self.m
+        if not await m.until(lambda: m.heartbeat is not None and m.heartbeat.armed):
+            return
+        origin = await self.link.read_origin()
+        if origin is not None:
+            m.emit("frame", source="own", lat=round(origin[0], 7), lon=round(origin[1], 7),
+                   north=0.0, east=0.0)  # fmt: skip
 
     async def _check_start(self) -> None:
         """Refuse to start a vehicle (GPS position) too far outside the search area."""

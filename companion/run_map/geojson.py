@@ -44,10 +44,18 @@ def _point(frame: LocalFrame, s: Sample, **properties: Any) -> dict[str, Any]:
                     east=round(s.east, 1), **properties)  # fmt: skip
 
 
+def map_origin(profile: MissionProfile, tracks: list[VehicleTrack]) -> tuple[float, float]:
+    """Where the map's frame starts: the profile's origin, unless the vehicles flew in their
+    own frames (no ``site``): then the first one's origin, where the link said it was."""
+    own = next((t.origin for t in tracks if t.origin is not None), None)
+    return own if own is not None else (profile.origin.lat, profile.origin.lon)
+
+
 def run_geojson(profile: MissionProfile, tracks: list[VehicleTrack]) -> dict[str, Any]:
-    """The FeatureCollection of a run flown with ``profile`` (its origin places every point)."""
-    o = profile.origin
-    frame = LocalFrame(o.lat, o.lon, o.alt)
+    """The FeatureCollection of a run flown with ``profile``: the area, fence and targets
+    placed at :func:`map_origin`, each vehicle's points at its own origin where it has one."""
+    lat, lon = map_origin(profile, tracks)
+    frame = LocalFrame(lat, lon, profile.origin.alt)
     a = profile.area
     box = np.array([[0.0, 0.0], [a.north, 0.0], [a.north, a.east], [0.0, a.east]])
     features = [
@@ -62,14 +70,15 @@ def run_geojson(profile: MissionProfile, tracks: list[VehicleTrack]) -> dict[str
                                position="start" if moving else "fixed"))  # fmt: skip
     for track in tracks:
         v = track.vehicle
+        where = frame if track.origin is None else LocalFrame(*track.origin, profile.origin.alt)
         if len(track.path) >= 2:
-            line = [_lon_lat(frame, s.north, s.east) for s in track.path]
+            line = [_lon_lat(where, s.north, s.east) for s in track.path]
             features.append(_feature({"type": "LineString", "coordinates": line}, kind="path",
                                      vehicle=v, samples=len(line), t_first=track.path[0].t,
                                      t_last=track.path[-1].t, end=track.end_reason))  # fmt: skip
         for s, level in track.detections:
-            features.append(_point(frame, s, kind="detection", vehicle=v, level=level))
+            features.append(_point(where, s, kind="detection", vehicle=v, level=level))
         for s in track.confirmations:
-            features.append(_point(frame, s, kind="confirmation", vehicle=v))
+            features.append(_point(where, s, kind="confirmation", vehicle=v))
     # Only the members RFC 7946 defines: a reader owes nothing to foreign ones.
     return {"type": "FeatureCollection", "features": features}

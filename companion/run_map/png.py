@@ -1,4 +1,4 @@
-"""The run's map as a PNG: metres east/north of the profile origin, equal scale, a scale bar."""
+"""The run's map as a PNG: metres east/north of the map's origin (geojson.map_origin), equal scale, a scale bar."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from companion.fence_from_profile import fence_for
+from companion.run_map.geojson import map_origin
 from companion.run_map.tracks import VehicleTrack
 from mdm_profiles import MissionProfile
 
@@ -78,8 +79,8 @@ def draw_png(profile: MissionProfile, tracks: list[VehicleTrack], path: Path, ti
     ax.annotate("N", xy=(0.04, 0.95), xytext=(0.04, 0.85), xycoords="axes fraction",
                 ha="center", fontsize=12, fontweight="bold",
                 arrowprops={"arrowstyle": "-|>", "color": "black"})  # fmt: skip
-    o = profile.origin
-    ax.set_xlabel(f"east of the origin ({o.lat:.6f}, {o.lon:.6f}), m")
+    lat, lon = map_origin(profile, tracks)
+    ax.set_xlabel(f"east of the origin ({lat:.6f}, {lon:.6f}), m")
     ax.set_ylabel("north of the origin, m")
     ax.set_title(title)
     ax.grid(True, color="0.85", lw=0.5)

@@ -30,6 +30,10 @@ class VehicleTrack:
     confirmations: list[Sample] = field(default_factory=list)
     """Where each confirmed target was reported."""
     end_reason: str | None = None
+    origin: tuple[float, float] | None = None
+    """(lat, lon) where the vehicle's own frame starts, for a vehicle flown in that frame (a
+    profile without ``site``, the mission log's ``frame`` record of source ``own``); None: its
+    positions are in the profile's frame."""
 
 
 def read_track(path: Path, vehicle: int) -> VehicleTrack:
@@ -44,7 +48,12 @@ def read_track(path: Path, vehicle: int) -> VehicleTrack:
         elif isinstance(e.event, events.Confirmation):
             track.confirmations.append(Sample(e.t, e.event.north, e.event.east))
     for record in read_records(path):
-        if record.get("event") == "tick":
+        if record.get("event") == "frame" and record.get("source") == "own":
+            try:
+                track.origin = (float(record["lat"]), float(record["lon"]))
+            except (KeyError, TypeError, ValueError):
+                continue
+        elif record.get("event") == "tick":
             try:
                 track.path.append(
                     Sample(float(record["t"]), float(record["north"]), float(record["east"]))
