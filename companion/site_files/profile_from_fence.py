@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from pydantic import ValidationError
+from shapely.geometry import Polygon, box
 
 from companion.fence_from_profile import guidance_fence
 from companion.link.local_frame import LocalFrame
@@ -110,11 +111,17 @@ def profile_with_fence(base: MissionProfile, fence: FencePolygon, source: str,
         profile = MissionProfile.model_validate(data)
     except ValidationError as exc:
         described = describe_errors(f"{base.name} with the fence of {source}", exc)
-        raise SiteFileError(f"{described}\n  (targets are kept by --targets {how.targets}: "
-                            "rehearsal targets must lie inside the new search area)") from None  # fmt: skip
+        if "outside the area" in described:
+            described += (f"\n  (targets are placed by --targets {how.targets}: rehearsal "
+                          "targets must lie inside the new search area)")  # fmt: skip
+        raise SiteFileError(described) from None
     try:
-        guidance_fence(profile)
+        inner = guidance_fence(profile)
     except ValueError as exc:
         raise SiteFileError(f"{source}: {exc} (site.fence_inset "
                             f"{profile.site.fence_inset if profile.site else 0:g} m)") from exc  # fmt: skip
+    area = box(0.0, 0.0, profile.area.north, profile.area.east)
+    if not Polygon(inner.vertices).intersects(area):
+        raise SiteFileError(f"{source}: the fence lies {Polygon(inner.vertices).distance(area):.0f}"
+                            " m from the profile's search area (--keep-area): another site?")  # fmt: skip
     return profile

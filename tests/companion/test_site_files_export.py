@@ -63,6 +63,10 @@ def test_the_plan_keeps_a_clockwise_fence_vertex_for_vertex(tmp_path: Path) -> N
     (polygon,) = data["geoFence"]["polygons"]
     assert polygon["inclusion"] is True
     assert [tuple(p) for p in polygon["polygon"]] == [(p.lat, p.lon) for p in profile.site.geofence]
+    # what QGroundControl's loader requires of a plan (PlanMasterController, GeoFenceController)
+    assert (data["fileType"], data["version"], data["geoFence"]["version"]) == ("Plan", 1, 2)
+    assert isinstance(data["groundStation"], str)
+    assert all(isinstance(data[k], dict) for k in ("mission", "geoFence", "rallyPoints"))
     assert data["geoFence"]["circles"] == []
     assert data["mission"]["items"] == []
     assert data["rallyPoints"]["points"] == []

@@ -96,6 +96,21 @@ def test_keep_area_replaces_only_the_fence(tmp_path: Path) -> None:
     assert [(p.lat, p.lon) for p in profile.site.geofence] == _plan_fence()
 
 
+def test_keep_area_refuses_a_fence_far_from_the_area(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    zurich = [(47.37, 8.53), (47.38, 8.53), (47.38, 8.54), (47.37, 8.54)]
+    drawn = tmp_path / "elsewhere.geojson"
+    drawn.write_text(json.dumps(_geojson_polygon(zurich)))
+    out = tmp_path / "p.yaml"
+    argv = ["profile", "import", str(drawn), "--base", "field-duebendorf", "--into", str(out),
+            "--keep-area"]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"{drawn}: the fence lies " in err
+    assert "m from the profile's search area (--keep-area)" in err
+
+
 def test_targets_keep_their_ground_position_by_default(tmp_path: Path) -> None:
     ring = [(47.3962, 8.6383), (47.4080, 8.6383), (47.4080, 8.6660), (47.3962, 8.6660)]
     drawn = tmp_path / "box.geojson"
