@@ -9,7 +9,6 @@ import contextlib
 import os
 import shutil
 import signal
-import socket
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -21,27 +20,23 @@ from selenium.webdriver.chrome.service import Service
 
 from tests.fleet_cli import processes_naming
 from tests.mqtt_harness import Broker
-from tests.services import missing
+from tests.services import (
+    MQTT_PORT,
+    broker_missing,
+    chromium_missing,
+    missing,
+    mosquitto_missing,
+)
 from tests.waiting import wait_until
-
-MQTT_PORT = 1883
-_INSTALL_MOSQUITTO = "README 'Tests': `sudo apt-get install mosquitto mosquitto-clients`"
-
-
-def _need_mqtt_clients() -> None:
-    for tool in ("mosquitto_sub", "mosquitto_pub"):
-        if shutil.which(tool) is None:
-            missing(f"no {tool} on PATH ({_INSTALL_MOSQUITTO})")
 
 
 @pytest.fixture(scope="session")
 def mqtt_broker() -> int:
     """The Mosquitto broker on 127.0.0.1:1883 (the user's, or the one ``.ci/run`` starts), with
     the mosquitto_sub / mosquitto_pub clients tests watch it with; its port."""
-    _need_mqtt_clients()
-    with socket.socket() as s:
-        if s.connect_ex(("127.0.0.1", MQTT_PORT)) != 0:
-            missing(f"no MQTT broker listens on 127.0.0.1:{MQTT_PORT} ({_INSTALL_MOSQUITTO})")
+    reason = broker_missing()
+    if reason is not None:
+        missing(reason)
     return MQTT_PORT
 
 
@@ -49,9 +44,9 @@ def mqtt_broker() -> int:
 def mosquitto(tmp_path: Path) -> Iterator[Callable[..., Broker]]:
     """Brokers of the test's own: ``mosquitto(name, security=...)`` makes a ``Broker`` (not yet
     started) in ``tmp_path/name`` on a free port; every one is stopped at teardown."""
-    if shutil.which("mosquitto") is None:
-        missing(f"no mosquitto on PATH ({_INSTALL_MOSQUITTO})")
-    _need_mqtt_clients()
+    reason = mosquitto_missing()
+    if reason is not None:
+        missing(reason)
     made: list[Broker] = []
 
     def make(name: str = "broker", **options: Any) -> Broker:
@@ -69,16 +64,16 @@ def chromium() -> Iterator[webdriver.Chrome]:
     """A headless Chromium (``chromium`` and ``chromedriver`` from PATH, as Debian's chromium and
     chromium-driver packages put them in /usr/bin) driven through Selenium; nothing is
     downloaded. Quit at teardown."""
-    browser, driver = shutil.which("chromium"), shutil.which("chromedriver")
-    if browser is None or driver is None:
-        missing(
-            "no chromium or chromedriver on PATH (`sudo apt-get install chromium chromium-driver`)"
-        )
+    reason = chromium_missing()
+    if reason is not None:
+        missing(reason)
     options = Options()
-    options.binary_location = browser
+    options.binary_location = str(shutil.which("chromium"))
     for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage"):
         options.add_argument(arg)
-    session = webdriver.Chrome(options=options, service=Service(executable_path=driver))
+    session = webdriver.Chrome(
+        options=options, service=Service(executable_path=str(shutil.which("chromedriver")))
+    )
     try:
         yield session
     finally:
