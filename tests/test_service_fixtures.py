@@ -45,4 +45,3 @@ def test_fleet_processes_finds_a_process_naming_the_tests_folder(fleet_processes
         proc.kill()
         proc.wait()
     assert not processes_naming(str(fleet_processes))
-
