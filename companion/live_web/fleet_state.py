@@ -127,8 +127,10 @@ class FleetState:
         level = payload.get("level")
         if isinstance(level, int) and not isinstance(level, bool):
             v.level = level
-        v.ci = _number(payload.get("ci"))
-        v.battery = _number(payload.get("battery"))
+        if "ci" in payload:  # null on level 0: no index there
+            v.ci = _number(payload["ci"])
+        battery = _number(payload.get("battery"))
+        v.battery = v.battery if battery is None else battery
         found = payload.get("found")
         if isinstance(found, int) and not isinstance(found, bool):
             v.found = found
