@@ -280,7 +280,7 @@ class VehicleMission:
 
     def snapshot(self) -> dict[str, object]:
         """What the vehicle is doing now (the MQTT state message)."""
-        pos, hb, ap = self.position, self.heartbeat, self.link.autopilot
+        pos, hb, ap, st = self.position, self.heartbeat, self.link.autopilot, self.status
         t = self.clock.now
         ci = self.core.index_value(t) if self.core.started else math.nan
         sensor = self.core.sensor()
@@ -289,6 +289,8 @@ class VehicleMission:
                 "armed": hb.armed if hb is not None else None, "level": self.core.level,
                 "sensor": sensor, "sensor_name": self.config.profile.sensors[sensor].name,
                 "ci": None if math.isnan(ci) else round(ci, 4), "found": self.core.confirmed_count,
+                # SYS_STATUS battery_remaining, percent; -1 (the autopilot does not know): null
+                "battery": None if st is None or st.battery_remaining < 0 else st.battery_remaining,
                 **({} if pos is None else {"north": round(pos.north, 1), "east": round(pos.east, 1),
                                            "alt": round(-pos.down, 1)})}  # fmt: skip
 
