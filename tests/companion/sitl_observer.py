@@ -46,6 +46,9 @@ class Trace:
     """(lat, lon, relative altitude, custom mode) of every position while airborne."""
     stamps: list[float] = field(default_factory=list)
     """The observer's monotonic wall time of each ``track`` entry (to line up several vehicles)."""
+    boot_s: float = 0.0
+    """The vehicle's own clock (time since boot of its latest position), s: runs at the SITL's
+    speed-up as far as the host lets it, not at the nominal one."""
 
 
 class Observer:
@@ -99,6 +102,7 @@ class Observer:
                 t.mode = msg.custom_mode  # type: ignore[attr-defined]
                 t.modes.append(t.mode)
         elif kind == "GLOBAL_POSITION_INT":
+            t.boot_s = msg.time_boot_ms / 1000.0  # type: ignore[attr-defined]
             t.alt = msg.relative_alt / 1000.0  # type: ignore[attr-defined]
             t.max_alt = max(t.max_alt, t.alt)
             here = (msg.lat * 1e-7, msg.lon * 1e-7)  # type: ignore[attr-defined]
@@ -166,7 +170,33 @@ class Observer:
             t = self.trace
             return Trace(t.armed_ever, t.armed, t.mode, list(t.modes), t.max_alt, t.alt,
                          t.distance, t.max_speed, t.landed_state, list(t.texts), t.last_position,
-                         list(t.track), list(t.stamps))  # fmt: skip
+                         list(t.track), list(t.stamps), t.boot_s)  # fmt: skip
+
+    def hold(
+        self,
+        vehicle_s: float,
+        what: str,
+        holds: Callable[[Trace], bool] = lambda _: True,
+        *,
+        wall_timeout: float = 120.0,
+        context: Callable[[], str] | None = None,
+    ) -> None:
+        """Wait until the vehicle's own clock has run ``vehicle_s`` on (not a wall-clock sleep
+        scaled by the nominal speed-up, which a loaded host's slower SITL would cut short),
+        asserting ``holds`` of every snapshot meanwhile; ``what`` names it in a failure."""
+        start = self.snapshot().boot_s
+        deadline = time.monotonic() + wall_timeout
+        while True:
+            snap = self.snapshot()
+            more = "" if context is None else f"\n{context()}"
+            assert holds(snap), f"{what}: broken {snap.boot_s - start:.1f} vehicle s in{more}"
+            if snap.boot_s - start >= vehicle_s:
+                return
+            assert time.monotonic() < deadline, (
+                f"{what}: the vehicle's clock ran {snap.boot_s - start:.1f} of {vehicle_s:g} s "
+                f"in {wall_timeout:g} s wall{more}"
+            )
+            time.sleep(0.05)
 
     def close(self) -> None:
         self._stop.set()

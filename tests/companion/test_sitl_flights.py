@@ -192,10 +192,8 @@ def test_flies_through_takeover_kill_and_restart(
             "the observer sees the pilot's mode",
             context=context,
         )
-        held = time.monotonic()
-        while time.monotonic() - held < 10.0 / ap.speedup:  # 10 vehicle s: nobody takes it back
-            assert ob.snapshot().mode == ap.pilot_custom, context()
-            time.sleep(0.1)
+        ob.hold(10.0, "nobody takes the pilot's mode back", lambda t: t.mode == ap.pilot_custom,
+                context=context)  # fmt: skip
         before = ob.snapshot().distance
         ob.set_mode(*ap.guided)
         wait_until(
@@ -219,7 +217,7 @@ def test_flies_through_takeover_kill_and_restart(
                 context=context,
             )
         else:
-            time.sleep(5.0 / ap.speedup)  # past GUID_TIMEOUT (3 vehicle s): stopped, still GUIDED
+            ob.hold(5.0, "past GUID_TIMEOUT (3 vehicle s)")  # stopped, still GUIDED
             assert ob.snapshot().mode == ap.guided_custom, context()
         failsafe_mode = ob.snapshot().mode
         before = ob.snapshot().distance
@@ -348,7 +346,7 @@ def test_field_profile_on_px4_keeps_its_own_fence_and_stays_inside(
             "PX4's geofence action",
             context=context,
         )
-        time.sleep(10.0 / SPEEDUP)  # 10 vehicle s more: it stays put
+        obs.hold(10.0, "10 vehicle s more: it stays put")
         after = obs.snapshot()
         north = [frame.to_local(la, lo, alt)[0] for la, lo, _, _ in after.track[flown:]]
         beyond = [float(np.hypot(*(fence.clamp(p) - p))) for p in (
