@@ -1,7 +1,8 @@
 """What the mission does about bad positions: reports the ones the link's check dropped
 (console and ``telemetry_dropped`` records, at most once per ``REPORT_PERIOD_S``), and flies the
 profile's failsafe when no valid position came for ``failsafe.position_timeout`` wall s while
-flying: HOLD (in the search: a pause, as the operator's), then, when none came for
+flying: hold setpoints at once (the setpoint stream goes on), HOLD (in the search: a pause,
+as the operator's), then, when none came for
 ``position_hold`` more, the end action; positions back before that resume the search."""
 
 from __future__ import annotations
@@ -21,6 +22,12 @@ log = logging.getLogger(__name__)
 REPORT_PERIOD_S = 5.0
 """Wall seconds between two reports of dropped positions."""
 _FLYING = frozenset({Phase.CLIMB, Phase.TRANSIT, Phase.SEARCH})
+_ALIVE_S = 1.0
+"""A HEARTBEAT this long after the last valid position: the link lives, the positions are bad
+(when both stop, the link is lost: the supervision's case, not this one)."""
+_STREAM_GAP_S = 0.5
+"""Wall s without a valid position after which each check (4 a second) sends a hold setpoint:
+PX4 leaves OFFBOARD after COM_OF_LOSS_T (1 s) without setpoints, before the failsafe's HOLD."""
 BY = "position failsafe"
 """The ``by`` of the pause's ``phase`` record."""
 
@@ -43,6 +50,10 @@ class PositionFailsafe:
         self._report(now)
         self._watch(now)
 
+    def flush(self) -> None:
+        """Report what was dropped since the last report (the mission's end)."""
+        self._report(self._next_report)
+
     def _report(self, now: float) -> None:
         if now < self._next_report:
             return
@@ -64,6 +75,9 @@ class PositionFailsafe:
         if not flying or m.end_reason is not None:
             self._since = None
             return
+        alive = now - m.last_heartbeat_wall < m.config.link_timeout
+        if m.phase in _FLYING and alive and last is not None and now - last >= _STREAM_GAP_S:
+            m.send_hold()
         fresh = last is not None and now - last < self.spec.position_timeout
         if fresh:
             self._since = None
@@ -75,8 +89,9 @@ class PositionFailsafe:
         if self._since is None:
             self._since = now if last is None else last
         silent = now - self._since
-        if silent < self.spec.position_timeout:
-            return
+        beat = m.last_heartbeat_wall
+        if silent < self.spec.position_timeout or beat - self._since < _ALIVE_S:
+            return  # (no heartbeat since the positions stopped either: the link's loss)
         if silent < self.spec.position_timeout + self.spec.position_hold:
             if (
                 not self.holding

@@ -146,7 +146,7 @@ class VehicleMission:
         self.search_start = self.recovered.search_start
         self.latencies: list[float] = []
         self.real_targets = sum(not t.false_target for t in profile.targets)
-        self._last_heartbeat_wall = 0.0
+        self.last_heartbeat_wall = 0.0
         self._period = 0.1
         self._last_tick = -np.inf
         self._changed = asyncio.Event()
@@ -208,13 +208,14 @@ class VehicleMission:
                 life.add_done_callback(lambda _: [t.cancel() for t in loops])
         finally:
             self._emit_latency()
+            self.position_failsafe.flush()
             self._record_exit()
             await self.link.close()
         return self.end_reason or "stopped"
 
     def _record_exit(self) -> None:
         """The ``exit`` record: set by the end's wait or the link's loss, else from what the
-        vehicle was last seen doing."""
+        vehicle was last seen doing; never 0 after the position failsafe."""
         if self.exit is None:
             hb = self.heartbeat
             if hb is None:
@@ -225,9 +226,9 @@ class VehicleMission:
                 self.exit = MissionExit(1, f"left armed in {mode}, {self.where()}")
             else:
                 self.exit = MissionExit(0, "disarmed on the ground")
-            failsafe = self.position_failsafe.cause
-            if failsafe is not None:
-                self.exit = MissionExit(1, f"failsafe ({failsafe}); {self.exit.cause}")
+        failsafe = self.position_failsafe.cause
+        if failsafe is not None and self.exit.status == 0:
+            self.exit = MissionExit(1, f"failsafe ({failsafe}); {self.exit.cause}")
         self.record(events.Exit(self.exit.status, self.exit.cause))
 
     def where(self) -> str:
@@ -406,7 +407,7 @@ class VehicleMission:
             self.emit("statustext", severity=text.severity, text=text.text)
 
     def _on_heartbeat(self, hb: Heartbeat) -> None:
-        self._last_heartbeat_wall = time.perf_counter()
+        self.last_heartbeat_wall = time.perf_counter()
         previous = self.heartbeat
         self.heartbeat = hb
         ap = self.link.autopilot
@@ -568,7 +569,16 @@ class VehicleMission:
         self._send(guidance.pursuit_xy(pos.north, pos.east, pos.down, north, east, self.guide,
                                        self.fence, self._period), pos)  # fmt: skip
 
-    def _send(self, sp: NedSetpoint, pos: LocalPosition) -> None:
+    def send_hold(self) -> None:
+        """A setpoint that holds at the last valid position (while none valid comes)."""
+        pos = self.position
+        if pos is not None:
+            self._send(NedSetpoint(pos.north, pos.east, pos.down, 0.0, 0.0, 0.0), pos,
+                       answer=False)  # fmt: skip
+
+    def _send(self, sp: NedSetpoint, pos: LocalPosition, *, answer: bool = True) -> None:
+        """``sp``, the answer to ``pos`` (its latency measured; not for a hold without a new
+        position), through the last check."""
         safe, why = self.setpoint_guard.safe(sp)
         if why is not None:
             self._refused_setpoint(*why)
@@ -577,7 +587,7 @@ class VehicleMission:
             sp = safe
         self.link.send_setpoint(sp, self.config.setpoints)
         self._setpoint_time = pos.time
-        if len(self.latencies) < 200_000:
+        if answer and len(self.latencies) < 200_000:
             self.latencies.append(time.perf_counter() - pos.received)
 
     def _refused_setpoint(self, kind: str, detail: str) -> None:
@@ -618,7 +628,7 @@ class VehicleMission:
             self.position_failsafe.check(time.perf_counter())
             if self.heartbeat is None or self.phase is Phase.DONE:
                 continue
-            silent = time.perf_counter() - self._last_heartbeat_wall
+            silent = time.perf_counter() - self.last_heartbeat_wall
             if silent <= self.config.link_timeout:
                 backoff = 0.5
                 continue
@@ -645,7 +655,7 @@ class VehicleMission:
             deadline = time.perf_counter() + 2.0 * self.config.link_timeout
             while time.perf_counter() < deadline:
                 await asyncio.sleep(0.1)
-                if time.perf_counter() - self._last_heartbeat_wall < 1.0:
+                if time.perf_counter() - self.last_heartbeat_wall < 1.0:
                     self.record(events.LinkState("restored"))
                     self._after_link_restored(resume)
                     break
