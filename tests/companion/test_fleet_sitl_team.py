@@ -138,3 +138,51 @@ def test_ctrl_c_mid_search_brings_every_vehicle_home_and_exits_130(
     assert result["stopped_by"] == "SIGINT"
     assert not result["complete"]
     assert not processes_naming(str(out)), "SITL or companion processes left running"
+
+
+def test_a_killed_autopilot_is_named_and_the_other_three_complete_their_search(
+    sitl_both: None, tmp_path: Path
+) -> None:
+    profile = team_profile(tmp_path, vehicles=4, seed=SEED, duration=120.0)
+    out = tmp_path / "run"
+    fleet = start_fleet("--profile", str(profile), "--sitl", "mixed", "--sitl-speedup",
+                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600",
+                        "--duration", "120", "--quiet", output=tmp_path / "fleet.out")  # fmt: skip
+    observers: dict[int, Observer] = {}
+    victim = 1  # a PX4 instance: its command line names its working directory
+    try:
+        team = team_of(out)
+        observers = observe(team)
+        kinds = {e.index: str(e.autopilot) for e in team}
+
+        def searching() -> bool:
+            return all(o.snapshot().alt > 30.0 for o in observers.values())
+
+        wait_until(searching, 600.0, "every vehicle at its search altitude",
+                   context=lambda: _tail(tmp_path / "fleet.out"))  # fmt: skip
+        pids = processes_naming(str(out / f"sitl-{victim}"))
+        assert pids, "the PX4 instance of vehicle 1 was not found"
+        for pid in pids:
+            os.kill(pid, signal.SIGKILL)
+        code = fleet.wait(timeout=1500)
+        traces = {i: o.snapshot() for i, o in observers.items()}
+    finally:
+        if fleet.poll() is None:
+            os.killpg(fleet.pid, signal.SIGKILL)
+        _close(observers)
+    text = _tail(tmp_path / "fleet.out")
+    assert code == 1, text
+    result = json.loads((out / "results.json").read_text())
+    ends = {e["name"]: e for e in result["ends"]}
+    lost = ends[f"vehicle {victim}"]
+    assert lost["how"].startswith("lost: its px4 SITL process exited, killed by signal 9"), lost
+    assert not lost["ok"]
+    assert f"vehicle {victim}   lost: its px4 SITL process exited" in text
+    for i, t in traces.items():
+        if i == victim:
+            continue
+        assert ends[f"vehicle {i}"]["how"] == "mission time", ends[f"vehicle {i}"]
+        f = figures(t, kinds[i], fence_polygon(profile))
+        assert f.end == "landed, disarmed", f.line(i, kinds[i])
+    print(f"\n{lost['name']}: {lost['how']}")
+    assert not processes_naming(str(out)), "SITL or companion processes left running"
