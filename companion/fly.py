@@ -23,7 +23,7 @@ from companion.link.base import VehicleLink
 from companion.mission import MissionConfig, VehicleMission
 from companion.mission.core_for import is_swarm
 from companion.mission.start_point import start_point
-from companion.mission.swarm_core import SwarmCore
+from companion.mission.swarm_core import SwarmCore, live_swarm_refusal
 from companion.sensors.factory import DetectorFeed, make_sensor_source
 from companion.telemetry import EventSink, MissionLog, read_log
 from companion.telemetry.tee_sink import TeeSink
@@ -72,6 +72,9 @@ def check_flight(config: MissionConfig, mqtt: MqttSpec | None, source: SensorSou
             "shares the swarm's bests over MQTT; configure a broker (--mqtt HOST[:PORT] or "
             "the profile's mqtt: section)"
         )
+    refusal = live_swarm_refusal(config.profile) if is_swarm(config) else None
+    if refusal is not None:
+        raise ValueError(refusal)
     if source == "mqtt" and mqtt is None:
         raise ValueError(
             "sensor source 'mqtt' reads detections from a broker; configure one "

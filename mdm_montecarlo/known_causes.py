@@ -11,6 +11,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from mdm_montecarlo.study import VARIANTS
 from mdm_montecarlo.tables import MeasuredRow
 
 SWARMS = ("PSO", "SPSO", "ARPSO")
@@ -58,7 +59,7 @@ def _is_mdm(row: MeasuredRow) -> bool:
 CAUSES: tuple[Cause, ...] = (
     Cause(
         "Level-2 waypoints: the default is not eq. (10)",
-        lambda r, m: bool(r.variant),
+        lambda r, m: r.variant == VARIANTS["eq10"][0],
         lambda r, m: "the default rule (anchor) is the row above it",
     ),
     Cause(

@@ -39,6 +39,18 @@ def _axis_of(table: str) -> tuple[str, str]:
     return "search method", "method"
 
 
+_VARIANT_TICKS = {
+    "eq10": "eq. 10",
+    "popup_from_0": "t_i=200(i-1)",
+    "swarm_forgets": "forgets",
+    "swarm_waypoint_detection": "r_1 waypoints",
+    "swarm_detection": "r_1 every 5 s",
+}
+"""Short x tick names of the variants of study.VARIANTS (the report's tables give the labels)."""
+PaperMeans = dict[Case, tuple[float | None, float | None]]
+"""The paper's mean T_nc and T_S of a plotted case (None where it prints none)."""
+
+
 def case_label(case: Case, kind: str) -> str:
     """The x tick label of a case: its δ1, its two distributions, or its method."""
     if kind == "delta1":
@@ -46,11 +58,37 @@ def case_label(case: Case, kind: str) -> str:
     if kind == "levels":
         return case.method.removeprefix("MDM:")
     label = case.method.replace("MDM:", "MDM ")
-    return f"{label}\n(eq. 10)" if case.variant else label
+    return f"{label}\n({_VARIANT_TICKS[case.variant]})" if case.variant else label
 
 
-def _boxes(ax: Axes, data: list[list[float]], labels: list[str], xlabel: str, ylabel: str) -> None:
-    ax.boxplot(data, tick_labels=labels)
+def _boxes(
+    ax: Axes,
+    data: list[list[float]],
+    labels: list[str],
+    xlabel: str,
+    ylabel: str,
+    paper: list[float | None],
+) -> None:
+    """Box plots with our mean (a triangle) and the paper's mean (a red diamond, where it
+    prints one) on each box."""
+    ax.boxplot(
+        data,
+        tick_labels=labels,
+        showmeans=True,
+        meanprops={"marker": "^", "markerfacecolor": _COLOURS[2], "markeredgecolor": "black"},
+    )
+    where = [k + 1 for k, v in enumerate(paper) if v is not None]
+    ax.plot([], [], "^", color=_COLOURS[2], markeredgecolor="black", label="our mean")
+    if where:
+        ax.plot(
+            where,
+            [v for v in paper if v is not None],
+            "D",
+            color=_COLOURS[3],
+            markeredgecolor="black",
+            label="paper's mean",
+        )
+    ax.legend(fontsize=8, loc="best")
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.grid(axis="y", alpha=0.3)
@@ -59,10 +97,16 @@ def _boxes(ax: Axes, data: list[list[float]], labels: list[str], xlabel: str, yl
 
 
 def plot_table(
-    path: str, table: str, scenario: str, cases: list[Case], results: dict[Case, MissionResults]
+    path: str,
+    table: str,
+    scenario: str,
+    cases: list[Case],
+    results: dict[Case, MissionResults],
+    paper: PaperMeans,
 ) -> None:
     """Box plots of T_nc and, where the rows have one, T_S for the rows of one table and
-    scenario. Rows simulated only to the mission duration (the swarms) have no T_S box."""
+    scenario, each with our mean and the paper's beside it. Rows simulated only to the
+    mission duration (the swarms) have no T_S box."""
     xlabel, kind = _axis_of(table)
     labels = [case_label(c, kind) for c in cases]
     timed = [i for i, c in enumerate(cases) if results[c].has_ts]
@@ -75,7 +119,14 @@ def plot_table(
     fig, axes = plt.subplots(*grid, figsize=size, squeeze=False)
     axes = axes.reshape(-1)[None, :]
     a = axes[0, 0]
-    _boxes(a, [list(results[c].tnc) for c in cases], labels, xlabel, "targets confirmed T_nc")
+    _boxes(
+        a,
+        [list(results[c].tnc) for c in cases],
+        labels,
+        xlabel,
+        "targets confirmed T_nc",
+        [paper.get(c, (None, None))[0] for c in cases],
+    )
     a.set_title(f"{table}, {scenario} targets: efficiency", fontsize=10)
     if timed:
         b = axes[0, 1]
@@ -85,6 +136,7 @@ def plot_table(
             [labels[i] for i in timed],
             xlabel,
             "time to confirm all targets T_S (s)",
+            [paper.get(cases[i], (None, None))[1] for i in timed],
         )
         b.set_title(f"{table}, {scenario} targets: completeness", fontsize=10)
         if len(timed) < len(cases):

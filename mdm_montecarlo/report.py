@@ -231,7 +231,12 @@ def write_report(
                 methods = list(dict.fromkeys(c.method for c in cases))
                 plots.append((plot_scaling, (str(folder / png), scenario, methods, of_plot)))
             else:
-                plots.append((plot_table, (str(folder / png), table, scenario, cases, of_plot)))
+                paper = {
+                    r.case: (r.paper.tnc_mean, r.paper.ts_mean_s) for r in mine_rows if r.paper
+                }
+                plots.append(
+                    (plot_table, (str(folder / png), table, scenario, cases, of_plot, paper))
+                )
             lines += [f"![{table} {scenario}]({png})", ""]
     _draw(plots, workers)
     path = folder / "report.md"

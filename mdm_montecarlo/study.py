@@ -31,16 +31,39 @@ TS_TOLERANCE = 0.15
 SCALING_FLEETS = (6, 12, 24)
 SECTION3B_METHODS = ("US", "MDM:LS+BS")
 """Single-sensor and MDM search of one UAV, for P_CS and P_CM."""
+_FORGET = ("policy.swarm.after_confirmation=forget", "policy.swarm.read_confirmed=false")
 VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     "eq10": (
         "eq. (10) literal",
         ("policy.waypoint_origin=position",),
     ),
+    "popup_from_0": (
+        "t_i = 200 (i - 1)",
+        tuple(f"targets.{k}.appear={200 * k}" for k in range(10)),
+    ),
+    "swarm_forgets": ("memory forgets confirmed targets", _FORGET),
+    "swarm_waypoint_detection": (
+        "waypoint PSO, MDM's detection sensor",
+        ("policy.swarm.signal_sensor=detection", *_FORGET),
+    ),
+    "swarm_detection": (
+        "swarm given MDM's detection sensor",
+        (
+            "policy.swarm.iteration=interval",
+            "policy.swarm.signal_sensor=detection",
+            *_FORGET,
+        ),
+    ),
 }
-"""Rows that fly a documented deviation of the defaults back to the paper's text, beside the
-default row and the same paper figures: name -> (label, profile overrides). 'eq10': level-2
-waypoints step from the previous waypoint, P_{q+1} = P_q + delta_2 D (the default steps from the
-point of detection; docs/model.md, "Level-2 waypoints: the default is not eq. (10)")."""
+"""Rows that fly a documented deviation of the defaults, beside the default row and the same
+paper figures: name -> (label, profile overrides). 'eq10': level-2 waypoints step from the
+previous waypoint, P_{q+1} = P_q + delta_2 D (the default steps from the point of detection;
+docs/model.md, "Level-2 waypoints: the default is not eq. (10)"). 'popup_from_0': the pop-up
+targets appear from t = 0 (docs/model.md, "Pop-up times"). The swarm readings of
+docs/model.md, "Social-cognitive baselines": 'swarm_forgets' drops the bests of confirmed
+targets and no longer reads them; 'swarm_waypoint_detection' also reads MDM's 2 km detection
+sensor; 'swarm_detection' is the reading before issue 33 (one iteration every 5 s, 100 m)."""
+SWARM_VARIANTS = ("swarm_forgets", "swarm_waypoint_detection", "swarm_detection")
 
 
 @dataclass(frozen=True)
@@ -95,6 +118,10 @@ def study_rows(tables: tuple[str, ...] = TABLES) -> list[Row]:
         rows.append(Row(r.table, _case_of(r), r))
         if r.table == "simtable1" and r.method == "MDM":
             rows.append(Row(r.table, replace(_case_of(r), variant="eq10"), r))
+        if r.table == "simtable1" and r.scenario == "popup" and r.method in ("US", "MDM"):
+            rows.append(Row(r.table, replace(_case_of(r), variant="popup_from_0"), r))
+        if r.table == "simtablepso1" and r.method in SWARM_METHODS:
+            rows += [Row(r.table, replace(_case_of(r), variant=v), r) for v in SWARM_VARIANTS]
     if "scaling" in tables:
         best = {"fixed": "MDM:LS+BS", "popup": "MDM:US+US", "dynamic": "MDM:LS+BS"}
         for scenario, mdm in best.items():

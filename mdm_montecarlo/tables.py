@@ -73,16 +73,21 @@ def measured_rows(rows: list[Row], results: dict[Case, MissionResults]) -> list[
             metrics.Summary.of(np.empty(0) if runs.ts is None else runs.ts),
             0 if runs.ts_capped is None else int(runs.ts_capped.sum()),
         )
-    mdm_of: dict[tuple[str, str, int], Case] = {}
+    # AISE/AISC against the table's MDM row of the same variant, else its default MDM row.
+    mdm_of: dict[tuple[str, str, int, str], Case] = {}
     for row in rows:
-        if row.case.method.startswith("MDM") and not row.case.variant:
-            mdm_of.setdefault((row.table, row.case.scenario, row.case.n_uav), row.case)
+        if row.case.method.startswith("MDM"):
+            key = (row.table, row.case.scenario, row.case.n_uav, row.case.variant)
+            mdm_of.setdefault(key, row.case)
     out = []
     for row in rows:
         case = row.case
         tnc, ts, capped = stats[case]
         aise = aisc = None
-        mdm_case = mdm_of.get((row.table, case.scenario, case.n_uav))
+        mdm_case = mdm_of.get(
+            (row.table, case.scenario, case.n_uav, case.variant),
+            mdm_of.get((row.table, case.scenario, case.n_uav, "")),
+        )
         if not case.method.startswith("MDM") and mdm_case is not None:
             mdm_tnc, mdm_ts, _ = stats[mdm_case]
             aise = _rounded(metrics.aise(mdm_tnc.mean, tnc.mean))

@@ -42,6 +42,32 @@ FIXED_TARGET_TOLERANCE_M = 10.0
 vehicle moves about 2 m between a position and the SENS_SIG of the same tick."""
 
 
+LIVE_READING = {
+    "iteration": "interval",
+    "after_confirmation": "forget",
+    "read_confirmed": False,
+}
+"""The policy.swarm settings the live particle flies (the engine's 'swarm given MDM's
+detection sensor' reading); the waypoint iteration and the kept memory are the engine's only."""
+
+
+def live_swarm_refusal(profile: MissionProfile) -> str | None:
+    """Why the live companion cannot fly ``profile``'s swarm settings (None if it can)."""
+    spec = profile.policy.swarm
+    wrong = [
+        f"policy.swarm.{name} is {getattr(spec, name)!r}, not {value!r}"
+        for name, value in LIVE_READING.items()
+        if getattr(spec, name) != value
+    ]
+    if not wrong:
+        return None
+    return (
+        f"profile {profile.name!r}: the live swarm flies one iteration per update interval and "
+        f"forgets confirmed targets; {'; '.join(wrong)} (set them in the profile's "
+        "policy.swarm, as mission_profiles/swarm-small.yaml does)"
+    )
+
+
 class SwarmExchange(Protocol):
     """The peers' side (companion.telemetry.mqtt.swarm_peers.SwarmPeers)."""
 
@@ -62,6 +88,9 @@ class SwarmCore:
         self, profile: MissionProfile, seed: int, vehicle: int, peers: SwarmExchange,
         signal: Callable[[], float],
     ) -> None:  # fmt: skip
+        refusal = live_swarm_refusal(profile)
+        if refusal is not None:
+            raise ValueError(refusal)
         self.profile = profile
         self.config = swarm_config(profile)
         self.spec = profile.policy.swarm

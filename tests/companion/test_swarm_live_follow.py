@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 
 from companion.fleet.runner import FleetOptions, run_fleet
+from companion.mission.swarm_core import LIVE_READING
 from companion.telemetry import read_records
 from tests.profile_files import sensors, write_profile_with
 
@@ -36,7 +37,12 @@ Log = list[dict[str, Any]]
 
 def _fly(tmp_path: Path, drop: float) -> list[Log]:
     prefix = f"mdm/test-{os.getpid()}-swarm-follow-{drop}"
-    swarm = {"signal_radius": SIGNAL_RADIUS, "update_interval": 2.0, "message_drop": drop}
+    swarm = {
+        **LIVE_READING,
+        "signal_radius": SIGNAL_RADIUS,
+        "update_interval": 2.0,
+        "message_drop": drop,
+    }
     profile = write_profile_with(
         tmp_path / f"profile-{drop}.yaml", "swarm-live-follow-test",
         area={"north": 2500.0, "east": 2500.0},

@@ -1,4 +1,6 @@
-"""The time-stepped engine of the swarm baselines (mdm_montecarlo.social_engine)."""
+"""The time-stepped engine of the swarm baselines (mdm_montecarlo.social_engine), flying the
+reading used before issue 33 ("swarm given MDM's detection sensor": one iteration per update
+interval, the detection sensor's signal, bests of confirmed targets forgotten)."""
 
 from __future__ import annotations
 
@@ -11,10 +13,20 @@ from mdm_montecarlo.variants import with_method
 from mdm_profiles import MissionProfile, load_profile
 from mdm_profiles.overrides import apply_overrides
 
+DETECTION_READING = (
+    "policy.swarm.iteration=interval",
+    "policy.swarm.signal_sensor=detection",
+    "policy.swarm.after_confirmation=forget",
+    "policy.swarm.read_confirmed=false",
+)
+
 
 def _profile(method: str, *settings: str) -> MissionProfile:
-    """paper-fixed flown by a swarm method, simulated up to the 1000 s mission duration."""
-    base = apply_overrides(load_profile("paper-fixed"), ["mission.ts_cap=1000", *settings])
+    """paper-fixed flown by a swarm method in the detection-sensor reading, simulated up to
+    the 1000 s mission duration."""
+    base = apply_overrides(
+        load_profile("paper-fixed"), ["mission.ts_cap=1000", *DETECTION_READING, *settings]
+    )
     return with_method(base, method)
 
 
@@ -73,7 +85,7 @@ def test_sharing_helps_with_a_2km_signal() -> None:
 
 
 def test_the_three_baselines_differ_and_each_follows_shared_bests() -> None:
-    """Default choices (signal read out to the detection radius r_1): PSO, SPSO and ARPSO fly
+    """Signal read out to the detection radius r_1: PSO, SPSO and ARPSO fly
     different missions from the same random streams, and each spends a measured share of its
     iterations following a best heard from a peer (none when every message is lost)."""
     results = {m: run_missions(_profile(m), runs=100, seed=2024) for m in ("PSO", "SPSO", "ARPSO")}
@@ -92,9 +104,10 @@ def test_the_three_baselines_differ_and_each_follows_shared_bests() -> None:
     assert results["PSO"].tnc.mean() != pytest.approx(results["ARPSO"].tnc.mean(), abs=1e-9)
 
 
-def test_default_signal_reaches_beyond_the_confirmation_radius() -> None:
-    """Read only within r_2 (the old default), a signal confirms its target at once: no best
-    forms and the swarm is the uniform search. Out to r_1 the swarm climbs the signal."""
+def test_detection_signal_reaches_beyond_the_confirmation_radius() -> None:
+    """Read only within r_2, a signal confirms its target at once: no best forms and the
+    swarm (forgetting confirmed targets) is the uniform search. Out to r_1 (signal_sensor
+    detection) the swarm climbs the signal."""
     default = run_missions(_profile("PSO"), runs=100, seed=5)
     short = run_missions(_profile("PSO", "policy.swarm.signal_radius=400"), runs=100, seed=5)
     assert default.profile.policy.swarm.signal_radius is None
@@ -110,7 +123,10 @@ def test_views_of_the_own_bests_give_the_inbox_results(scenario: str, method: st
     draw. Every first-confirmation time, the work counts and the followed share are those of
     the inbox, bit for bit; the runs do follow peers and confirm targets."""
     profile = with_method(
-        apply_overrides(load_profile(scenario), ["mission.ts_cap=1000", "mission.duration=1000"]),
+        apply_overrides(
+            load_profile(scenario),
+            ["mission.ts_cap=1000", "mission.duration=1000", *DETECTION_READING],
+        ),
         method,
     )
     fast = run_swarm_block(profile, 11, 2, 40)

@@ -66,7 +66,7 @@ def small_report(tmp_path_factory: pytest.TempPathFactory) -> str:
 
 def test_summary_comes_first_and_outside_rows_link_their_cause(small_report: str) -> None:
     assert small_report.index("## Summary") < small_report.index("## simtable1")
-    assert re.search(r"T_nc inside tolerance: \d+ of 15 rows", small_report)
+    assert re.search(r"T_nc inside tolerance: \d+ of 17 rows", small_report)
     outside = small_report.split("## Means outside tolerance")[1].split("\n## ", maxsplit=1)[0]
     rows = [line for line in outside.splitlines() if line.startswith("| simtable1")]
     assert rows
@@ -79,6 +79,49 @@ def test_eq10_row_sits_beside_the_default(small_report: str) -> None:
     table = small_report.split("## simtable1")[1]
     lines = [ln for ln in table.splitlines() if ln.startswith("| simtable1 | fixed | MDM")]
     assert [("eq. (10) literal" in ln) for ln in lines] == [False, True]
+
+
+def test_popup_rows_from_t0_follow_the_default_rows(small_report: str) -> None:
+    """The pop-up US and MDM rows with t_i = 200 (i - 1) come after their default rows (MDM's
+    after its eq. (10) row) and fly targets that appear from t = 0."""
+    table = small_report.split("## simtable1")[1]
+    label = "t_i = 200 (i - 1)"
+    expected = {"US": [False, True], "MDM": [False, False, True]}
+    for method, marks in expected.items():
+        lines = [
+            ln for ln in table.splitlines() if ln.startswith(f"| simtable1 | popup | {method}")
+        ]
+        assert [label in ln for ln in lines] == marks
+    rows = study_rows(("simtable1",))
+    variant = [r.case for r in rows if r.case.variant == "popup_from_0"]
+    assert [c.method for c in variant] == ["US", "MDM:US+US"]
+    appear = [t.appear for t in variant[0].profile().targets]
+    assert appear == [200.0 * k for k in range(10)]
+
+
+def test_every_swarm_row_has_its_three_labelled_readings() -> None:
+    """simtablepso1: each swarm row, then the same row in the three other readings, each
+    flying its settings; the unlabelled row flies the text's reading (the defaults)."""
+    rows = [r for r in study_rows(("simtablepso1",)) if not r.case.method.startswith("MDM")]
+    assert len(rows) == 9 * 4
+    for k in range(0, len(rows), 4):
+        group = [r.case for r in rows[k : k + 4]]
+        assert [c.variant for c in group] == [
+            "",
+            "swarm_forgets",
+            "swarm_waypoint_detection",
+            "swarm_detection",
+        ]
+        swarm = [c.profile().policy.swarm for c in group]
+        readings = [
+            (s.iteration, s.signal_sensor, s.after_confirmation, s.read_confirmed) for s in swarm
+        ]
+        assert readings == [
+            ("waypoint", "confirmation", "keep", True),
+            ("waypoint", "confirmation", "forget", False),
+            ("waypoint", "detection", "forget", False),
+            ("interval", "detection", "forget", False),
+        ]
 
 
 def test_section_3b_is_in_the_report(small_report: str) -> None:

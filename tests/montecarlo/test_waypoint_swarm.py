@@ -20,8 +20,19 @@ from mdm_profiles.loader import ProfileError
 from mdm_profiles.overrides import apply_overrides
 
 WAYPOINT = ("policy.swarm.iteration=waypoint",)
-CONFIRMATION = (*WAYPOINT, "policy.swarm.signal_sensor=confirmation")
-TEXT = (*CONFIRMATION, "policy.swarm.after_confirmation=keep", "policy.swarm.read_confirmed=true")
+CONFIRMATION = (
+    *WAYPOINT,
+    "policy.swarm.signal_sensor=confirmation",
+    "policy.swarm.after_confirmation=forget",
+    "policy.swarm.read_confirmed=false",
+)
+TEXT = (
+    *WAYPOINT,
+    "policy.swarm.signal_sensor=confirmation",
+    "policy.swarm.after_confirmation=keep",
+    "policy.swarm.read_confirmed=true",
+)
+"""Section IV's reading, the defaults (spelt out: the tests do not depend on them)."""
 
 
 def _profile(scenario: str, method: str, *settings: str) -> MissionProfile:
@@ -40,7 +51,9 @@ def test_two_workers_match_one() -> None:
 def test_an_iteration_lasts_until_the_waypoint_is_reached() -> None:
     """Per interval, every particle iterates every 5 s step; per waypoint, only on arrival:
     a 4 km exploration leg takes many steps, so there are far fewer iterations."""
-    interval = run_swarm_block(_profile("fixed", "PSO"), 4, 0, 30)
+    interval = run_swarm_block(
+        _profile("fixed", "PSO", "policy.swarm.iteration=interval"), 4, 0, 30
+    )
     waypoint = run_swarm_block(_profile("fixed", "PSO", *WAYPOINT), 4, 0, 30)
     steps = 1000 / 5
     assert interval.events == steps * 30 * 12
