@@ -104,19 +104,31 @@ def _t_sf(t: float, df: float) -> float:
 def _bootstrap(
     x: NDArray[np.float64], y: NDArray[np.float64], resamples: int
 ) -> tuple[float, float]:
-    """Percentile interval of mean(y*) - mean(x*), resampling each sample with replacement,
-    in chunks so memory stays a few MB whatever the sample sizes."""
+    """Percentile interval of mean(y*) - mean(x*), each sample resampled with replacement."""
     rng = np.random.default_rng(BOOTSTRAP_SEED)
-    diffs = np.empty(resamples)
-    chunk = max(1, 2_000_000 // max(len(x), len(y)))
-    for start in range(0, resamples, chunk):
-        n = min(chunk, resamples - start)
-        mx = x[rng.integers(0, len(x), size=(n, len(x)))].mean(axis=1)
-        my = y[rng.integers(0, len(y), size=(n, len(y)))].mean(axis=1)
-        diffs[start : start + n] = my - mx
+    diffs = _resampled_means(y, resamples, rng) - _resampled_means(x, resamples, rng)
     tail = (1 - CONFIDENCE) / 2
     low, high = np.quantile(diffs, [tail, 1 - tail])
     return float(low), float(high)
+
+
+def _resampled_means(
+    values: NDArray[np.float64], resamples: int, rng: np.random.Generator
+) -> NDArray[np.float64]:
+    """Means of ``resamples`` resamples of ``values``. A sample of few distinct values (T_nc:
+    0 to the number of targets) is resampled as multinomial counts of those values, the same
+    law at a fraction of the draws; others run by run, in chunks of a few MB."""
+    n = len(values)
+    distinct, counts = np.unique(values, return_counts=True)
+    if len(distinct) <= 64:
+        drawn = rng.multinomial(n, counts / n, size=resamples)
+        return np.asarray(drawn @ distinct / n, dtype=np.float64)
+    means = np.empty(resamples)
+    chunk = max(1, 2_000_000 // n)
+    for start in range(0, resamples, chunk):
+        k = min(chunk, resamples - start)
+        means[start : start + k] = values[rng.integers(0, n, size=(k, n))].mean(axis=1)
+    return means
 
 
 def format_comparisons(label_a: str, label_b: str, rows: list[Comparison]) -> str:

@@ -17,6 +17,7 @@ from mdm_montecarlo.figure_claims import Claim, check_claims
 from mdm_montecarlo.known_causes import cause_of, slug
 from mdm_montecarlo.local_pool import imap_unordered
 from mdm_montecarlo.plots import plot_scaling, plot_section3b, plot_table
+from mdm_montecarlo.report_comparisons import comparison_section
 from mdm_montecarlo.runner import MissionResults
 from mdm_montecarlo.section3b import SearchGeometry, confirmed_share, p_cm, p_cs
 from mdm_montecarlo.study import SECTION3B_METHODS, TNC_TOLERANCE, TS_TOLERANCE, Case, Row
@@ -201,6 +202,7 @@ def write_report(
         "",
         *summary(measured, docs, claims),
         *outside_table(measured, docs),
+        *comparison_section(rows, results),
         "Single-sensor AISE/AISC are against the MDM row of the same table and scenario "
         "(blank where the single-sensor row's mean is 0: a percentage of it is undefined); "
         "'follows peer %' is the share of a swarm's particle-iterations that followed a best "
