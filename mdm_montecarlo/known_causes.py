@@ -15,19 +15,20 @@ from mdm_montecarlo.study import VARIANTS
 from mdm_montecarlo.tables import MeasuredRow
 
 SWARMS = ("PSO", "SPSO", "ARPSO")
-_SWARM_AT_R2 = {
-    ("fixed", "PSO"): 3.949,
-    ("fixed", "SPSO"): 3.926,
-    ("fixed", "ARPSO"): 3.949,
-    ("popup", "PSO"): 3.448,
-    ("popup", "SPSO"): 3.441,
-    ("popup", "ARPSO"): 3.448,
-    ("dynamic", "PSO"): 3.865,
-    ("dynamic", "SPSO"): 3.880,
-    ("dynamic", "ARPSO"): 3.865,
+_WAYPOINT_R1 = "waypoint PSO, MDM's detection sensor"
+_CLOSEST_SWARM = {
+    ("fixed", "PSO"): (_WAYPOINT_R1, 4.527),
+    ("fixed", "SPSO"): (_WAYPOINT_R1, 4.630),
+    ("fixed", "ARPSO"): (_WAYPOINT_R1, 4.367),
+    ("popup", "PSO"): ("the text's reading (default)", 2.991),
+    ("popup", "SPSO"): ("the text's reading (default)", 3.245),
+    ("popup", "ARPSO"): ("the text's reading (default)", 3.067),
+    ("dynamic", "PSO"): (_WAYPOINT_R1, 4.373),
+    ("dynamic", "SPSO"): (_WAYPOINT_R1, 4.446),
+    ("dynamic", "ARPSO"): (_WAYPOINT_R1, 4.283),
 }
-"""T_nc of the swarm rows with the signal read only within r_2 (the old default): 1000 runs,
-seed 2024, `reproduce --runs 1000` before the change to r_1 (docs/model.md)."""
+"""The swarm reading of `reproduce` whose T_nc is closest to the paper's, with its T_nc: 1000
+runs, seed 2024 (docs/model.md, "simtablepso1 at 1000 runs, every reading (issue 33)")."""
 _REFLECT_DELTA1 = {10.0: 3.69, 20.0: 4.21, 30.0: 4.25, 40.0: 4.34, 50.0: 4.65}
 """simtable3 fixed MDM T_nc with out_of_area = reflect, 300 runs (docs/model.md)."""
 
@@ -65,9 +66,8 @@ CAUSES: tuple[Cause, ...] = (
     Cause(
         "Social-cognitive baselines (PSO, SPSO, ARPSO; simtablepso1)",
         lambda r, m: r.method in SWARMS,
-        lambda r, m: (
-            f"signal read only within r_2 (signal_radius 400): "
-            f"{_SWARM_AT_R2.get((r.scenario, r.method), float('nan')):.3f}"
+        lambda r, m: "{} {:.3f}".format(
+            *_CLOSEST_SWARM.get((r.scenario, r.method), ("none measured", float("nan")))
         ),
     ),
     Cause(
