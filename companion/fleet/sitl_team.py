@@ -194,6 +194,7 @@ def _start(
     while _free(*watch):
         if process.poll() is not None or time.monotonic() > deadline:
             member.stop()
-            raise RuntimeError(f"{kind} SITL for vehicle {vehicle} did not start (see {log})")
+            raise FleetInputError(f"--sitl: the {kind} SITL of vehicle {vehicle} did not start "
+                                  f"within {_BIND_S:g} s (its output: {log})")  # fmt: skip
         time.sleep(0.2)
     return member

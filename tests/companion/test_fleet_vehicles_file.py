@@ -139,3 +139,26 @@ def test_an_armed_vehicle_is_refused_and_stays_as_it_was(
             beat = first.pump(3.0, lambda m: m.get_type() == "HEARTBEAT")
             assert beat is not None
             assert not beat.base_mode & 128
+
+
+def test_sitl_for_a_profile_without_site_is_refused(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    code = main(["fleet", "--quiet", "--profile", "paper-fixed", "--sitl", "arducopter",
+                 "--vehicles", "2", "--out", str(tmp_path / "run")])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "--sitl: profile 'paper-fixed' has no site: SITL instances boot at the site's " \
+           "WGS84 start points" in err  # fmt: skip
+
+
+def test_sitl_without_a_build_is_refused_naming_the_variable(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("MDM_PX4_SITL", str(tmp_path / "nowhere"))
+    code = main(["fleet", "--quiet", "--profile", "field-duebendorf", "--sitl", "mixed",
+                 "--out", str(tmp_path / "run")])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert f"--sitl: no px4 SITL (start-px4) in {tmp_path / 'nowhere'}; set MDM_PX4_SITL to " \
+           "its folder" in err  # fmt: skip
