@@ -36,6 +36,7 @@ from companion.mission.phase import Phase
 from companion.run_map.cli_args import map_after_run
 from mavlink_signing import load_signing_key
 from mdm_profiles import MissionProfile, load_profile
+from mdm_provenance import collect
 
 __all__ = ["FleetOptions", "companion_command", "emulator_command", "run_fleet"]
 
@@ -159,6 +160,7 @@ def _fly(
 ) -> FleetResult:
     _write_run_file(o, profile, plan, team)
     env = dict(os.environ, PYTHONUNBUFFERED="1")
+    started = time.perf_counter()  # results.json's provenance: the flight's wall time
     page = start_page(o, plan.vehicles, emulated=plan.ports is not None, env=env)
     emulator = None
     if plan.ports is not None:
@@ -185,7 +187,7 @@ def _fly(
                 processes.stop(emulator, 10.0)
             if page is not None:
                 processes.stop(page, 5.0)
-    return _finish(o, profile, plan, companions, emulator, stopped)
+    return _finish(o, profile, plan, companions, emulator, stopped, started)
 
 
 def _write_run_file(o: FleetOptions, profile: MissionProfile, plan: FleetPlan,
@@ -398,6 +400,7 @@ def _finish(
     stopped: _Stopped,
 ) -> FleetResult:
     result = score(profile, o.out, plan.vehicles, o.duration,
+    started: float,
                    virtual_seed=_virtual_seed(o, profile))  # fmt: skip
     result.ends = [
         vehicle_end(o.out, i, companions[i].returncode if i in companions else None,
@@ -413,7 +416,8 @@ def _finish(
     result.stopped_by = stopped.by
     result.complete = stopped.by is None and all(e.ok for e in result.ends)
     path = o.out / RESULTS
-    path.write_text(json.dumps(result.as_json(), indent=2, default=str))
+    record = collect(seed=o.seed, started=started).as_dict()
+    path.write_text(json.dumps(result.as_json() | {"provenance": record}, indent=2, default=str))
     with contextlib.redirect_stdout(sys.stderr):  # stdout may carry --json
         map_after_run(o.out, profile, list(range(plan.vehicles)), "map")
     return result
