@@ -6,6 +6,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from companion.telemetry.events import Exit
 from companion.telemetry.mission_log import read_log, read_records
 
 NORMAL_ENDS = frozenset({"mission time", "all targets", "operator abort", "operator land"})
@@ -56,8 +57,12 @@ def vehicle_end(out: Path, vehicle: int, exit_code: int | None, earlier: str | N
     """How vehicle ``vehicle``'s companion ended (``earlier``: it ended in an earlier run)."""
     log = out / f"companion-{vehicle}.log"
     path = out / f"mission-{vehicle}.jsonl"
-    end = read_log(path).end()
+    logged = read_log(path)
+    end = logged.end()
     reason = None if end is None else end.reason
+    exits = logged.of(Exit)
+    if reason is not None and exits and exits[-1].status != 0:  # how the vehicle was left
+        reason = f"{reason}: {exits[-1].cause}"
     strays = tuple(f"{r.get('address')} (locked to {r.get('locked')})" for r in read_records(path)
                    if r.get("event") == "stray")  # fmt: skip
     if exit_code is None:

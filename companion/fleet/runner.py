@@ -96,6 +96,8 @@ def companion_command(
         # one map of every vehicle at the end, drawn by the fleet: twelve companions each
         # importing matplotlib for their own were 8-10 of a 300 s run's 25-28 CPU-s
         "--no-map",
+        # the emulator's clock runs at most this fast: a position whose clock leaps is dropped
+        *(["--max-speedup", str(o.speedup)] if real is None and o.speedup > 0 else []),
         *(["--sensor-source", source] if source else []),
         *(["--dedicated-link"] if dedicated else []),
         *o.mqtt_args,
@@ -158,9 +160,9 @@ def _run_team(o: FleetOptions, profile: MissionProfile, plan: FleetPlan, team: T
 def _fly(
     o: FleetOptions, profile: MissionProfile, plan: FleetPlan, team: Team | None
 ) -> FleetResult:
+    started = time.perf_counter()  # results.json's provenance: the flight's wall time
     _write_run_file(o, profile, plan, team)
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    started = time.perf_counter()  # results.json's provenance: the flight's wall time
     page = start_page(o, plan.vehicles, emulated=plan.ports is not None, env=env)
     emulator = None
     if plan.ports is not None:
@@ -398,9 +400,9 @@ def _finish(
     companions: dict[int, subprocess.Popen[bytes]],
     emulator: subprocess.Popen[bytes] | None,
     stopped: _Stopped,
+    started: float,
 ) -> FleetResult:
     result = score(profile, o.out, plan.vehicles, o.duration,
-    started: float,
                    virtual_seed=_virtual_seed(o, profile))  # fmt: skip
     result.ends = [
         vehicle_end(o.out, i, companions[i].returncode if i in companions else None,
