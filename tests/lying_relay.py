@@ -49,7 +49,8 @@ class RelayStats:
 class LyingRelay:
     """Start with :meth:`start`, stop with :meth:`stop` (or use it as a context manager).
 
-    ``kinds``: corruptions slipped in, round-robin at ``rate_hz`` (wall); ``fault_chance``:
+    ``kinds``: corruptions slipped in, round-robin at ``rate_hz`` (wall), from the companion's
+    first message on (a companion listens then; ``rate_hz`` 0 stops them); ``fault_chance``:
     chance of each transport fault per vehicle datagram; ``max_speed``: the profile's speed
     (a velocity setpoint faster than it is bad). ``silent``: forward nothing either way (the
     link dies); ``all_bad``: every LOCAL_POSITION_NED of the vehicle goes out with NaN
@@ -89,6 +90,8 @@ class LyingRelay:
         self._other = mavlink2.MAVLink(None, srcSystem=sysid, srcComponent=2)
         self._last: Any = None
         """The vehicle's newest LOCAL_POSITION_NED (what the lies are made from)."""
+        self._companion_heard = False
+        """Lies start once the companion has spoken (it listens): each one sent is one it read."""
         self._held: bytes | None = None
         self._delayed: list[tuple[float, bytes]] = []
         self._stop = threading.Event()
@@ -134,7 +137,8 @@ class LyingRelay:
                     continue
             now = time.monotonic()
             self._release(now)
-            if self.kinds and self.rate_hz > 0 and now >= next_lie and not self.silent:
+            lying = self.kinds and self.rate_hz > 0 and self._companion_heard
+            if lying and now >= next_lie and not self.silent:
                 next_lie = now + 1.0 / self.rate_hz
                 if self._last is not None:
                     kind = self.kinds[turn % len(self.kinds)]
@@ -197,6 +201,7 @@ class LyingRelay:
 
     def _companion_data(self) -> None:
         data, _ = self._to_companion.recvfrom(65536)
+        self._companion_heard = True
         for msg in self._parse_out.parse_buffer(data) or ():
             if msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED":
                 self._check(msg)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import math
 import time
 from pathlib import Path
 from typing import Any
@@ -169,8 +170,8 @@ class MavsdkLink(VehicleLink):
         if name == "LOCAL_POSITION_NED":
             self.streams.note(name, f["time_boot_ms"] / 1000.0)
             return self._local(
-                component, f["time_boot_ms"] / 1000.0, float(f["x"]), float(f["y"]),
-                float(f["z"]), float(f["vx"]), float(f["vy"]), float(f["vz"]), received,
+                component, f["time_boot_ms"] / 1000.0, _number(f["x"]), _number(f["y"]),
+                _number(f["z"]), _number(f["vx"]), _number(f["vy"]), _number(f["vz"]), received,
             )  # fmt: skip
         if name == "GLOBAL_POSITION_INT":
             return self._global(component, f["time_boot_ms"] / 1000.0, f["lat"] * 1e-7,
@@ -184,12 +185,16 @@ class MavsdkLink(VehicleLink):
             return None
         if name == "DEBUG_VECT":
             label = str(f["name"]).rstrip("\x00")
-            if label in ("DET", "CNF"):
-                return SensorContact(label, f["time_usec"] / 1e6, f["x"], f["y"], f["z"])
+            reading = (f["time_usec"], _number(f["x"]), _number(f["y"]), _number(f["z"]))
+            if label in ("DET", "CNF") and self.guard.reading(*reading):
+                return SensorContact(label, reading[0] / 1e6, *reading[1:])
             return None
         if name == "NAMED_VALUE_FLOAT":
-            if str(f["name"]).rstrip("\x00") == "SENS_SIG":
-                return SensorSignal(f["time_boot_ms"] / 1000.0, f["value"])
+            value = _number(f["value"])
+            if str(f["name"]).rstrip("\x00") == "SENS_SIG" and self.guard.reading(
+                f["time_boot_ms"], value
+            ):
+                return SensorSignal(f["time_boot_ms"] / 1000.0, value)
             return None
         if name == "HEARTBEAT":
             if component != 1 or f["type"] in _NOT_AUTOPILOT_TYPES:
@@ -404,3 +409,10 @@ def _repack(name: str, fields: dict[str, Any], system: int) -> bytes:
         return bytes(cls(*args).pack(mav))
     except (KeyError, TypeError, ValueError, AttributeError, Exception):
         return b""
+
+
+def _number(value: Any) -> float:
+    """A float field of MAVSDK's JSON: NaN and the infinities may come as null or as text."""
+    if value is None:
+        return math.nan
+    return float(value)

@@ -238,6 +238,8 @@ class PymavlinkLink(VehicleLink):
                 _, value, name = fast_frames.unpack(msg_id, frame)
                 if name == b"SENS_SIG":
                     signal = cast(float, value)
+                    if not math.isfinite(signal):
+                        return False  # the events' path drops and counts it
             elif msg_id in _BESIDE_POSITION:
                 rare.append((i, msg_id, frame))
             else:
@@ -316,11 +318,15 @@ class PymavlinkLink(VehicleLink):
             return local
         if msg_id == fast_frames.NAMED_VALUE_FLOAT:
             t, value, raw = cast(tuple[int, float, bytes], f)
-            return SensorSignal(t / 1000.0, value) if _text(raw) == "SENS_SIG" else None
+            if _text(raw) != "SENS_SIG" or not self.guard.reading(t, value):
+                return None
+            return SensorSignal(t / 1000.0, value)
         if msg_id == fast_frames.DEBUG_VECT:
             usec, x, y, z, raw = cast(tuple[int, float, float, float, bytes], f)
             name = _text(raw)
-            return SensorContact(name, usec / 1e6, x, y, z) if name in ("DET", "CNF") else None
+            if name not in ("DET", "CNF") or not self.guard.reading(usec, x, y, z):
+                return None
+            return SensorContact(name, usec / 1e6, x, y, z)
         if msg_id == fast_frames.HEARTBEAT:
             custom, kind, autopilot, base, status, _ = cast(tuple[int, ...], f)
             return self._heartbeat(frame[6], kind, autopilot, base, custom, status)
@@ -427,11 +433,11 @@ class PymavlinkLink(VehicleLink):
             return None
         if kind == "DEBUG_VECT":
             name = _text(msg.name)
-            if name in ("DET", "CNF"):
+            if name in ("DET", "CNF") and self.guard.reading(msg.time_usec, msg.x, msg.y, msg.z):
                 return SensorContact(name, msg.time_usec / 1e6, msg.x, msg.y, msg.z)
             return None
         if kind == "NAMED_VALUE_FLOAT":
-            if _text(msg.name) == "SENS_SIG":
+            if _text(msg.name) == "SENS_SIG" and self.guard.reading(msg.time_boot_ms, msg.value):
                 return SensorSignal(msg.time_boot_ms / 1000.0, msg.value)
             return None
         if kind == "HEARTBEAT":

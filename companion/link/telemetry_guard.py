@@ -101,6 +101,17 @@ class TelemetryGuard:
         last = self._tracks.get("local")
         return last is not None and self._jump(last, _Sample(t, north, east, down, wall)) is None
 
+    def reading(self, t: float, *values: float) -> bool:
+        """Whether to take a sensor reading (its time; a contact's position and strength, the
+        signal's value): finite, the values within 10 ``max_distance``; counted when not."""
+        if not _finite(t, *values):
+            self.dropped["non-finite reading"] += 1
+            return False
+        if max(abs(v) for v in values) > self.limits.max_distance * 10:
+            self.dropped["reading out of range"] += 1
+            return False
+        return True
+
     def take_report(self) -> dict[str, int]:
         """Causes and counts dropped since the last call."""
         new = self.dropped - self._reported

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from companion.geofence import Geofence
 from companion.guidance import GuidanceConfig, NedSetpoint, pursuit_xy
-from companion.link.messages import LinkEvent, LocalPosition
+from companion.link.messages import LinkEvent, LocalPosition, SensorContact, SensorSignal
 from companion.link.pymavlink_link import PymavlinkLink
 from companion.link.telemetry_guard import TelemetryLimits
 from companion.mission.setpoint_guard import SetpointGuard
@@ -43,7 +43,7 @@ def _frame(sample: tuple[int, int, float, float, float, float, float, float]) ->
     return bytes(mav.local_position_ned_encode(t, *values).pack(mav))
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=200, deadline=None)
 @given(st.lists(SAMPLE, min_size=1, max_size=60))
 def test_only_sane_positions_on_one_clock_leave_the_link(
     samples: list[tuple[int, int, float, float, float, float, float, float]],
@@ -75,7 +75,32 @@ def test_only_sane_positions_on_one_clock_leave_the_link(
         previous, tracks = pos, new_tracks
 
 
-@settings(max_examples=500, deadline=None)
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(st.booleans(), st.integers(0, 2**32 - 1), ANY_FLOAT, ANY_FLOAT,
+                          ANY_FLOAT), min_size=1, max_size=20))  # fmt: skip
+def test_only_finite_sensor_readings_leave_the_link(
+    readings: list[tuple[bool, int, float, float, float]],
+) -> None:
+    link = PymavlinkLink(url="udpin:127.0.0.1:1", target_system=1)
+    got: list[LinkEvent] = []
+    link.listener = got.extend
+    mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+    for contact, t, x, y, z in readings:
+        msg = (mav.debug_vect_encode(b"DET", t, x, y, z) if contact
+               else mav.named_value_float_encode(t, b"SENS_SIG", x))  # fmt: skip
+        link._receive(bytes(msg.pack(mav)), ("127.0.0.1", 5))
+        link._publish_pending()
+    assert len(got) + sum(link.guard.dropped.values()) == len(readings)
+    for event in got:
+        if isinstance(event, SensorContact):
+            assert math.isfinite(event.time)
+            assert all(math.isfinite(v) for v in (event.north, event.east, event.strength))
+        else:
+            assert isinstance(event, SensorSignal)
+            assert math.isfinite(event.value)
+
+
+@settings(max_examples=300, deadline=None)
 @given(st.tuples(*([ANY_FLOAT] * 6)), st.sampled_from(["velocity", "position"]))
 def test_no_setpoint_outside_the_envelope_is_sent(
     values: tuple[float, float, float, float, float, float], kind: str
@@ -96,7 +121,7 @@ def test_no_setpoint_outside_the_envelope_is_sent(
 FINITE = st.floats(-5000.0, 8000.0)
 
 
-@settings(max_examples=500, deadline=None)
+@settings(max_examples=300, deadline=None)
 @given(FINITE, FINITE, st.floats(-200.0, 5.0), FINITE, FINITE, st.floats(0.001, 2.0))
 def test_guidance_from_valid_positions_always_passes_the_check(
     pn: float, pe: float, down: float, wn: float, we: float, period: float

@@ -65,6 +65,8 @@ class Flight:
             return self.companion.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
             pytest.fail(f"companion still running after {timeout:g} s:\n{self.log()[-3000:]}")
+        finally:
+            self.relay.rate_hz = 0.0  # no lies counted that no companion read
 
     def exit_record(self) -> dict[str, Any]:
         ends = [r for r in self.records() if r["event"] == "exit"]
