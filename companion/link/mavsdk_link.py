@@ -157,7 +157,7 @@ class MavsdkLink(VehicleLink):
             fields = json.loads(message.fields_json)
             event = self._translate(message.message_name, message.component_id, fields, received)
         except (ValueError, KeyError, TypeError, UnknownAutopilotError) as exc:
-            log.warning("ignored %s: %s", message.message_name, exc)
+            self.guard.unreadable(message.message_name, exc)
             return
         if self._tlog is not None:
             self._tlog.write(_repack(message.message_name, fields, self.target_system))

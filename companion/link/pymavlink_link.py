@@ -303,7 +303,7 @@ class PymavlinkLink(VehicleLink):
         try:
             return self._fast_event(msg_id, frame, received)
         except (UnknownAutopilotError, ValueError) as exc:
-            log.warning("ignored %s: %s", mavlink2.mavlink_map[msg_id].msgname, exc)
+            self.guard.unreadable(mavlink2.mavlink_map[msg_id].msgname, exc)
             return None
 
     def _fast_event(self, msg_id: int, frame: bytes, received: float) -> LinkEvent | None:
@@ -372,7 +372,7 @@ class PymavlinkLink(VehicleLink):
             try:
                 event = self._translate(msg, received)
             except (UnknownAutopilotError, ValueError) as exc:
-                log.warning("ignored %s: %s", msg.get_type(), exc)
+                self.guard.unreadable(msg.get_type(), exc)
                 continue
             if event is not None:
                 self._pending.append(event)

@@ -10,9 +10,12 @@ reset is recognised from a consistent run of samples, never from one message.
 
 from __future__ import annotations
 
+import logging
 import math
 from collections import Counter
 from dataclasses import dataclass
+
+log = logging.getLogger(__name__)
 
 AUTOPILOT_COMPONENT = 1
 """MAV_COMP_ID_AUTOPILOT1: the component whose HEARTBEAT the link takes, and the only one whose
@@ -111,6 +114,14 @@ class TelemetryGuard:
             self.dropped["reading out of range"] += 1
             return False
         return True
+
+    def unreadable(self, name: str, exc: Exception) -> None:
+        """A message no event can carry (a field of the wrong type, an unknown autopilot):
+        counted; logged the 1st, 10th, 100th ... time."""
+        self.dropped["unreadable message"] += 1
+        n = self.dropped["unreadable message"]
+        if n == 10 ** (len(str(n)) - 1):
+            log.warning("ignored %s: %s (%d unreadable so far)", name, exc, n)
 
     def take_report(self) -> dict[str, int]:
         """Causes and counts dropped since the last call."""
