@@ -4,7 +4,7 @@
 (T_nc, T_S and whether it was capped; AISE and AISC are differences of their means).
 ``confirmations``: one row per target a run's team confirmed, with the time and the vehicle
 that confirmed it first. Both start with the configuration's columns (``config`` and what
-the writer adds: scenario, method, the swept values...). The columns: docs/samples.md.
+the writer adds: scenario, method, the swept values...). The columns: docs/study.md.
 
 pyarrow is imported where a table is written or read, not with this module: the
 simulation workers `reproduce` forks import the module and never write.
