@@ -1,4 +1,6 @@
-"""Time-stepped batched missions for the social-cognitive baselines (PSO, SPSO, ARPSO).
+"""Time-stepped batched missions for the social-cognitive baselines (PSO, SPSO, ARPSO) that
+iterate every update interval (``policy.swarm.iteration: interval``; the default, one
+iteration per waypoint, is mdm_montecarlo.waypoint_swarm).
 
 Unlike MDM, particles share state, so a run is stepped as a whole at the swarm's update interval,
 batched over (runs, vehicles). One iteration (the per-particle parts are
@@ -12,8 +14,9 @@ mdm_core.search.swarm_iteration, shared with the live companion):
    a real target whose r_2 disc the segment enters is confirmed (closed form,
    mdm_core.world.first_entry_time) and becomes known to that vehicle;
 3. each vehicle reads its signal sensor (exp(-d / r) within the signal radius, as
-   mdm_core.world.contacts reads it) and keeps the strongest signal of a target it does
-   not know to be confirmed as its fitness; personal bests from confirmed targets are forgotten;
+   mdm_core.world.contacts reads it) and keeps the strongest signal as its fitness (of a
+   target it does not know to be confirmed, unless ``read_confirmed``); with
+   ``after_confirmation: forget``, bests from targets it knows confirmed are dropped;
 4. each vehicle publishes (personal best, current fitness, targets it knows confirmed); a message
    reaches each other vehicle ``message_delay`` seconds later unless lost (``message_drop``).
    A receiver keeps the last message it got from each sender.

@@ -140,3 +140,20 @@ def test_views_of_the_own_bests_give_the_inbox_results(scenario: str, method: st
     assert fast.followed is not None
     assert fast.followed > 0.1 * fast.events
     assert np.isfinite(fast.per_vehicle).sum() > 40
+
+
+def test_kept_bests_of_confirmed_targets_hold_the_swarm_there() -> None:
+    """after_confirmation keep (standard PSO memory) in this reading: the swarm stays on the
+    2 km signal of targets already confirmed, so pop-up targets appearing elsewhere are
+    found far less often than when those bests are forgotten (fixed seed, 100 runs)."""
+    popup = apply_overrides(
+        load_profile("paper-popup"), ["mission.ts_cap=2000", *DETECTION_READING]
+    )
+    forgot = run_missions(with_method(popup, "PSO"), runs=100, seed=11)
+    kept = run_missions(
+        with_method(apply_overrides(popup, ["policy.swarm.after_confirmation=keep"]), "PSO"),
+        runs=100,
+        seed=11,
+    )
+    print(f"pop-up PSO T_nc: forget {forgot.tnc.mean():.2f}, keep {kept.tnc.mean():.2f}")
+    assert kept.tnc.mean() < forgot.tnc.mean() - 2.0
