@@ -10,6 +10,8 @@ from dataclasses import dataclass
 from companion.link.local_frame import LocalFrame
 
 _FIELDS = frozenset({"time", "sensor", "lat", "lon", "north", "east", "confidence"})
+MAX_DISTANCE = 200_000.0
+"""Metres from the profile's origin a detection may be (the telemetry check's bound)."""
 
 
 class DetectionError(ValueError):
@@ -80,6 +82,9 @@ def parse_detection(payload: bytes, names: tuple[str, ...], frame: LocalFrame) -
         if local != {"north", "east"}:
             raise DetectionError("north and east go together")
         position = (_number(data, "north"), _number(data, "east"))
+    if position is not None and max(abs(position[0]), abs(position[1])) > MAX_DISTANCE:
+        raise DetectionError(f"position ({position[0]:g}, {position[1]:g}) m: more than "
+                             f"{MAX_DISTANCE / 1000:g} km from the profile's origin")  # fmt: skip
     confidence = None
     if "confidence" in data:
         confidence = _number(data, "confidence")

@@ -51,6 +51,7 @@ def test_a_frame_without_a_position_says_nothing_was_seen() -> None:
         (b'{"time": 1, "sensor": 0, "north": "x", "east": 1}', "north: expected a finite number"),
         (b'{"time": NaN, "sensor": 0}', "time: expected a finite number"),
         (b'{"time": 1, "sensor": 0, "confidence": 1.5}', "confidence 1.5: expected 0-1"),
+        (b'{"time": 1, "sensor": 0, "north": 1e38, "east": 1}', "more than 200 km from the"),
         (b'{"time": 1, "sensor": 0, "x": 1}', "unknown field(s) x"),
     ],
 )
