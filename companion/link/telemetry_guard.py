@@ -45,13 +45,8 @@ class TelemetryLimits:
     """Samples in a row, agreeing with each other, that make a new track (a reboot)."""
 
 
-@dataclass(frozen=True)
-class _Sample:
-    time: float
-    north: float
-    east: float
-    down: float
-    wall: float
+_Sample = tuple[float, float, float, float, float]
+"""(vehicle time, north, east, down, host wall time) of a position."""
 
 
 class TelemetryGuard:
@@ -73,12 +68,8 @@ class TelemetryGuard:
     def local(self, component: int, t: float, north: float, east: float, down: float,
               vn: float, ve: float, vd: float, wall: float) -> bool:  # fmt: skip
         """Whether to take this LOCAL_POSITION_NED (counted either way)."""
-        cause = self._static(component, t, north, east, down)
-        if cause is None and not _finite(vn, ve, vd):
-            cause = "non-finite"
-        if cause is None and max(abs(vn), abs(ve), abs(vd)) > self.limits.max_speed:
-            cause = "velocity out of range"
-        ok = self._decide("local", cause, _Sample(t, north, east, down, wall))
+        cause = self._local_cause(component, t, north, east, down, vn, ve, vd)
+        ok = self._decide("local", cause, (t, north, east, down, wall))
         if ok:
             self.last_valid_wall = wall
         return ok
@@ -91,18 +82,16 @@ class TelemetryGuard:
             cause = "lat/lon out of range"
         else:
             cause = self._static(component, t, north, east, -relative_alt)
-        return self._decide("global", cause, _Sample(t, north, east, -relative_alt, wall))
+        return self._decide("global", cause, (t, north, east, -relative_alt, wall))
 
     def plausible_local(self, component: int, t: float, north: float, east: float,
                         down: float, vn: float, ve: float, vd: float, wall: float) -> bool:  # fmt: skip
         """Whether :meth:`local` would take this position at once, changing nothing (the
         pymavlink backend's direct answer asks first, then leaves a doubtful one to it)."""
-        if self._static(component, t, north, east, down) is not None:
-            return False
-        if not _finite(vn, ve, vd) or max(abs(vn), abs(ve), abs(vd)) > self.limits.max_speed:
+        if self._local_cause(component, t, north, east, down, vn, ve, vd) is not None:
             return False
         last = self._tracks.get("local")
-        return last is not None and self._jump(last, _Sample(t, north, east, down, wall)) is None
+        return last is not None and self._jump(last, (t, north, east, down, wall)) is None
 
     def reading(self, t: float, *values: float) -> bool:
         """Whether to take a sensor reading (its time; a contact's position and strength, the
@@ -129,13 +118,28 @@ class TelemetryGuard:
         self._reported = self.dropped.copy()
         return dict(new)
 
+    def _local_cause(self, component: int, t: float, north: float, east: float, down: float,
+                     vn: float, ve: float, vd: float) -> str | None:  # fmt: skip
+        # one sum: NaN and the infinities carry through it (the per-position cost counts)
+        if component == AUTOPILOT_COMPONENT and math.isfinite(
+            t + north + east + down + vn + ve + vd
+        ):
+            cause = self._ranges(t, north, east, down)
+            if cause is None and max(abs(vn), abs(ve), abs(vd)) > self.limits.max_speed:
+                return "velocity out of range"
+            return cause
+        return self._static(component, t, north, east, down) or "non-finite"
+
     def _static(self, component: int, t: float, north: float, east: float,
                 down: float) -> str | None:  # fmt: skip
-        lim = self.limits
         if component != AUTOPILOT_COMPONENT:
             return "other component"
         if not _finite(t, north, east, down):
             return "non-finite"
+        return self._ranges(t, north, east, down)
+
+    def _ranges(self, t: float, north: float, east: float, down: float) -> str | None:
+        lim = self.limits
         if t < 0.0:
             return "time out of range"
         if max(abs(north), abs(east)) > lim.max_distance:
@@ -147,19 +151,20 @@ class TelemetryGuard:
     def _jump(self, last: _Sample, s: _Sample) -> str | None:
         """Why ``s`` cannot follow ``last`` on one track, or None."""
         lim = self.limits
-        dt = s.time - last.time
+        t0, n0, e0, d0, w0 = last
+        t, n, e, d, w = s
+        dt = t - t0
         if dt < 0.0:
             return "clock went back"
-        if dt == 0.0 and (s.north, s.east, s.down) == (last.north, last.east, last.down):
+        if dt == 0.0 and n == n0 and e == e0 and d == d0:
             return "duplicate"
-        wall = max(s.wall - last.wall, 0.0)
-        allowed = lim.leap if lim.max_rate is None else lim.max_rate * wall + lim.slack
+        allowed = lim.leap if lim.max_rate is None else lim.max_rate * max(w - w0, 0.0) + lim.slack
         if dt > max(allowed, lim.slack):
             return "clock leapt ahead"
         reach = lim.max_speed * dt + lim.jitter
-        if math.hypot(s.north - last.north, s.east - last.east) > reach:
+        if math.hypot(n - n0, e - e0) > reach:
             return "moved too fast"
-        if abs(s.down - last.down) > reach:
+        if abs(d - d0) > reach:
             return "climbed too fast"
         return None
 
