@@ -63,10 +63,9 @@ def _from_folder(spec: str) -> Sample:
     configs = list(dict.fromkeys(table["config"]))
     if not config:
         if len(configs) != 1:
-            listed = "; ".join(configs[:8]) + (" ..." if len(configs) > 8 else "")
             raise ValueError(
                 f"{folder} holds {len(configs)} configurations; name one as "
-                f"{folder}#CONFIG, CONFIG one of: {listed}"
+                f"{folder}#CONFIG, CONFIG one of:\n  " + "\n  ".join(configs)
             )
         config = configs[0]
     if config not in configs:
