@@ -17,11 +17,10 @@ from companion.link.pymavlink_link import PymavlinkLink
 from mavlink_signing import passphrase_to_secret
 from tests.emulator_harness import make_config, running_emulator
 
-pytestmark = pytest.mark.usefixtures("fleet_processes")
-
 PASSPHRASE = "companion-signing-test"
 
 
+@pytest.mark.usefixtures("fleet_processes")
 @pytest.mark.timeout(300)
 def test_signed_fleet_arms_flies_and_no_message_is_rejected(tmp_path: Path) -> None:
     key_file = tmp_path / "fleet.key"

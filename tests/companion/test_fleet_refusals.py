@@ -16,8 +16,6 @@ from companion.fleet.ports import free_port_block
 from companion.fleet.preflight import RUN_FILE
 from tests.fleet_cli import small_profile
 
-pytestmark = pytest.mark.usefixtures("fleet_processes")
-
 
 def _refused(capsys: pytest.CaptureFixture[str], *args: str) -> str:
     code = main(["fleet", "--quiet", *args])
@@ -97,6 +95,7 @@ def test_a_busy_base_port_is_refused_naming_the_port(
     assert "leave --base-port out for a free block" in err
 
 
+@pytest.mark.usefixtures("fleet_processes")
 def test_a_base_port_another_emulator_sends_to_is_refused(
     capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:

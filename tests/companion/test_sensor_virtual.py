@@ -17,8 +17,6 @@ from sim_vehicle_stub.emulator import Emulator
 from tests.emulator_harness import free_udp_base
 from tests.profile_files import levels, sensors, write_profile_with
 
-pytestmark = pytest.mark.usefixtures("fleet_processes")
-
 
 @pytest.mark.parametrize("name", ["paper-dynamic-false", "paper-popup-false"])
 def test_virtual_targets_are_the_emulators_for_the_same_seed(name: str) -> None:
@@ -45,6 +43,7 @@ def test_virtual_confirmation_sees_false_targets_only_with_the_detection_sensor(
     assert source.signal < np.exp(-1.0)  # no real target within the confirmation radius
 
 
+@pytest.mark.usefixtures("fleet_processes")
 @pytest.mark.timeout(150)
 def test_virtual_sensors_confirm_the_real_target_with_the_emulators_sensors_off(
     tmp_path: Path,
