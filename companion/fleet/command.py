@@ -11,7 +11,7 @@ from companion.fleet.gcs import parse_gcs
 from companion.fleet.options import FleetOptions
 from companion.fleet.runner import run_fleet
 from companion.fleet.summary import exit_status, summary_lines
-from companion.live_web.cli_args import parse_web, web_argv
+from companion.live_web.cli_args import check_tiles, parse_web, web_argv
 from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
 from mdm_core.search.pso import VARIANTS
 from mdm_profiles import load_profile
@@ -56,10 +56,12 @@ def fleet_command(args: argparse.Namespace) -> int:
 def _web_argv(args: argparse.Namespace, mqtt: bool) -> tuple[str, ...]:
     """The `companion watch` flags of --web (checked here, before anything starts)."""
     if args.web is None:
-        if args.web_read_only or args.web_token_file:
-            raise ValueError("--web-read-only and --web-token-file need --web [HOST:]PORT")
+        if args.web_read_only or args.web_token_file or args.web_tiles:
+            raise ValueError("--web-read-only, --web-token-file and --web-tiles need --web "
+                             "[HOST:]PORT")  # fmt: skip
         return ()
     parse_web(args.web)
+    check_tiles(args.web_tiles)
     if not mqtt:
         raise ValueError("--web shows the team from its MQTT topics and commands it over them: "
                          "give --mqtt HOST[:PORT] (or a profile with an mqtt: section)")  # fmt: skip

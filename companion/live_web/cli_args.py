@@ -25,8 +25,26 @@ def parse_web(value: str) -> tuple[str, int]:
     return host, int(port)
 
 
+def check_tiles(template: str | None) -> str | None:
+    """A map-tile URL template (``https://tiles.example/{z}/{x}/{y}.png``), checked."""
+    if template is None:
+        return None
+    missing = [k for k in ("{z}", "{x}", "{y}") if k not in template]
+    if not template.startswith(("http://", "https://")) or missing:
+        raise ValueError(f"--web-tiles {template!r}: expected an http(s) URL with {{z}}, {{x}} "
+                         f"and {{y}}{'; it lacks ' + ', '.join(missing) if missing else ''}")  # fmt: skip
+    return template
+
+
+def add_tiles_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--web-tiles", metavar="URL",
+                   help="map tiles under the page, from your own tile server "
+                   "(http://HOST/{z}/{x}/{y}.png; the browser loads them); default none")  # fmt: skip
+
+
 def add_web_arguments(p: argparse.ArgumentParser) -> None:
-    """--web-read-only and --web-token-file (--web itself differs per command)."""
+    """--web-read-only, --web-token-file and --web-tiles (--web itself differs per command)."""
+    add_tiles_argument(p)
     p.add_argument("--web-read-only", action="store_true",
                    help="the page shows the team but sends no commands")  # fmt: skip
     p.add_argument("--web-token-file", type=Path, metavar="PATH",
@@ -37,7 +55,8 @@ def add_web_arguments(p: argparse.ArgumentParser) -> None:
 def web_argv(args: argparse.Namespace) -> list[str]:
     """The same flags again, for the `companion watch` a fleet starts."""
     return [*(["--web-read-only"] if args.web_read_only else []),
-            *(["--web-token-file", str(args.web_token_file)] if args.web_token_file else [])]  # fmt: skip
+            *(["--web-token-file", str(args.web_token_file)] if args.web_token_file else []),
+            *(["--web-tiles", args.web_tiles] if args.web_tiles else [])]  # fmt: skip
 
 
 def add_watch_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from companion.live_web.access import is_loopback, resolve_access
-from companion.live_web.cli_args import parse_web
+from companion.live_web.cli_args import check_tiles, parse_web
 from companion.live_web.fleet_state import FleetState
 from companion.live_web.mqtt_feed import MqttFeed
 from companion.live_web.replay import Replay
@@ -36,19 +36,21 @@ def watch_command(args: argparse.Namespace) -> int:
     state = FleetState(profile, show_targets=args.show_targets, stale_after=args.stale_after)
     feed = MqttFeed(settings_for(spec, 0), spec.topic_prefix or default_prefix(profile.name), state)
     vehicles = args.vehicles or profile.fleet.vehicles
-    page = LivePage(scene(profile, vehicles=vehicles, show_targets=args.show_targets), access,
-                    state=state, feed=feed, clock=time.time)  # fmt: skip
+    shown = scene(profile, vehicles=vehicles, show_targets=args.show_targets,
+                  tiles=check_tiles(args.web_tiles))  # fmt: skip
+    page = LivePage(shown, access, state=state, feed=feed, clock=time.time)
     asyncio.run(serve(page, host, port, token_printed=generated))
     return 0
 
 
-def replay_command(run_dir: Path, profile: MissionProfile, web: str) -> int:
+def replay_command(run_dir: Path, profile: MissionProfile, web: str, tiles: str | None) -> int:
     """`companion map --web RUN_DIR`: the run on the page with a time slider."""
     host, port = parse_web(web)
     replay = Replay(run_dir, profile, show_targets=True)
     access, _ = resolve_access(host, read_only=True, token_file=None)
-    page = LivePage(scene(profile, vehicles=len(replay.vehicles), show_targets=True), access,
-                    replay=replay)  # fmt: skip
+    shown = scene(profile, vehicles=len(replay.vehicles), show_targets=True,
+                  tiles=check_tiles(tiles))  # fmt: skip
+    page = LivePage(shown, access, replay=replay)
     if not is_loopback(host):
         print(f"web: serving {run_dir} beyond loopback, read-only", flush=True)
     asyncio.run(serve(page, host, port, token_printed=False))

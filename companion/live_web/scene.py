@@ -8,8 +8,11 @@ from companion.fence_from_profile import fence_for
 from mdm_profiles import MissionProfile
 
 
-def scene(profile: MissionProfile, *, vehicles: int, show_targets: bool) -> dict[str, Any]:
-    """The page's fixed layer, in metres north/east of the profile's origin."""
+def scene(
+    profile: MissionProfile, *, vehicles: int, show_targets: bool, tiles: str | None = None
+) -> dict[str, Any]:
+    """The page's fixed layer, in metres north/east of the profile's origin; ``tiles`` a
+    map-tile URL template the browser draws under it."""
     o = profile.origin
     return {
         "profile": profile.name,
@@ -31,4 +34,5 @@ def scene(profile: MissionProfile, *, vehicles: int, show_targets: bool) -> dict
         else [],
         "real_targets": sum(not t.false_target for t in profile.targets),
         "levels": len(profile.sensors),
+        "tiles": tiles,
     }

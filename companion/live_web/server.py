@@ -156,24 +156,24 @@ async def _socket(page: LivePage, request: web.Request) -> web.WebSocketResponse
 
 
 async def _live_socket(page: LivePage, ws: web.WebSocketResponse) -> None:
+    """A snapshot, then the next once the page has drawn it (its ``ack``) and PUSH_S has
+    passed: a page that draws slowly (a loaded host) gets fewer, current snapshots instead of
+    a queue of old ones."""
     state, clock = page.state, page.clock
     assert state is not None, "a live page has a state"
     assert clock is not None, "a live page has a clock"
     sent: dict[int, int] = {}
-    reader = asyncio.ensure_future(ws.receive())
+    loop = asyncio.get_running_loop()
     try:
         while not ws.closed:
+            started = loop.time()
             await ws.send_str(json.dumps(state.snapshot(clock(), sent)))
-            done, _ = await asyncio.wait({reader}, timeout=PUSH_S)
-            if done:
-                if reader.result().type in (aiohttp.WSMsgType.CLOSE, aiohttp.WSMsgType.CLOSED,
-                                            aiohttp.WSMsgType.ERROR):  # fmt: skip
-                    break
-                reader = asyncio.ensure_future(ws.receive())
+            msg = await ws.receive()
+            if msg.type != aiohttp.WSMsgType.TEXT:
+                break  # closed, closing or an error
+            await asyncio.sleep(max(0.0, started + PUSH_S - loop.time()))
     except (ConnectionResetError, aiohttp.ClientConnectionResetError):
         pass
-    finally:
-        reader.cancel()
 
 
 async def _replay_socket(replay: Replay, ws: web.WebSocketResponse) -> None:

@@ -8,6 +8,7 @@ import logging
 import re
 from pathlib import Path
 
+from companion.live_web.cli_args import add_tiles_argument
 from companion.run_map.writer import write_run_map
 from mdm_profiles import MissionProfile, load_profile
 
@@ -25,6 +26,7 @@ def add_map_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> 
                    help="instead: replay the run on the live page, with a time slider")  # fmt: skip
     p.add_argument("--web-bind", default="127.0.0.1:8765", metavar="[HOST:]PORT",
                    help="where --web serves the page (port 0: any free)")  # fmt: skip
+    add_tiles_argument(p)
 
 
 def logged_vehicles(log_dir: Path) -> list[int]:
@@ -40,7 +42,7 @@ def map_command(args: argparse.Namespace) -> int:
         from companion.live_web.commands import replay_command
 
         return replay_command(args.web, load_profile(args.profile or _run_profile(args.web)),
-                              args.web_bind)  # fmt: skip
+                              args.web_bind, args.web_tiles)  # fmt: skip
     if args.profile is None or args.log_dir is None:
         raise ValueError("companion map needs --profile and --log-dir (or --web RUN_DIR)")
     vehicles = logged_vehicles(args.log_dir)

@@ -39,6 +39,12 @@ def _emulator_modes(run: Path, vehicle: int) -> list[str]:
             if r.get("event") == "mode" and r.get("vehicle") == vehicle]  # fmt: skip
 
 
+def _stale_rows(driver: WebDriver) -> list[str]:
+    return list(driver.execute_script(
+        "return [...document.querySelectorAll('#team tbody tr.stale')].map(r => r.dataset.vehicle)"
+    ))  # fmt: skip
+
+
 @pytest.mark.timeout(300)
 def test_live_page_shows_the_team_moving_and_confirming_and_one_abort_flies_rtl(
     chromium: WebDriver, tmp_path: Path
@@ -80,6 +86,9 @@ def test_live_page_shows_the_team_moving_and_confirming_and_one_abort_flies_rtl(
             assert "RTL" not in _emulator_modes(run, i), _emulator_modes(run, i)
             assert cell(chromium, i, 1) != "RTL"
         assert cell(chromium, 0, 3).startswith(("return", "done")), cell(chromium, 0, 3)
+        # its companion ended with the mission: silent now, so shown stale; the others are not
+        wait_until(lambda: _stale_rows(chromium), 30, "uav0 shown stale, alone",
+                   until=lambda rows: rows == ["0"])  # fmt: skip
         screenshot(chromium, tmp_path, "live-fleet-confirmation")
     finally:
         if fleet.poll() is None:

@@ -1,14 +1,19 @@
-"""A finished fleet run replayed on the page to its end (`companion map --web`), and every
-emulated vehicle heard by a ground station on `companion fleet --gcs`."""
+"""A finished fleet run replayed on the page to its end (`companion map --web`, over the
+user's own map tiles), and every emulated vehicle heard by a ground station on `companion
+fleet --gcs`."""
 
 from __future__ import annotations
 
 import os
 import re
 import signal
+import struct
 import subprocess
 import sys
+import threading
 import time
+import zlib
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -34,10 +39,12 @@ def test_a_finished_run_replays_to_its_end(chromium: WebDriver, tmp_path: Path) 
                          "--speedup", "50", "--duration", "150", "--quiet", timeout=180)  # fmt: skip
     assert done.returncode == 0, done.stderr
     out = tmp_path / "map.out"
+    tiles, asked = _tile_server()
     with out.open("wb") as f:
         server = subprocess.Popen(
             [sys.executable, "-m", "companion.cli", "map", "--web", str(run),
-             "--web-bind", "127.0.0.1:0"],
+             "--web-bind", "127.0.0.1:0",
+             "--web-tiles", f"http://127.0.0.1:{tiles.server_port}/{{z}}/{{x}}/{{y}}.png"],
             stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
         )  # fmt: skip
     try:
@@ -60,10 +67,46 @@ def test_a_finished_run_replays_to_its_end(chromium: WebDriver, tmp_path: Path) 
             ticks = [r for r in read_records(run / f"mission-{i}.jsonl") if r["event"] == "tick"]
             assert (north, east) == (ticks[-1]["north"], ticks[-1]["east"]), i
         assert float(chromium.find_element("id", "clock").text) == pytest.approx(end, abs=1.0)
+        # the user's tile server under the map: the browser asked it for z/x/y tiles
+        assert (
+            int(chromium.execute_script("return document.querySelectorAll('#tiles image').length"))
+            > 0
+        )
+        assert asked, "no tile was asked for"
+        assert all(re.fullmatch(r"/\d+/\d+/\d+\.png", p) for p in asked), asked[:5]
         screenshot(chromium, tmp_path, "replay-end")
     finally:
         os.killpg(server.pid, signal.SIGTERM)
         server.wait(20)
+        tiles.shutdown()
+
+
+def _tile_server() -> tuple[ThreadingHTTPServer, list[str]]:
+    """A tile server on a free port answering every path with one grey 256 px PNG; the
+    paths asked for."""
+    asked: list[str] = []
+    row = b"\x00" + b"\xc8\xc8\xc8" * 256
+    chunks = [(b"IHDR", struct.pack(">IIBBBBB", 256, 256, 8, 2, 0, 0, 0)),
+              (b"IDAT", zlib.compress(row * 256)), (b"IEND", b"")]  # fmt: skip
+    png = b"\x89PNG\r\n\x1a\n" + b"".join(
+        struct.pack(">I", len(d)) + k + d + struct.pack(">I", zlib.crc32(k + d)) for k, d in chunks
+    )
+
+    class Tiles(BaseHTTPRequestHandler):
+        def do_GET(self) -> None:
+            asked.append(self.path)
+            self.send_response(200)
+            self.send_header("Content-Type", "image/png")
+            self.send_header("Content-Length", str(len(png)))
+            self.end_headers()
+            self.wfile.write(png)
+
+        def log_message(self, *_: object) -> None:
+            pass
+
+    server = ThreadingHTTPServer(("127.0.0.1", 0), Tiles)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server, asked
 
 
 @pytest.mark.timeout(180)

@@ -9,6 +9,7 @@ let socket = null;
 let view = null; // [x, y, w, h] of the SVG viewBox
 const tracks = new Map(); // vehicle -> [[north, east], ...]
 let last = null; // the latest snapshot
+let drawnMarks = -1; // detections + confirmations drawn
 
 function el(tag, attrs, parent) {
   const e = document.createElementNS(NS, tag);
@@ -61,8 +62,42 @@ function drawScene() {
   applyView();
 }
 
+// Optional map tiles (--web-tiles): Web Mercator tiles placed in the local metric frame by an
+// equirectangular approximation around the origin (good to a few metres over tens of km).
+const R = 6378137;
+const toLatLon = (n, e) => [scene.origin.lat + (n / R) * 180 / Math.PI,
+  scene.origin.lon + (e / (R * Math.cos(scene.origin.lat * Math.PI / 180))) * 180 / Math.PI];
+const toLocal = (lat, lon) => [(lat - scene.origin.lat) * Math.PI / 180 * R,
+  (lon - scene.origin.lon) * Math.PI / 180 * R * Math.cos(scene.origin.lat * Math.PI / 180)];
+const tileLon = (x, z) => x / 2 ** z * 360 - 180;
+const tileLat = (y, z) => Math.atan(Math.sinh(Math.PI * (1 - 2 * y / 2 ** z))) * 180 / Math.PI;
+
+function drawTiles() {
+  const layer = $("tiles");
+  layer.replaceChildren();
+  const lat0 = scene.origin.lat * Math.PI / 180;
+  const z = Math.max(0, Math.min(19, Math.round(Math.log2(156543.03 * Math.cos(lat0) / metresPerPixel()))));
+  const [x, y, w, h] = view;
+  const [latN, lonW] = toLatLon(-y, x);
+  const [latS, lonE] = toLatLon(-(y + h), x + w);
+  const tx = (lon) => Math.floor((lon + 180) / 360 * 2 ** z);
+  const ty = (lat) => Math.floor((1 - Math.log(Math.tan(lat * Math.PI / 180) + 1 / Math.cos(lat * Math.PI / 180)) / Math.PI) / 2 * 2 ** z);
+  const [x0, x1, y0, y1] = [tx(lonW), tx(lonE), ty(latN), ty(latS)];
+  if ((x1 - x0 + 1) * (y1 - y0 + 1) > 100) return; // zoomed far out: no tiles
+  for (let i = x0; i <= x1; i++) {
+    for (let j = y0; j <= y1; j++) {
+      const [n0, e0] = toLocal(tileLat(j, z), tileLon(i, z));
+      const [n1, e1] = toLocal(tileLat(j + 1, z), tileLon(i + 1, z));
+      const href = scene.tiles.replace("{z}", z).replace("{x}", i).replace("{y}", j);
+      el("image", { href, x: e0, y: -n0, width: e1 - e0, height: n0 - n1, preserveAspectRatio: "none",
+        class: "tile" }, layer);
+    }
+  }
+}
+
 function applyView() {
   $("map").setAttribute("viewBox", view.join(" "));
+  if (scene.tiles) drawTiles();
   const px = metresPerPixel();
   for (const t of document.querySelectorAll("#grid text")) t.setAttribute("font-size", 10 * px);
   for (const t of document.querySelectorAll("#targets text")) t.setAttribute("font-size", 16 * px);
@@ -102,21 +137,24 @@ function update(s) {
     let line = document.querySelector(`#tracks polyline[data-vehicle="${v.vehicle}"]`);
     if (!line) line = el("polyline", { "data-vehicle": v.vehicle, fill: "none", stroke: color(v.vehicle),
       "stroke-width": 1.5, "vector-effect": "non-scaling-stroke", opacity: 0.7 }, $("tracks"));
-    line.setAttribute("points", track.map(([n, e]) => pt(n, e)).join(" "));
+    if (v.track.length || s.reset) line.setAttribute("points", track.map(([n, e]) => pt(n, e)).join(" "));
     if (v.north === null || v.east === null) continue;
     const g = vehicleMarker(v);
-    g.setAttribute("transform", `translate(${pt(v.north, v.east)})`);
+    const where = `translate(${pt(v.north, v.east)})`;
+    if (g.getAttribute("transform") !== where) g.setAttribute("transform", where);
     g.dataset.north = v.north;
     g.dataset.east = v.east;
     g.classList.toggle("stale", v.stale);
     g.querySelector("circle").setAttribute("fill", v.stale ? "#999" : color(v.vehicle));
   }
-  drawMarks(s);
+  const marks = s.detections.length + s.confirmations.length;
+  if (marks !== drawnMarks || s.reset) drawMarks(s);
   drawTable(s);
   drawCommands(s.commands);
 }
 
 function drawMarks(s) {
+  drawnMarks = s.detections.length + s.confirmations.length;
   const px = metresPerPixel();
   const marks = $("marks");
   marks.replaceChildren();
@@ -161,6 +199,7 @@ function drawTable(s) {
     const cells = [`uav${v.vehicle}`, v.mode, armed, phase, level, fmt(v.ci, 3), v.found,
       fmt(v.alt, 1), fmt(v.battery, 0), scene.replay ? "-" : fmt(v.age, 1)];
     cells.forEach((text, k) => { row.children[k].textContent = text === null ? "-" : text; });
+    row.children[3].title = phase || "";
     row.children[0].style.color = color(v.vehicle);
     row.classList.toggle("stale", v.stale);
     commandButtons(row.lastChild, String(v.vehicle));
@@ -217,7 +256,10 @@ function connect() {
   socket.onmessage = (m) => {
     const s = JSON.parse(m.data);
     if (s.type === "error") { $("message").textContent = s.error; return; }
-    if (s.type === "snapshot") update(s);
+    if (s.type === "snapshot") {
+      update(s);
+      if (!scene.replay) socket.send("ack"); // drawn: the server may send the next
+    }
     if (s.at !== undefined) $("at").textContent = s.at.toFixed(0);
   };
 }
