@@ -85,7 +85,7 @@ def format_rows(ask: SweepAsk, rows: list[PointRow]) -> str:
     ]
     for r in rows:
         ts = (
-            "| |"
+            " |"  # two empty cells
             if r.ts is None
             else (f"{r.ts.mean:.0f} ± {r.ts.std:.0f} | [{r.ts.ci_low:.0f}, {r.ts.ci_high:.0f}]")
         )

@@ -11,12 +11,16 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
 import pyarrow.parquet as pq
 import pytest
 from distributed import LocalCluster
 
+from mdm_core import metrics
 from mdm_montecarlo.cli import main
 from mdm_montecarlo.result_files import report_provenance
+from mdm_montecarlo.sweep import SweepAsk
+from mdm_montecarlo.sweep_table import PointRow, format_rows
 from tests.waiting import wait_until
 
 EXE = [sys.executable, "-m", "mdm_montecarlo.cli"]
@@ -129,3 +133,11 @@ def test_bad_fields_and_values_are_refused_before_any_work(
     assert main([*argv, "--out", str(out)]) == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_point_without_t_s_keeps_the_tables_columns() -> None:
+    ask = SweepAsk("paper-fixed", "PSO", [], [("fleet.vehicles", ["6"])], 3, 1)
+    tnc = metrics.Summary.of(np.array([1, 2, 3]))
+    lines = format_rows(ask, [PointRow(0, {"fleet.vehicles": "6"}, 3, tnc, None, None)])
+    head, _, row = lines.splitlines()
+    assert row.count("|") == head.count("|")
