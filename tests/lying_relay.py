@@ -109,7 +109,8 @@ class LyingRelay:
 
     def stop(self) -> None:
         self._stop.set()
-        self._thread.join(timeout=5)
+        if self._thread.is_alive():
+            self._thread.join(timeout=5)
         for s in (self._from_vehicle, self._to_companion):
             if s is not None:
                 s.close()

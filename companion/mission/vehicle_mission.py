@@ -645,14 +645,16 @@ class VehicleMission:
                 next_line = time.perf_counter() + _LINK_LINE_S
                 log.warning("vehicle %d: link lost for %.0f s; waiting up to %g s for it",
                             self.config.vehicle, silent, wait)  # fmt: skip
-            await asyncio.sleep(backoff * (1 + random.random()))  # jittered backoff
+            give_up = self.last_heartbeat_wall + wait  # no wait below runs past it
+            left = max(give_up - time.perf_counter(), 0.0)
+            await asyncio.sleep(min(backoff * (1 + random.random()), left))  # jittered backoff
             backoff = min(backoff * 2, 8.0)
             try:
                 await self.link.reconnect()
             except (OSError, LinkError) as exc:
                 log.warning("reconnect failed: %s", exc)
                 continue
-            deadline = time.perf_counter() + 2.0 * self.config.link_timeout
+            deadline = min(time.perf_counter() + 2.0 * self.config.link_timeout, give_up)
             while time.perf_counter() < deadline:
                 await asyncio.sleep(0.1)
                 if time.perf_counter() - self.last_heartbeat_wall < 1.0:
