@@ -203,7 +203,8 @@ def write_report(
         *summary(measured, docs, claims),
         *outside_table(measured, docs),
         *comparison_section(rows, results),
-        "Single-sensor AISE/AISC are against the MDM row of the same table and scenario "
+        "Single-sensor and swarm AISE/AISC are against the MDM row of the same table, scenario "
+        "and variant (the default MDM row where the variant has none) "
         "(blank where the single-sensor row's mean is 0: a percentage of it is undefined); "
         "'follows peer %' is the share of a swarm's particle-iterations that followed a best "
         "heard from another vehicle.",
