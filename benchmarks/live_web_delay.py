@@ -34,9 +34,8 @@ from pathlib import Path
 
 import paho.mqtt.client as mqtt
 from paho.mqtt.enums import CallbackAPIVersion
-
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from tests import browser
+from selenium import webdriver
+from selenium.webdriver.chrome.service import Service
 
 _URL = re.compile(r"live page (http://\S+)")
 _WATCH_JS = """
@@ -54,6 +53,16 @@ new MutationObserver((records) => {
   }
 }).observe(document.getElementById('vehicles'), {attributes: true, subtree: true});
 """
+
+
+def _chromium(profile: Path) -> webdriver.Chrome:
+    """Debian's headless Chromium and chromedriver (nothing downloaded), a fresh profile."""
+    options = webdriver.ChromeOptions()
+    options.binary_location = "/usr/bin/chromium"
+    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1600,1000",
+                 f"--user-data-dir={profile}"):  # fmt: skip
+        options.add_argument(flag)
+    return webdriver.Chrome(options=options, service=Service("/usr/bin/chromedriver"))
 
 
 def _cpu_s(pid: int) -> float:
@@ -121,7 +130,7 @@ def main() -> int:
             if time.monotonic() > deadline or fleet.poll() is not None:
                 raise SystemExit(f"no live page:\n{out.read_text()}")
             time.sleep(0.5)
-        driver = browser.start(work / "chromium")
+        driver = _chromium(work / "chromium")
         driver.get(m.group(1))
         time.sleep(5)
         driver.execute_script(_WATCH_JS)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import pytest
 
@@ -13,9 +13,6 @@ from tests import sitl
 from tests.markers import MARKERS, markers_for
 from tests.mqtt_harness import clear_retained_of_this_run
 from tests.services import missing
-
-if TYPE_CHECKING:
-    from selenium.webdriver.chrome.webdriver import WebDriver
 
 pytest_plugins = ["tests.service_fixtures"]
 
@@ -75,24 +72,6 @@ def sitl_start(tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:
     """For a test whose autopilot is a parameter: ``sitl_start(kind, home=..., speedup=...)``
     starts an instance of ``kind`` as ``arducopter`` / ``px4`` do (skipping where there is none)."""
     yield from _sitl_starter(tmp_path)
-
-
-@pytest.fixture
-def chromium(tmp_path: Path) -> Iterator[WebDriver]:
-    """Headless Chromium (Debian's, through Selenium and /usr/bin/chromedriver) with a fresh
-    profile; skips naming what is missing (fails under CI=true); quit at teardown."""
-    from tests import browser
-
-    why = browser.missing_parts()
-    if why is not None:
-        if browser.in_ci():
-            pytest.fail(f"CI=true and {why}", pytrace=False)
-        pytest.skip(why)
-    driver = browser.start(tmp_path / "chromium-profile")
-    try:
-        yield driver
-    finally:
-        driver.quit()
 
 
 @pytest.fixture(scope="session", autouse=True)

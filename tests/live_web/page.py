@@ -31,6 +31,12 @@ def page_url(output: Path, process: subprocess.Popen[bytes], timeout: float = 60
                           context=output.read_text))  # fmt: skip
 
 
+def open_page(driver: WebDriver, url: str) -> None:
+    """``url`` in a window wide enough for the map and the whole table."""
+    driver.set_window_size(1600, 1000)
+    driver.get(url)
+
+
 def markers(driver: WebDriver) -> dict[int, tuple[float, float]]:
     """Vehicle -> (north, east) of every marker drawn."""
     found = driver.execute_script(

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from tests.live_web.page import command, screenshot
+from tests.live_web.page import command, open_page, screenshot
 from tests.mqtt_harness import Message, Subscriber
 from tests.waiting import wait_until
 
@@ -27,12 +27,14 @@ if TYPE_CHECKING:
 _URL = re.compile(r"web: (http://\S+)")
 
 
-def _watch(tmp_path: Path, prefix: str, *flags: str) -> tuple[subprocess.Popen[bytes], str]:
-    """`companion watch` on the broker at 1883; its process and printed address."""
+def _watch(
+    tmp_path: Path, port: int, prefix: str, *flags: str
+) -> tuple[subprocess.Popen[bytes], str]:
+    """`companion watch` on the broker at 127.0.0.1:``port``; its process and printed address."""
     out = tmp_path / "watch.out"
     with out.open("wb") as f:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "companion.cli", "watch", "--mqtt", "127.0.0.1:1883",
+            [sys.executable, "-m", "companion.cli", "watch", "--mqtt", f"127.0.0.1:{port}",
              "--mqtt-prefix", prefix, *flags],
             stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
         )  # fmt: skip
@@ -69,17 +71,17 @@ def _stop(proc: subprocess.Popen[bytes]) -> None:
 
 @pytest.mark.timeout(180)
 def test_a_command_without_the_token_on_a_non_loopback_bind_is_refused(
-    chromium: WebDriver, tmp_path: Path
+    chromium: WebDriver, mqtt_broker: int, tmp_path: Path
 ) -> None:
     prefix = f"mdm/test-{os.getpid()}-liveweb-token"
-    sub = Subscriber(1883, f"{prefix}/#", tmp_path / "sub.txt")
-    sub.ready(1883, f"{prefix}/probe")
-    proc, url = _watch(tmp_path, prefix, "--web", "0.0.0.0:0")
+    sub = Subscriber(mqtt_broker, f"{prefix}/#", tmp_path / "sub.txt")
+    sub.ready(mqtt_broker, f"{prefix}/probe")
+    proc, url = _watch(tmp_path, mqtt_broker, prefix, "--web", "0.0.0.0:0")
     try:
         token = url.partition("#token=")[2]
         assert len(token) >= 16, f"no token printed for a bind to 0.0.0.0: {url}"
         local = url.partition("#")[0].replace("0.0.0.0", "127.0.0.1")
-        chromium.get(local)  # without the token
+        open_page(chromium, local)  # without the token
         wait_until(lambda: chromium.find_element("id", "token-box").is_displayed(), 20,
                    "the token box of a page that needs one")  # fmt: skip
         command(chromium, "all", "pause")
@@ -105,13 +107,15 @@ def test_a_command_without_the_token_on_a_non_loopback_bind_is_refused(
 
 
 @pytest.mark.timeout(120)
-def test_read_only_and_bad_requests_are_refused_with_a_clear_error(tmp_path: Path) -> None:
+def test_read_only_and_bad_requests_are_refused_with_a_clear_error(
+    mqtt_broker: int, tmp_path: Path
+) -> None:
     prefix = f"mdm/test-{os.getpid()}-liveweb-ro"
-    sub = Subscriber(1883, f"{prefix}/#", tmp_path / "sub.txt")
-    sub.ready(1883, f"{prefix}/probe")
-    proc, url = _watch(tmp_path, prefix, "--web", "127.0.0.1:0", "--web-read-only")
+    sub = Subscriber(mqtt_broker, f"{prefix}/#", tmp_path / "sub.txt")
+    sub.ready(mqtt_broker, f"{prefix}/probe")
+    proc, url = _watch(tmp_path, mqtt_broker, prefix, "--web", "127.0.0.1:0", "--web-read-only")
     (tmp_path / "open").mkdir()
-    open_proc, open_url = _watch(tmp_path / "open", prefix, "--web", "127.0.0.1:0")
+    open_proc, open_url = _watch(tmp_path / "open", mqtt_broker, prefix, "--web", "127.0.0.1:0")
     try:
         status, answer = _post(url, b'{"vehicle": 0, "command": "abort"}')
         assert status == 403

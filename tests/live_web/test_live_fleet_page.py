@@ -12,7 +12,7 @@ import pytest
 
 from companion.telemetry.mission_log import read_records
 from tests.fleet_cli import start_fleet
-from tests.live_web.page import cell, command, count, markers, page_url, screenshot
+from tests.live_web.page import cell, command, count, markers, open_page, page_url, screenshot
 from tests.mqtt_harness import retained_topics
 from tests.profile_files import sensors, write_profile_with
 from tests.waiting import wait_until
@@ -47,17 +47,18 @@ def _stale_rows(driver: WebDriver) -> list[str]:
 
 @pytest.mark.timeout(300)
 def test_live_page_shows_the_team_moving_and_confirming_and_one_abort_flies_rtl(
-    chromium: WebDriver, tmp_path: Path
+    chromium: WebDriver, mqtt_broker: int, fleet_processes: Path
 ) -> None:
+    tmp_path = fleet_processes
     prefix = f"mdm/test-{os.getpid()}-liveweb"
     run, output = tmp_path / "run", tmp_path / "fleet.out"
     fleet = start_fleet(
         "--profile", str(_profile(tmp_path)), "--out", str(run), "--speedup", "10",
         "--duration", "900", "--seed", "3", "--land-wait", "100", "--web", "127.0.0.1:0",
-        "--mqtt", "127.0.0.1:1883", "--mqtt-prefix", prefix, output=output,
+        "--mqtt", f"127.0.0.1:{mqtt_broker}", "--mqtt-prefix", prefix, output=output,
     )  # fmt: skip
     try:
-        chromium.get(page_url(output, fleet))
+        open_page(chromium, page_url(output, fleet))
         first = wait_until(lambda: markers(chromium), 60, f"{VEHICLES} vehicle markers",
                            until=lambda m: len(m) == VEHICLES)  # fmt: skip
         assert count(chromium, "#team tbody tr") == VEHICLES
@@ -98,4 +99,4 @@ def test_live_page_shows_the_team_moving_and_confirming_and_one_abort_flies_rtl(
             except Exception:
                 os.killpg(fleet.pid, signal.SIGKILL)
                 raise
-        retained_topics(1883, f"{prefix}/#", remove=True)
+        retained_topics(mqtt_broker, f"{prefix}/#", remove=True)

@@ -22,7 +22,7 @@ from pymavlink import mavutil
 
 from companion.telemetry.mission_log import read_records
 from tests.fleet_cli import run_fleet_cli, small_profile, start_fleet
-from tests.live_web.page import markers, screenshot
+from tests.live_web.page import markers, open_page, screenshot
 from tests.mqtt_harness import free_port
 from tests.waiting import wait_until
 
@@ -33,7 +33,8 @@ _URL = re.compile(r"web: (http://\S+)")
 
 
 @pytest.mark.timeout(240)
-def test_a_finished_run_replays_to_its_end(chromium: WebDriver, tmp_path: Path) -> None:
+def test_a_finished_run_replays_to_its_end(chromium: WebDriver, fleet_processes: Path) -> None:
+    tmp_path = fleet_processes
     run = tmp_path / "run"
     done = run_fleet_cli("--profile", small_profile(tmp_path), "--out", str(run),
                          "--speedup", "50", "--duration", "150", "--quiet", timeout=180)  # fmt: skip
@@ -51,7 +52,7 @@ def test_a_finished_run_replays_to_its_end(chromium: WebDriver, tmp_path: Path) 
         m = wait_until(lambda: _URL.search(out.read_text()), 60, "the replay's address",
                        context=out.read_text)  # fmt: skip
         assert m is not None
-        chromium.get(m.group(1))
+        open_page(chromium, m.group(1))
         wait_until(lambda: chromium.find_element("id", "replay").is_displayed(), 20, "the slider")
         end = float(chromium.find_element("id", "end").text)
         assert chromium.find_elements("css selector", "button[data-command]") == []  # read-only
@@ -110,7 +111,8 @@ def _tile_server() -> tuple[ThreadingHTTPServer, list[str]]:
 
 
 @pytest.mark.timeout(180)
-def test_a_ground_station_on_the_gcs_port_hears_every_vehicle(tmp_path: Path) -> None:
+def test_a_ground_station_on_the_gcs_port_hears_every_vehicle(fleet_processes: Path) -> None:
+    tmp_path = fleet_processes
     port = free_port()
     gcs = mavutil.mavlink_connection(f"udpin:127.0.0.1:{port}")
     fleet = start_fleet("--profile", small_profile(tmp_path), "--out", str(tmp_path / "run"),
