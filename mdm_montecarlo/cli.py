@@ -8,9 +8,7 @@ import gc
 import importlib
 import json
 import os
-import resource
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -18,7 +16,12 @@ from pathlib import Path
 from tqdm import tqdm
 
 from mdm_montecarlo.compare_command import add_compare_parser, compare_command
-from mdm_montecarlo.result_files import append_provenance, case_columns, write_result_files
+from mdm_montecarlo.result_files import (
+    append_provenance,
+    case_columns,
+    check_writable,
+    write_result_files,
+)
 from mdm_montecarlo.runner import MissionResults, RunInterruptedError, run_many
 from mdm_montecarlo.study import TABLES, Case, Row, study_rows
 from mdm_montecarlo.sweep_command import add_sweep_parser, sweep_command
@@ -26,7 +29,7 @@ from mdm_montecarlo.tables import MeasuredRow, format_table, measured_rows
 from mdm_montecarlo.variants import with_method
 from mdm_profiles import MissionProfile, ProfileError, load_profile
 from mdm_profiles.overrides import apply_overrides
-from mdm_provenance import add_version_flag, collect
+from mdm_provenance import add_version_flag, collect, cpu_seconds
 
 INTERRUPTED = 130
 """Exit status after Ctrl-C (128 + SIGINT, as a shell reports it)."""
@@ -110,16 +113,6 @@ def _workers(n: int | None) -> int:
     return n if n is not None else (os.cpu_count() or 1)
 
 
-def _check_writable(folder: Path) -> None:
-    """Fail before any simulation if the report folder cannot be created or written."""
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=folder):
-            pass
-    except OSError as exc:
-        raise ValueError(f"--out {folder}: not a writable folder ({exc.strerror or exc})") from None
-
-
 def _simulate(
     profiles: list[MissionProfile],
     args: argparse.Namespace,
@@ -161,7 +154,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.method:
         profile = with_method(profile, args.method)
     out = Path(args.out or time.strftime("reports/run-%Y%m%d-%H%M%S", time.gmtime()))
-    _check_writable(out)
+    check_writable(out)
     start = time.perf_counter()
     try:
         res = _simulate([profile], args, profile.name)[0]
@@ -208,13 +201,6 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cpu_seconds() -> float:
-    """User + system CPU of this process and of its finished children (workers, plotters)."""
-    own = resource.getrusage(resource.RUSAGE_SELF)
-    children = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
-
-
 def _import_report() -> None:
     """The report's imports, which the simulation workers do not need: matplotlib and
     scipy.special (metrics.Summary's t quantile), about 0.6 CPU-s. Done while the workers
@@ -229,9 +215,9 @@ def _reproduce(args: argparse.Namespace) -> int:
     cases = list(dict.fromkeys(r.case for r in rows))
     profiles = [apply_overrides(c.profile(), args.set) for c in cases]
     out = Path(args.out)
-    _check_writable(out)
+    check_writable(out)
     start = time.perf_counter()
-    cpu_start = _cpu_seconds()
+    cpu_start = cpu_seconds()
     partial = ""
     try:
         results = dict(
@@ -244,7 +230,7 @@ def _reproduce(args: argparse.Namespace) -> int:
         partial = f"{len(results)} of {len(cases)} configurations finished"
         rows = [r for r in rows if r.case in results]
     wall = time.perf_counter() - start
-    cpu_simulated = _cpu_seconds()
+    cpu_simulated = cpu_seconds()
     if partial and not rows:
         print(f"mdm-montecarlo: interrupted; {partial}, no report written", file=sys.stderr)
         return INTERRUPTED
@@ -275,7 +261,7 @@ def _reproduce(args: argparse.Namespace) -> int:
         f"phases: start-up {cpu_start:.1f} CPU-s; simulation {wall:.1f} s wall, "
         f"{cpu_simulated - cpu_start:.1f} CPU-s; report "
         f"{time.perf_counter() - start - wall:.1f} s wall, "
-        f"{_cpu_seconds() - cpu_simulated:.1f} CPU-s",
+        f"{cpu_seconds() - cpu_simulated:.1f} CPU-s",
         file=sys.stderr,
     )
     return 0

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -29,6 +30,16 @@ def case_columns(case: Case) -> dict[str, str | int | float]:
         "n_false": case.n_false,
         "variant": case.variant,
     }
+
+
+def check_writable(folder: Path) -> None:
+    """Fail before any simulation if the report folder cannot be created or written."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise ValueError(f"--out {folder}: not a writable folder ({exc.strerror or exc})") from None
 
 
 def write_result_files(

@@ -8,14 +8,13 @@ import argparse
 import json
 import os
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 from tqdm import tqdm
 
-from mdm_montecarlo.result_files import PROVENANCE_FILE, append_provenance
+from mdm_montecarlo.result_files import PROVENANCE_FILE, append_provenance, check_writable
 from mdm_montecarlo.samples import RUNS, write_tables
 from mdm_montecarlo.sweep import (
     SweepAsk,
@@ -62,15 +61,6 @@ def add_sweep_parser(
     common(p)
 
 
-def _writable(folder: Path) -> None:
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=folder):
-            pass
-    except OSError as exc:
-        raise ValueError(f"--out {folder}: not a writable folder ({exc.strerror or exc})") from None
-
-
 def sweep_command(args: argparse.Namespace) -> int:
     ask = SweepAsk(
         profile=args.profile,
@@ -83,7 +73,7 @@ def sweep_command(args: argparse.Namespace) -> int:
     base = load_profile(args.profile)
     every = points(base, ask)  # every point validated before any run
     folder = Path(args.out or f"reports/sweep-{base.name}")
-    _writable(folder)
+    check_writable(folder)
     open_folder(folder, ask)
     todo = [p for p in every if not done(folder, p.index)]
     if len(todo) < len(every):

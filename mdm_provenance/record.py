@@ -59,6 +59,7 @@ def version_text(prog: str) -> str:
 
 
 def cpu_seconds() -> float:
+    """User + system CPU of this process and of its finished children (workers, plotters)."""
     own = resource.getrusage(resource.RUSAGE_SELF)
     children = resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
