@@ -14,7 +14,14 @@ from hypothesis import strategies as st
 
 from companion.geofence import Geofence
 from companion.guidance import GuidanceConfig, NedSetpoint, pursuit_xy
-from companion.link.messages import LinkEvent, LocalPosition, SensorContact, SensorSignal
+from companion.link.local_frame import LocalFrame
+from companion.link.messages import (
+    GlobalPosition,
+    LinkEvent,
+    LocalPosition,
+    SensorContact,
+    SensorSignal,
+)
 from companion.link.pymavlink_link import PymavlinkLink
 from companion.link.telemetry_guard import TelemetryLimits
 from companion.mission.setpoint_guard import SetpointGuard
@@ -98,6 +105,38 @@ def test_only_finite_sensor_readings_leave_the_link(
         else:
             assert isinstance(event, SensorSignal)
             assert math.isfinite(event.value)
+
+
+INT32 = st.one_of(st.integers(-(2**31), 2**31 - 1), st.sampled_from([2**31 - 1, -(2**31), 0]))
+ORIGIN = LocalFrame(47.397742, 8.545594, 488.0)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 2**32 - 1), INT32, INT32, INT32), min_size=1,
+                max_size=30))  # fmt: skip
+def test_only_gps_positions_on_earth_leave_the_link(
+    samples: list[tuple[int, int, int, int]],
+) -> None:
+    """GLOBAL_POSITION_INT (read by geo-referenced profiles) at any int32 lat/lon/altitude."""
+    link = PymavlinkLink(url="udpin:127.0.0.1:1", target_system=1)
+    link.use_profile_frame(ORIGIN)
+    assert link.alignment is not None
+    link.alignment.from_global_origin(ORIGIN.lat, ORIGIN.lon, ORIGIN.alt)
+    got: list[LinkEvent] = []
+    link.listener = got.extend
+    mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+    for t, lat, lon, alt in samples:
+        msg = mav.global_position_int_encode(t, lat, lon, alt, alt, 0, 0, 0, 0)
+        link._receive(bytes(msg.pack(mav)), ("127.0.0.1", 5))
+        link._publish_pending()
+    outside = sum((lat, lon) != (0, 0) and (abs(lat) > 900_000_000 or abs(lon) > 1_800_000_000)
+                  for _, lat, lon, _ in samples)  # fmt: skip
+    assert link.guard.dropped["lat/lon out of range"] == outside
+    for event in got:
+        assert isinstance(event, GlobalPosition)
+        assert -90.0 <= event.lat <= 90.0, event
+        assert -180.0 <= event.lon <= 180.0, event
+        assert max(abs(event.north), abs(event.east)) <= link.guard.limits.max_distance
 
 
 @settings(max_examples=300, deadline=None)
