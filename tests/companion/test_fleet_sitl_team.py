@@ -9,17 +9,21 @@ from __future__ import annotations
 import json
 import os
 import signal
+import subprocess
 import time
 from pathlib import Path
 
 import pytest
 
+from companion.fleet.sitl_team import boot_points
+from mdm_profiles import load_profile
 from tests import sitl
 from tests.companion.sitl_observer import Observer
 from tests.companion.sitl_team import (
     ON_GROUND,
     fence_polygon,
     figures,
+    metres,
     observe,
     separation_breaches,
     team_of,
@@ -50,6 +54,22 @@ def _close(observers: dict[int, Observer]) -> None:
 
 def _tail(path: Path) -> str:
     return path.read_text(errors="replace")[-3000:] if path.exists() else "(no output)"
+
+
+def _searching(observers: dict[int, Observer]) -> bool:
+    return all(o.snapshot().alt > 30.0 for o in observers.values())
+
+
+def _rtl_delays(observers: dict[int, Observer], kinds: dict[int, str]) -> dict[int, float]:
+    """Wall s from now until each observer sees its vehicle in RTL (up to 60 s)."""
+    asked = time.monotonic()
+    home: dict[int, float] = {}
+    while len(home) < len(observers) and time.monotonic() - asked < 60.0:
+        for i, o in observers.items():
+            if i not in home and o.snapshot().mode == RTL[kinds[i]]:
+                home[i] = round(time.monotonic() - asked, 2)
+        time.sleep(0.05)
+    return home
 
 
 def test_a_mixed_sitl_team_searches_inside_the_fence_in_its_layers_and_lands(
@@ -84,6 +104,14 @@ def test_a_mixed_sitl_team_searches_inside_the_fence_in_its_layers_and_lands(
         assert f.outside == 0, lines[-1]
         assert abs(f.layer - layers[i]) <= 2.0, lines[-1]
         assert f.end == "landed, disarmed", lines[-1]
+    # each booted at its start point: the profile's spacing kept from the ground up
+    homes = boot_points(load_profile(str(profile)), SEED, sorted(kinds))
+    starts = {i: (float(h.split(",")[0]), float(h.split(",")[1])) for i, h in homes.items()}
+    for i, t in traces.items():
+        lat, lon, _, _ = t.track[0]
+        assert metres(starts[i], (lat, lon)) < 15.0, (i, starts[i], (lat, lon))
+    spacing = min(metres(starts[i], starts[j]) for i in starts for j in starts if i < j)
+    lines.append(f"closest start points {spacing:.0f} m apart")
     breaches = separation_breaches(traces)
     print("\n" + "\n".join(lines) + f"\nseparation breaches: {len(breaches)}")
     assert breaches == [], breaches[:5]
@@ -107,21 +135,11 @@ def test_ctrl_c_mid_search_brings_every_vehicle_home_and_exits_130(
         team = team_of(out)
         observers = observe(team)
         kinds = {e.index: str(e.autopilot) for e in team}
-
-        def searching() -> bool:
-            return all(o.snapshot().alt > 30.0 for o in observers.values())
-
-        wait_until(searching, 600.0, "every vehicle at its search altitude",
+        wait_until(lambda: _searching(observers), 600.0, "every vehicle at its search altitude",
                    context=lambda: _tail(tmp_path / "fleet.out"))  # fmt: skip
         time.sleep(5.0)
         os.killpg(fleet.pid, signal.SIGINT)  # a terminal's Ctrl-C reaches the foreground group
-        asked = time.monotonic()
-        home: dict[int, float] = {}
-        while len(home) < len(observers) and time.monotonic() - asked < 60.0:
-            for i, o in observers.items():
-                if i not in home and o.snapshot().mode == RTL[kinds[i]]:
-                    home[i] = time.monotonic() - asked
-            time.sleep(0.05)
+        home = _rtl_delays(observers, kinds)
         print(f"\nwall s from the fleet's SIGINT to each vehicle in RTL (its observer): {home}")
         code = fleet.wait(timeout=900)
         traces = {i: o.snapshot() for i, o in observers.items()}
@@ -154,11 +172,7 @@ def test_a_killed_autopilot_is_named_and_the_other_three_complete_their_search(
         team = team_of(out)
         observers = observe(team)
         kinds = {e.index: str(e.autopilot) for e in team}
-
-        def searching() -> bool:
-            return all(o.snapshot().alt > 30.0 for o in observers.values())
-
-        wait_until(searching, 600.0, "every vehicle at its search altitude",
+        wait_until(lambda: _searching(observers), 600.0, "every vehicle at its search altitude",
                    context=lambda: _tail(tmp_path / "fleet.out"))  # fmt: skip
         pids = processes_naming(str(out / f"sitl-{victim}"))
         assert pids, "the PX4 instance of vehicle 1 was not found"
@@ -186,3 +200,40 @@ def test_a_killed_autopilot_is_named_and_the_other_three_complete_their_search(
         assert f.end == "landed, disarmed", f.line(i, kinds[i])
     print(f"\n{lost['name']}: {lost['how']}")
     assert not processes_naming(str(out)), "SITL or companion processes left running"
+
+
+def test_an_mqtt_abort_to_all_brings_every_vehicle_home_as_a_normal_end(
+    sitl_both: None, mqtt_broker: int, tmp_path: Path
+) -> None:
+    profile = team_profile(tmp_path, vehicles=2, seed=SEED, duration=600.0)
+    prefix = f"mdm/sitl-{os.getpid()}"
+    out = tmp_path / "run"
+    fleet = start_fleet("--profile", str(profile), "--sitl", "mixed", "--sitl-speedup",
+                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600",
+                        "--mqtt", f"127.0.0.1:{mqtt_broker}", "--mqtt-prefix", prefix, "--quiet",
+                        output=tmp_path / "fleet.out")  # fmt: skip
+    observers: dict[int, Observer] = {}
+    try:
+        team = team_of(out)
+        observers = observe(team)
+        kinds = {e.index: str(e.autopilot) for e in team}
+        wait_until(lambda: _searching(observers), 600.0, "every vehicle at its search altitude",
+                   context=lambda: _tail(tmp_path / "fleet.out"))  # fmt: skip
+        subprocess.run(["mosquitto_pub", "-h", "127.0.0.1", "-p", str(mqtt_broker), "-q", "1",
+                        "-t", f"{prefix}/all/cmd", "-m", '{"command": "abort"}'],
+                       check=True, timeout=20)  # fmt: skip
+        delays = _rtl_delays(observers, kinds)
+        print(f"\nwall s from the MQTT abort (all) to each vehicle in RTL (its observer): {delays}")
+        code = fleet.wait(timeout=900)
+        traces = {i: o.snapshot() for i, o in observers.items()}
+    finally:
+        if fleet.poll() is None:
+            os.killpg(fleet.pid, signal.SIGKILL)
+        _close(observers)
+    assert code == 0, _tail(tmp_path / "fleet.out")
+    assert sorted(delays) == sorted(kinds)
+    for i, t in traces.items():
+        f = figures(t, kinds[i], fence_polygon(profile))
+        assert f.end == "landed, disarmed", f.line(i, kinds[i])
+    result = json.loads((out / "results.json").read_text())
+    assert {e["how"] for e in result["ends"]} == {"operator abort"}, result["ends"]
