@@ -30,6 +30,7 @@ class MqttFeed:
             self.channel.subscribe(f"{prefix}/+/{leaf}", self._on_message)
         self.refused = 0
         """Messages on the team's topics that were not understood (logged)."""
+        self._last_seq: dict[int, int] = {}
 
     def _on_message(self, msg: Received) -> None:
         m = _TOPIC.fullmatch(msg.topic[len(self.prefix) + 1 :])
@@ -49,8 +50,18 @@ class MqttFeed:
             self.state.on_state(vehicle, payload, wall)
         elif leaf == "status":
             self.state.on_status(vehicle, payload, wall)
-        else:
+        elif self._fresh(vehicle, payload.get("seq")):
             self.state.on_event(vehicle, payload, wall)
+
+    def _fresh(self, vehicle: int, seq: Any) -> bool:
+        """Not an event seen already: QoS 1 may deliver one twice after a reconnect, and a
+        vehicle's ``seq`` only grows (docs/mqtt.md)."""
+        if isinstance(seq, bool) or not isinstance(seq, int):
+            return True
+        if seq <= self._last_seq.get(vehicle, -1):
+            return False
+        self._last_seq[vehicle] = seq
+        return True
 
     async def send(self, vehicle: int | None, command: str, ref: str) -> None:
         """Publish one command (QoS 1, not retained); raises aiomqtt.MqttError when the broker

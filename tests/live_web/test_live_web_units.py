@@ -12,7 +12,10 @@ from companion.fleet.gcs import parse_gcs
 from companion.live_web.access import AccessError, resolve_access
 from companion.live_web.cli_args import parse_web
 from companion.live_web.fleet_state import CommandOutcome, FleetState
+from companion.live_web.mqtt_feed import MqttFeed
 from companion.live_web.replay import Replay
+from companion.telemetry.mqtt.channel import Received
+from companion.telemetry.mqtt.settings import MqttSettings
 from tests.profile_files import profile_with
 
 
@@ -123,3 +126,13 @@ def test_tnc_counts_real_targets_within_the_confirmation_radius() -> None:
 def test_a_directory_without_mission_logs_is_refused(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match=r"no mission-I\.jsonl"):
         Replay(tmp_path, profile_with("units"), show_targets=True)
+
+
+def test_an_event_delivered_twice_counts_once() -> None:
+    s = _state()
+    feed = MqttFeed(MqttSettings("127.0.0.1"), "mdm/units", s)  # not connected: fed by hand
+    event = b'{"seq": 7, "vehicle": 2, "t": 3.0, "event": "detection", "north": 1.0, "east": 2.0, "level": 0}'
+    for payload in (event, event, b"not json", b"[1]"):
+        feed._on_message(Received("mdm/units/uav2/event", payload, retained=False))
+    assert len(s.detections) == 1
+    assert feed.refused == 2
