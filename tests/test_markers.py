@@ -6,7 +6,6 @@ from __future__ import annotations
 import pytest
 
 from tests.markers import MARKERS, markers_for
-from tests.services import in_ci, missing
 
 
 @pytest.mark.parametrize(
@@ -48,24 +47,3 @@ def test_a_test_using_the_broker_is_marked_broker(
 ) -> None:
     assert request.node.get_closest_marker("broker") is not None
     assert mqtt_broker == 1883
-
-
-@pytest.mark.parametrize(
-    ("value", "ci"), [("true", True), ("1", True), ("TRUE", True), ("", False), ("false", False)]
-)
-def test_ci_is_recognised_from_the_ci_variable(
-    value: str, ci: bool, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.setenv("CI", value)
-    assert in_ci() is ci
-
-
-def test_a_missing_service_skips_naming_it_and_fails_instead_under_ci(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    monkeypatch.delenv("CI", raising=False)
-    with pytest.raises(pytest.skip.Exception, match="no broker on port 1"):
-        missing("no broker on port 1")
-    monkeypatch.setenv("CI", "true")
-    with pytest.raises(pytest.fail.Exception, match="CI=true and no broker on port 1"):
-        missing("no broker on port 1")
