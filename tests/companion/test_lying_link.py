@@ -91,8 +91,10 @@ def _stop(p: subprocess.Popen[bytes]) -> None:
 
 
 @pytest.fixture
-def fly(tmp_path: Path) -> Iterator[Callable[..., Flight]]:
-    """Starts an emulator vehicle, the relay and a companion; stops them all after the test."""
+def fly(fleet_processes: Path) -> Iterator[Callable[..., Flight]]:
+    """Starts an emulator vehicle, the relay and a companion; stops them all after the test
+    (``fleet_processes``: the test's folder, none of whose processes may outlive it)."""
+    tmp_path = fleet_processes
     procs: list[subprocess.Popen[bytes]] = []
     relays: list[LyingRelay] = []
     profile = write_profile_with(tmp_path / "lying.yaml", "lying", failsafe=FAILSAFE,

@@ -67,6 +67,7 @@ def _signed_area(ring: list[list[float]]) -> float:
 
 
 @pytest.mark.timeout(150)
+@pytest.mark.usefixtures("fleet_processes")
 def test_fleet_writes_a_geojson_that_matches_the_mission_logs_and_a_png(tmp_path: Path) -> None:
     path = _profile(tmp_path / "profile.yaml")
     out = tmp_path / "run"
