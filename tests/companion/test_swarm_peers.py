@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import json
 from collections.abc import Callable
 
 import numpy as np
@@ -102,3 +103,21 @@ async def _degraded(port: int) -> None:
         for t in tasks:
             t.cancel()
         await asyncio.gather(*tasks, return_exceptions=True)
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "fault"),
+    [
+        ("best", [float("nan"), 0.0], "non-finite"),
+        ("best", [3.0e5, 0.0], "200 km"),
+        ("known", [[0.0, -2.5e5]], "200 km"),
+        ("fitness", 1.5, "fitness outside"),
+    ],
+)
+def test_a_peer_report_out_of_range_is_refused_naming_the_fault(
+    field: str, value: object, fault: str
+) -> None:
+    good = {"t": 1.0, "best": [10.0, 20.0], "fitness": 0.5, "current": 0.2, "known": []}
+    assert PeerReport.decode(json.dumps(good).encode()).best == (10.0, 20.0)
+    with pytest.raises(ValueError, match=fault):
+        PeerReport.decode(json.dumps({**good, field: value}).encode())

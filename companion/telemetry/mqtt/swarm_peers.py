@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import aiomqtt
 import numpy as np
 
+from companion.sensors.detection_payload import MAX_DISTANCE
 from companion.telemetry.mqtt.channel import MqttChannel, Received
 from mdm_core.search.pso import Best
 
@@ -73,6 +74,11 @@ class PeerReport:
         numbers = [report.time, *report.best, report.fitness, report.current]
         if not np.isfinite([*numbers, *(x for k in report.known for x in k)]).all():
             raise ValueError("swarm report: non-finite number")
+        positions = [report.best, *report.known]
+        if max(abs(x) for p in positions for x in p) > MAX_DISTANCE:
+            raise ValueError(
+                f"swarm report: a position more than {MAX_DISTANCE / 1000:g} km from the origin"
+            )
         if not 0.0 <= report.fitness <= 1.0 or not 0.0 <= report.current <= 1.0:
             raise ValueError("swarm report: fitness outside [0, 1]")
         return report
