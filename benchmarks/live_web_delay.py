@@ -150,6 +150,8 @@ def main() -> int:
             time.sleep(5)
             os.killpg(fleet.pid, signal.SIGINT)
             fleet.wait(60)
+        for i in range(args.vehicles):  # leave no retained status on the broker
+            sub.publish(f"{prefix}/uav{i}/status", b"", qos=1, retain=True).wait_for_publish(5)
         sub.loop_stop()
     with lock:
         delays = [t - arrivals[(v, n, e)] for t, v, n, e in moves if (v, n, e) in arrivals]
