@@ -84,16 +84,16 @@ def run_waypoint_swarm_block(
     forget_by = known if spec.after_confirmation == "forget" else nothing
 
     own = Best(position.copy(), np.zeros(shape), np.full(shape, -1, dtype=np.intp))
+    # Each particle's reading at its last waypoint (ARPSO's aggregation degree).
     current = np.zeros(shape)
-    """Each particle's reading at its last waypoint (ARPSO's aggregation degree)."""
     reading = np.zeros(shape)
     source = np.full(shape, -1, dtype=np.intp)
     nearest = np.empty(shape)
     links = np.broadcast_to(~np.eye(n_vehicles, dtype=bool), (*shape, n_vehicles)).copy()
     if config.variant == "spso":
         links = kernels.informants(rng.random((n_runs, n_vehicles, n_vehicles)), spec.informants)
+    # SPSO: the local best each particle steered by at its last arrival.
     local_fitness = np.zeros(shape)
-    """SPSO: the local best each particle steered by at its last arrival."""
 
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
     velocity = waypoint - position
