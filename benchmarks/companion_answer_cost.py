@@ -71,11 +71,11 @@ async def answer(answers: int, out: Path, profile: cProfile.Profile | None) -> t
     await link.open()
     vehicle = subprocess.Popen([sys.executable, "-c", VEHICLE, str(port), str(answers)])
     # the first position starts the search there, as the lifecycle does once climbed
-    while mission.position is None:
+    while mission.seen.position is None:
         event = await link.events.get()
         mission._handle_queued(event, link.events)
     _begin_search(mission)
-    mission._handle(mission.position)  # the first answer: the vehicle waits for it
+    mission._handle(mission.seen.position)  # the first answer: the vehicle waits for it
     decide = asyncio.create_task(mission._decide())
     cpu, wall = time.process_time(), time.perf_counter()
     if profile is not None:
@@ -97,10 +97,10 @@ def _begin_search(mission: VehicleMission) -> None:
     """The search phase from the mission's position, as the lifecycle enters it once climbed.
     (The mission's state was a bare Control before the lifecycle machine: either is set, so
     that older commits run this script too, through PYTHONPATH.)"""
-    pos = mission.position
+    pos = mission.seen.position
     assert pos is not None
-    t = mission.clock.now
-    mission.search_start = t
+    t = mission.seen.clock.now
+    mission.seen.begin_search(t)
     mission.core.start(np.array([pos.north, pos.east]), t, [])
     searching = enter(mission.control, Phase.SEARCH)
     if hasattr(mission, "state"):

@@ -8,15 +8,21 @@ import asyncio
 import logging
 import math
 import time
-from collections.abc import Awaitable, Callable
-from typing import TYPE_CHECKING
+from collections.abc import Awaitable, Callable, Coroutine
+from typing import Any, Protocol
 
 import numpy as np
 
 from companion import guidance
 from companion.autopilots import FlightMode
+from companion.guidance import GuidanceConfig
+from companion.link.base import VehicleLink
 from companion.link.outcome import CommandResult
 from companion.link.streams import needs
+from companion.mission.config import MissionConfig
+from companion.mission.core_for import MissionCore
+from companion.mission.fence_watch import FenceWatch
+from companion.mission.lifecycle import Event
 from companion.mission.lifecycle_events import (
     Began,
     Climbed,
@@ -38,19 +44,63 @@ from companion.mission.lifecycle_events import (
     TransitEnded,
 )
 from companion.mission.mission_exit import MissionExit
+from companion.mission.observed import Observed
 from companion.mission.phase import Phase
+from companion.mission.vehicle_fence import VehicleFence
+from companion.mission.vehicle_waits import VehicleWaits
+from companion.sensors.base import SensorSource
 from companion.telemetry import events
-
-if TYPE_CHECKING:
-    from companion.mission.vehicle_mission import VehicleMission
+from companion.telemetry.mission_log import Recovered
 
 log = logging.getLogger(__name__)
+
+
+class Flown(Protocol):
+    """What the lifecycle's steps read of the mission and ask of it (VehicleMission)."""
+
+    @property
+    def config(self) -> MissionConfig: ...
+    @property
+    def link(self) -> VehicleLink: ...
+    @property
+    def recovered(self) -> Recovered: ...
+    @property
+    def seen(self) -> Observed: ...
+    @property
+    def waits(self) -> VehicleWaits: ...
+    @property
+    def core(self) -> MissionCore: ...
+    @property
+    def sensors(self) -> SensorSource: ...
+    @property
+    def guide(self) -> GuidanceConfig: ...
+    @property
+    def watch(self) -> FenceWatch | None: ...
+    @property
+    def start(self) -> tuple[float, float] | None: ...
+    @property
+    def vehicle_fence(self) -> VehicleFence | None: ...
+    @property
+    def phase(self) -> Phase: ...
+    @property
+    def end_reason(self) -> str | None: ...
+    @property
+    def end_action(self) -> FlightMode: ...
+    @property
+    def exit(self) -> MissionExit | None: ...
+    def end_with(self, exit: MissionExit) -> None: ...
+    def feed(self, event: Event, *, mode: str = "") -> tuple[Do, ...]: ...
+    def chore(self, work: Coroutine[Any, Any, None]) -> None: ...
+    def emit(self, event: str, **fields: object) -> None: ...
+    def record(self, event: events.DurableEvent) -> None: ...
+    def request_end(self, reason: str) -> None: ...
+    def where(self) -> str: ...
 
 
 class LifecycleSteps:
     """Drives one mission's lifecycle: feeds outcomes to the machine, performs its steps."""
 
-    def __init__(self, mission: VehicleMission) -> None:
+    def __init__(self, mission: Flown) -> None:
         self.m = mission
         self.config = mission.config
         self.link = mission.link
@@ -97,24 +147,24 @@ class LifecycleSteps:
 
     async def _locate(self) -> Located:
         m = self.m
-        await m.until(lambda: m.heartbeat is not None and m.position is not None)
+        await m.waits.until(lambda: m.seen.heartbeat is not None and m.seen.position is not None)
         return Located(self._airborne_guided())
 
     async def _await_control(self) -> ControlBack:
-        await self.m.until(lambda: self.m.phase not in (Phase.PAUSED, Phase.LINK_LOST))
+        await self.m.waits.until(lambda: self.m.phase not in (Phase.PAUSED, Phase.LINK_LOST))
         return ControlBack()
 
     async def _retry(self) -> Retried:
-        await self.m.sleep_vehicle(1.0)
+        await self.m.waits.sleep_vehicle(1.0)
         return Retried()
 
     async def _await_vehicle(self) -> None:
         """Wait for the vehicle's HEARTBEAT, saying every few seconds what is heard instead."""
         m, period = self.m, self.config.waiting_line_period
         next_line = time.monotonic() + period
-        while m.heartbeat is None and m.end_reason is None:
-            await m.wait_changed(max(next_line - time.monotonic(), 0.0))
-            if m.heartbeat is not None or time.monotonic() < next_line:
+        while m.seen.heartbeat is None and m.end_reason is None:
+            await m.waits.wait_changed(max(next_line - time.monotonic(), 0.0))
+            if m.seen.heartbeat is not None or time.monotonic() < next_line:
                 continue  # other messages of the vehicle woke us: not yet time for a line
             next_line = time.monotonic() + period
             heard = sorted(self.link.heard)
@@ -162,7 +212,7 @@ class LifecycleSteps:
         origin is set by then), where that frame starts, for the run map (a SITL booted at
         ArduCopter's default home flies in Australia, not at the profile's default origin)."""
         m = self.m
-        if not await m.until(lambda: m.heartbeat is not None and m.heartbeat.armed):
+        if not await m.waits.until(lambda: m.seen.heartbeat is not None and m.seen.heartbeat.armed):
             return
         origin = await self.link.read_origin()
         if origin is not None:
@@ -174,9 +224,9 @@ class LifecycleSteps:
         m = self.m
         if m.watch is None:
             return
-        m.gps = None  # one taken after the origin is known: the GPS has a fix by then
-        await m.until(lambda: m.gps is not None)
-        gps = m.gps
+        m.seen.forget_gps()  # one taken after the origin is known: the GPS has a fix by then
+        await m.waits.until(lambda: m.seen.gps is not None)
+        gps = m.seen.gps
         if gps is None:
             return
         why = m.watch.start_refusal(gps.north, gps.east)
@@ -192,7 +242,7 @@ class LifecycleSteps:
     # -- prepare and climb -------------------------------------------------------------------
 
     def _airborne_guided(self) -> bool:
-        hb, pos, ap = self.m.heartbeat, self.m.position, self.link.autopilot
+        hb, pos, ap = self.m.seen.heartbeat, self.m.seen.position, self.link.autopilot
         if hb is None or pos is None or ap is None:
             return False
         near = -pos.down > 0.8 * self.config.altitude
@@ -201,19 +251,19 @@ class LifecycleSteps:
     async def _prepare(self) -> Prepared:
         """Stream setpoints, switch to the guided mode, arm."""
         m = self.m
-        await m.until(lambda: m.status is None or m.status.healthy, 30.0)
-        await m.sleep_vehicle(1.0)  # setpoints flowing before the mode switch (PX4)
+        await m.waits.until(lambda: m.seen.status is None or m.seen.status.healthy, 30.0)
+        await m.waits.sleep_vehicle(1.0)  # setpoints flowing before the mode switch (PX4)
         ap = self.link.autopilot
         if ap is None or m.phase is not Phase.PREPARE or not await self._ensure_guided():
             return Prepared(ok=False, takeoff=False)
-        hb = m.heartbeat
+        hb = m.seen.heartbeat
         if hb is not None and not hb.armed:
             result = await self.link.arm()
             if not result:
                 self._refused("arm", result, "vehicle %d refused to arm: %s")
                 return Prepared(ok=False, takeoff=False)
-        await m.until(lambda: m.heartbeat is not None and m.heartbeat.armed, 10.0)
-        pos = m.position
+        await m.waits.until(lambda: m.seen.heartbeat is not None and m.seen.heartbeat.armed, 10.0)
+        pos = m.seen.position
         on_ground = pos is not None and -pos.down < 0.5 * self.config.altitude
         return Prepared(ok=True, takeoff=ap.takeoff_by_command and on_ground)
 
@@ -221,15 +271,16 @@ class LifecycleSteps:
         m, ap = self.m, self.link.autopilot
         assert ap is not None
         for _ in range(3):
-            hb = m.heartbeat
+            hb = m.seen.heartbeat
             if hb is not None and ap.is_guided(hb.custom_mode):
                 return True
             result = await self.link.set_mode(FlightMode.GUIDED)
             if not result:
                 self._refused("guided", result, "vehicle %d: guided mode %s")
                 continue
-            if await m.until(
-                lambda: m.heartbeat is not None and ap.is_guided(m.heartbeat.custom_mode), 5.0
+            if await m.waits.until(
+                lambda: m.seen.heartbeat is not None and ap.is_guided(m.seen.heartbeat.custom_mode),
+                5.0,
             ):
                 return True
         return False
@@ -249,7 +300,7 @@ class LifecycleSteps:
         # If the autopilot's takeoff stops short (its own takeoff altitude), setpoints
         # finish the climb: wait for the altitude or for the climb to stall airborne.
         m = self.m
-        await m.until(lambda: self._climb_done_or_stalled() or m.phase is not Phase.CLIMB,
+        await m.waits.until(lambda: self._climb_done_or_stalled() or m.phase is not Phase.CLIMB,
                       self.config.climb_timeout)  # fmt: skip
         return ClimbStopped()
 
@@ -258,12 +309,12 @@ class LifecycleSteps:
 
     async def _climb(self) -> Climbed:
         m = self.m
-        return Climbed(await m.until(lambda: m.phase is not Phase.CLIMB or (
-            m.position is not None and -m.position.down > 0.95 * self.config.altitude),
+        return Climbed(await m.waits.until(lambda: m.phase is not Phase.CLIMB or (
+            m.seen.position is not None and -m.seen.position.down > 0.95 * self.config.altitude),
             self.config.climb_timeout))  # fmt: skip
 
     def _climb_done_or_stalled(self) -> bool:
-        pos = self.m.position
+        pos = self.m.seen.position
         if pos is None:
             return False
         alt = -pos.down
@@ -277,39 +328,40 @@ class LifecycleSteps:
             self._speed_report = await self.link.set_speed(self.config.profile.fleet.speed)
             log.info("vehicle %d speed: %s", self.config.vehicle, self._speed_report)
             self.m.emit("speed", report=self._speed_report)
-        return SetpointsBegun(self.m.search_start is not None, self.m.start is not None)
+        return SetpointsBegun(self.m.seen.search_start is not None, self.m.start is not None)
 
     async def _transit(self) -> TransitEnded:
         """Fly at the search altitude to the start point; the search clock starts there."""
-        m, pos, start = self.m, self.m.position, self.m.start
+        m, pos, start = self.m, self.m.seen.position, self.m.start
         assert pos is not None
         assert start is not None
         distance = math.hypot(start[0] - pos.north, start[1] - pos.east)
-        self._transit_t0 = m.clock.now
+        self._transit_t0 = m.seen.clock.now
         m.emit("transit", state="begin", north=round(pos.north, 1), east=round(pos.east, 1),
                to_north=round(start[0], 1), to_east=round(start[1], 1),
                distance=round(distance, 1))  # fmt: skip
         log.info("vehicle %d: transit %.0f m to its start point (%.0f, %.0f)",
                  self.config.vehicle, distance, *start)  # fmt: skip
         limit = 60.0 + 3.0 * distance / self.config.profile.fleet.speed
-        arrived = await m.until(
+        arrived = await m.waits.until(
             lambda: m.phase is not Phase.TRANSIT or (
-                m.position is not None and guidance.reached(
-                    np.array([m.position.north, m.position.east]), np.array(start),
+                m.seen.position is not None and guidance.reached(
+                    np.array([m.seen.position.north, m.seen.position.east]), np.array(start),
                     m.guide.acceptance_radius)),
             limit,
         )  # fmt: skip
         return TransitEnded(arrived, limit)
 
     async def _say_transit_done(self) -> None:
-        self.m.emit("transit", state="done", seconds=round(self.m.clock.now - self._transit_t0, 1))
+        self.m.emit(
+            "transit", state="done", seconds=round(self.m.seen.clock.now - self._transit_t0, 1)
+        )
 
     async def _start_search(self) -> SearchBegun:
-        m, pos = self.m, self.m.position
+        m, pos = self.m, self.m.seen.position
         assert pos is not None
-        t = m.clock.now
-        if m.search_start is None:
-            m.search_start = t
+        t = m.seen.clock.now
+        m.seen.begin_search(t)
         if not m.core.started:
             m.core.start(np.array([pos.north, pos.east]), t, m.recovered.confirmed)
         return SearchBegun()
@@ -317,27 +369,27 @@ class LifecycleSteps:
     async def _announce_level(self) -> None:
         m = self.m
         m.record(events.Level(m.core.level, m.core.sensor()))
-        m.sensors.select(m.core.sensor(), m.clock.now)
+        m.sensors.select(m.core.sensor(), m.seen.clock.now)
 
     async def _await_search_end(self) -> SearchLeft:
-        await self.m.until(lambda: self.m.phase is not Phase.SEARCH)
+        await self.m.waits.until(lambda: self.m.phase is not Phase.SEARCH)
         return SearchLeft()
 
     # -- the end -----------------------------------------------------------------------------
 
     async def _finish(self) -> Ending:
-        hb = self.m.heartbeat
+        hb = self.m.seen.heartbeat
         return Ending(hb is not None and hb.armed)
 
     async def _record_end(self) -> EndRecorded:
         m = self.m
         m.record(events.End(str(m.end_reason), m.core.confirmed_count))
         self._report_speed()
-        m.sensors.select(-1, m.clock.now)
+        m.sensors.select(-1, m.seen.clock.now)
         return EndRecorded()
 
     async def _fly_end_action(self) -> Landed:
-        m, action = self.m, self.m.state.end_action
+        m, action = self.m, self.m.end_action
         name = action.value.upper()
         result = await self.link.set_mode(action)
         if not result:
@@ -345,8 +397,11 @@ class LifecycleSteps:
                       result.describe())  # fmt: skip
         if self.config.land_wait <= 0:
             if m.exit is None:
-                m.exit = (MissionExit(0, f"{name} accepted; not waiting for the landing")
-                          if result else MissionExit(1, f"{name} refused: {result.describe()}"))  # fmt: skip
+                m.end_with(
+                    MissionExit(0, f"{name} accepted; not waiting for the landing")
+                    if result
+                    else MissionExit(1, f"{name} refused: {result.describe()}")
+                )
             return Landed()
         log.info("vehicle %d: %s; waiting up to %g vehicle s until it lands and disarms",
                  self.config.vehicle, name, self.config.land_wait)  # fmt: skip
@@ -355,10 +410,11 @@ class LifecycleSteps:
             return Landed()
         if how == "landed":
             log.info("vehicle %d: landed and disarmed", self.config.vehicle)
-            m.exit = MissionExit(0, f"{name}: landed and disarmed")
+            m.end_with(MissionExit(0, f"{name}: landed and disarmed"))
         else:
-            m.exit = MissionExit(1, f"{how} after {name}, still armed {m.where()}")
-            log.error("vehicle %d: %s", self.config.vehicle, m.exit.cause)
+            end = MissionExit(1, f"{how} after {name}, still armed {m.where()}")
+            m.end_with(end)
+            log.error("vehicle %d: %s", self.config.vehicle, end.cause)
         return Landed()
 
     async def _await_landing(self) -> str:
@@ -368,17 +424,17 @@ class LifecycleSteps:
         m, wait = self.m, self.config.land_wait
         spec = self.config.profile.failsafe
         stall = spec.position_timeout + spec.position_hold
-        start, seen, moved = m.clock.now, m.clock.now, time.monotonic()
+        start, last, moved = m.seen.clock.now, m.seen.clock.now, time.monotonic()
         while m.exit is None:
-            if m.heartbeat is not None and not m.heartbeat.armed:
+            if m.seen.heartbeat is not None and not m.seen.heartbeat.armed:
                 return "landed"
-            if m.clock.now - start >= wait:
+            if m.seen.clock.now - start >= wait:
                 return f"{wait:g} vehicle s"
-            if m.clock.now != seen:
-                seen, moved = m.clock.now, time.monotonic()
+            if m.seen.clock.now != last:
+                last, moved = m.seen.clock.now, time.monotonic()
             elif m.phase is not Phase.LINK_LOST and time.monotonic() - moved >= stall:
-                return f"no valid position for {time.monotonic() - moved:.0f} s ({m.clock.now - start:.0f} vehicle s)"
-            await m.wait_changed(0.5)
+                return f"no valid position for {time.monotonic() - moved:.0f} s ({m.seen.clock.now - start:.0f} vehicle s)"
+            await m.waits.wait_changed(0.5)
         return "link given up"
 
     def _report_speed(self) -> None:
@@ -389,8 +445,8 @@ class LifecycleSteps:
         if not m.core.started:
             return
         asked = self.config.profile.fleet.speed
-        m.emit("speed", max_search=round(m.max_search_speed, 2), asked=asked)
-        if m.max_search_speed < 0.9 * asked:
+        m.emit("speed", max_search=round(m.seen.max_search_speed, 2), asked=asked)
+        if m.seen.max_search_speed < 0.9 * asked:
             log.warning("vehicle %d flew at most %.1f m/s while searching; the profile asks "
                         "%g m/s: the vehicle caps it (%s)", self.config.vehicle,
-                        m.max_search_speed, asked, self._speed_report)  # fmt: skip
+                        m.seen.max_search_speed, asked, self._speed_report)  # fmt: skip

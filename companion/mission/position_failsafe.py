@@ -8,14 +8,16 @@ as the operator's), then, when none came for
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING
+from typing import Protocol
 
+from companion.autopilots import FlightMode
+from companion.link.base import VehicleLink
+from companion.mission.config import MissionConfig
 from companion.mission.control import OperatorPause, OperatorResume
+from companion.mission.lifecycle import Event
+from companion.mission.observed import Observed
 from companion.mission.phase import Phase
 from companion.telemetry import events
-
-if TYPE_CHECKING:
-    from companion.mission.vehicle_mission import VehicleMission
 
 log = logging.getLogger(__name__)
 
@@ -32,10 +34,31 @@ BY = "position failsafe"
 """The ``by`` of the pause's ``phase`` record."""
 
 
+class Guarded(Protocol):
+    """What the failsafe reads of the mission and asks of it (VehicleMission)."""
+
+    @property
+    def config(self) -> MissionConfig: ...
+    @property
+    def link(self) -> VehicleLink: ...
+    @property
+    def seen(self) -> Observed: ...
+    @property
+    def phase(self) -> Phase: ...
+    @property
+    def end_reason(self) -> str | None: ...
+    @property
+    def end_action(self) -> FlightMode: ...
+    def send_hold(self) -> None: ...
+    def ask(self, event: Event, *, by: str | None = None) -> str | None: ...
+    def request_end(self, reason: str) -> None: ...
+    def record(self, event: events.DurableEvent) -> None: ...
+
+
 class PositionFailsafe:
     """Called by the mission's supervision every quarter wall second (:meth:`check`)."""
 
-    def __init__(self, mission: VehicleMission) -> None:
+    def __init__(self, mission: Guarded) -> None:
         self.m = mission
         self.spec = mission.config.profile.failsafe
         self._next_report = 0.0
@@ -69,13 +92,13 @@ class PositionFailsafe:
 
     def _watch(self, now: float) -> None:
         m, v = self.m, self.m.config.vehicle
-        hb = m.heartbeat
+        hb = m.seen.heartbeat
         flying = hb is not None and hb.armed and (m.phase in _FLYING or self.holding)
         last = m.link.guard.last_valid_wall
         if not flying or m.end_reason is not None:
             self._since = None
             return
-        alive = now - m.last_heartbeat_wall < m.config.link_timeout
+        alive = now - m.seen.last_heartbeat_wall < m.config.link_timeout
         if m.phase in _FLYING and alive and last is not None and now - last >= _STREAM_GAP_S:
             m.send_hold()
         fresh = last is not None and now - last < self.spec.position_timeout
@@ -84,19 +107,19 @@ class PositionFailsafe:
             if self.holding:
                 self.holding = False
                 log.warning("vehicle %d: valid positions again: resuming the search", v)
-                m._ask(OperatorResume())
+                m.ask(OperatorResume())
             return
         if self._since is None:
             self._since = now if last is None else last
         silent = now - self._since
-        beat = m.last_heartbeat_wall
+        beat = m.seen.last_heartbeat_wall
         if silent < self.spec.position_timeout or beat - self._since < _ALIVE_S:
             return  # (no heartbeat since the positions stopped either: the link's loss)
         if silent < self.spec.position_timeout + self.spec.position_hold:
             if (
                 not self.holding
                 and m.phase is Phase.SEARCH
-                and m._ask(OperatorPause(), by=BY) is None
+                and m.ask(OperatorPause(), by=BY) is None
             ):
                 self.holding = True
                 log.error("vehicle %d: no valid position for %.1f s: HOLD (failsafe); the end "
@@ -107,5 +130,5 @@ class PositionFailsafe:
         if self.holding or m.phase in _FLYING:
             self.cause = f"no valid position for {silent:.1f} s"
             log.error("vehicle %d: %s: ending with %s (failsafe)", v, self.cause,
-                      m.state.end_action.value.upper())  # fmt: skip
+                      m.end_action.value.upper())  # fmt: skip
             m.request_end(f"failsafe: {self.cause}")

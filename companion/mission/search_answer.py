@@ -19,41 +19,62 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from companion.link.messages import LinkEvent, LocalPosition
-from companion.mission.phase import Phase
+from companion.mission.config import MissionConfig
+from companion.mission.core_for import MissionCore
+from companion.mission.observed import Observed
 from companion.mission.search_core import SearchCore
+from companion.sensors.base import SensorSource
 from companion.sensors.mavlink_source import MavlinkSensorSource
-
-if TYPE_CHECKING:
-    from companion.mission.vehicle_mission import VehicleMission
 
 TICK_S = 10.0
 """Vehicle seconds between two ``tick`` records of the mission log."""
 
 
-class SearchAnswer:
-    """The decision loop's steering of one position, for the positions that change nothing else
-    (a part of :class:`VehicleMission` in a file of its own: it changes the mission's state).
+Steer = Callable[[LocalPosition, float, float], None]
+"""The mission's steering: the pursuit setpoint from a position towards (north, east)."""
 
-    ``plan`` holds the waypoint the policy chose and its fenced goal; the decision loop sets it
+
+class SearchAnswer:
+    """The decision loop's steering of one position, for the positions that change nothing else.
+
+    It writes what the mission observed (``seen``: the position, clock and period) and steers
+    through ``steer``; every other event of the datagram goes to the mission's ``handle``, and
+    ``searching()`` says whether the mission is in the search and not ending. ``plan`` holds the waypoint the policy chose and its fenced goal; the decision loop sets it
     after each policy step (:meth:`steer_to`) and clears it on every phase change (:meth:`forget`),
     so that nothing here acts on a waypoint the policy has since replaced.
     """
 
-    def __init__(self, mission: VehicleMission) -> None:
-        self.m = mission
+    def __init__(
+        self,
+        seen: Observed,
+        steer: Steer,
+        *,
+        handle: Callable[[LinkEvent], None],
+        searching: Callable[[], bool],
+        config: MissionConfig,
+        core: MissionCore,
+        sensors: SensorSource,
+        acceptance_radius: float,
+    ) -> None:
+        self.seen = seen
+        self.steer = steer
+        self.handle = handle
+        self.searching = searching
+        self.search_duration = config.search_duration
+        self.core = core
+        self.sensors = sensors
+        self.acceptance_radius = acceptance_radius
         self.plan: tuple[float, float, float, float] | None = None
         """(waypoint north, east, fenced goal north, east) of the current policy decision."""
-        core, source = mission.core, mission.sensors
         self._parts = (
-            (core, source)
+            (core, sensors)
             if isinstance(core, SearchCore)
-            and isinstance(source, MavlinkSensorSource)
-            and mission.config.setpoints == "velocity"
+            and isinstance(sensors, MavlinkSensorSource)
+            and config.setpoints == "velocity"
             else None
         )
         """Only with the MDM core (a swarm core decides on its peers' news too), readings over
@@ -83,17 +104,16 @@ class SearchAnswer:
             return False
 
     def _ready(self, vehicle_time: float, north: float, east: float) -> bool:
-        m, plan = self.m, self.plan
-        parts = self._parts
-        if plan is None or parts is None or m.phase is not Phase.SEARCH:
+        seen, plan, parts = self.seen, self.plan, self._parts
+        if plan is None or parts is None or not self.searching():
             return False
-        t = m.clock.peek(vehicle_time)
-        if t is None or t - m._last_tick >= TICK_S or m.end_reason is not None:
+        t = seen.clock.peek(vehicle_time)
+        if t is None or t - seen.last_tick >= TICK_S:
             return False
-        start = m.search_start
-        if start is not None and t - start >= m.config.search_duration:
+        start = seen.search_start
+        if start is not None and t - start >= self.search_duration:
             return False
-        if math.hypot(north - plan[2], east - plan[3]) <= m.guide.acceptance_radius:
+        if math.hypot(north - plan[2], east - plan[3]) <= self.acceptance_radius:
             return False  # reached
         contacts = parts[1].waiting()
         if len(contacts) == 0:
@@ -114,30 +134,29 @@ class SearchAnswer:
         When an event before it changed the mission (a mode, a low battery, a contact), the
         position takes the decision loop's way. ``signal``, the sensor's reading, is only read by a policy step
         (never here), so where it came in the datagram does not matter."""
-        m = self.m
         try:
-            m._received_time = max(m._received_time, pos.time)  # as the batch does first
+            self.seen.note_received(pos.time)  # as the batch does first
             if signal is not None:
-                m.sensors.signal = signal
+                self.sensors.signal = signal
             for event in before:
-                m._handle(event)
+                self.handle(event)
             if before and not self._ready(pos.time, pos.north, pos.east):
-                m._handle(pos)
+                self.handle(pos)
             else:
                 self._steer(pos)
             for event in after:
-                m._handle(event)
+                self.handle(event)
         except Exception as exc:
             self.failed(exc)
 
     def _steer(self, pos: LocalPosition) -> None:
-        m, plan = self.m, self.plan
+        plan = self.plan
         assert plan is not None
-        m._note_position(pos)
-        m.sensors.take()  # ruled out by ready, as the policy would
-        m.max_search_speed = max(m.max_search_speed, math.hypot(pos.vn, pos.ve))
-        m.pursue(pos, plan[0], plan[1])
-        m._wake()
+        t = self.seen.note_position(pos)
+        self.sensors.observe(t, pos.north, pos.east)
+        self.sensors.take()  # ruled out by ready, as the policy would
+        self.seen.note_search_speed(pos)
+        self.steer(pos, plan[0], plan[1])
         self.answered += 1
 
 

@@ -4,13 +4,10 @@ loop and the link supervision, as named tasks."""
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import math
-import random
 import time
-from collections.abc import Callable, Coroutine
-from dataclasses import dataclass
+from collections.abc import Coroutine
 from typing import Any
 
 import numpy as np
@@ -36,7 +33,6 @@ from companion.mission.config import MissionConfig
 from companion.mission.control import (
     Action,
     Control,
-    LinkRestored,
     ModeReport,
     OperatorPause,
     OperatorResume,
@@ -50,13 +46,14 @@ from companion.mission.lifecycle_events import (
     Do,
     EndRequested,
     Gps,
-    LinkLost,
     OperatorEnd,
     SearchBegun,
     Signal,
 )
 from companion.mission.lifecycle_steps import LifecycleSteps
+from companion.mission.link_supervision import LinkSupervision
 from companion.mission.mission_exit import MissionExit, where
+from companion.mission.observed import Observed
 from companion.mission.phase import Phase
 from companion.mission.position_failsafe import PositionFailsafe
 from companion.mission.search_answer import TICK_S, SearchAnswer
@@ -64,6 +61,7 @@ from companion.mission.setpoint_guard import SetpointGuard
 from companion.mission.swarm_core import SwarmCore, SwarmExchange
 from companion.mission.vehicle_clock import VehicleClock
 from companion.mission.vehicle_fence import VehicleFence
+from companion.mission.vehicle_waits import VehicleWaits
 from companion.sensors.base import SensorSource
 from companion.sensors.mavlink_source import MavlinkSensorSource
 from companion.telemetry import events
@@ -75,25 +73,12 @@ _SETPOINT_GAP_S = 0.8
 COM_OF_LOSS_T (1 s stock, read from SITL) without setpoints; the newest position we hold may lag
 that HOLD by one 10 Hz period, so 0.8 still sees every fall-back, while a shorter gap (a loaded
 host descheduling us for 0.17 wall s at 3x gave 0.5) no longer turns a pilot's HOLD into one."""
-_OPEN_BACKOFF_MAX_S = 8.0
-_LINK_LINE_S = 5.0
-"""Wall seconds between two 'link lost, waiting' lines."""
 _RATE_MARGIN = 1.5
 """The vehicle clock may run this much faster than the speed-up asked (a simulator catching up
 after a stall of its host)."""
 _TEXT_LEVEL = {0: logging.ERROR, 1: logging.ERROR, 2: logging.ERROR, 3: logging.ERROR,
                4: logging.WARNING, 5: logging.INFO, 6: logging.INFO}  # fmt: skip
 """MAV_SEVERITY -> log level for the vehicle's STATUSTEXT (7, debug, is logged at DEBUG)."""
-
-
-@dataclass
-class _Waiter:
-    """One wait of :meth:`VehicleMission.until`."""
-
-    predicate: Callable[[], bool]
-    start: float
-    timeout: float | None
-    future: asyncio.Future[bool]
 
 
 class VehicleMission:
@@ -126,7 +111,9 @@ class VehicleMission:
         self.link = link
         self.sink = sink
         self.recovered = recovered or Recovered()
-        self.clock = VehicleClock(floor=self.recovered.last_time)
+        clock = VehicleClock(floor=self.recovered.last_time)
+        self.seen = Observed(clock, self.recovered.search_start)
+        self.waits = VehicleWaits(self.seen.clock, self._ended)
         self.sensors = sensors or MavlinkSensorSource(link, len(profile.sensors))
         self.sensors.report = self.emit
         self.core = core_for(config, lambda: self.sensors.signal, peers)
@@ -140,36 +127,25 @@ class VehicleMission:
         )
         self.state = Mission(end_action=config.end_action)
         """The lifecycle machine's state (mission/lifecycle.py), who is in control included."""
-        self.heartbeat: Heartbeat | None = None
-        self.position: LocalPosition | None = None
-        self.status: SystemStatus | None = None
-        self.search_start = self.recovered.search_start
         self.latencies: list[float] = []
         self.real_targets = sum(not t.false_target for t in profile.targets)
-        self.last_heartbeat_wall = 0.0
-        self._period = 0.1
-        self._last_tick = -np.inf
-        self._changed = asyncio.Event()
-        self._waiters: list[_Waiter] = []
-        """:meth:`until`'s open waits, checked where ``_changed`` is set (see :meth:`_wake`)."""
-        self._setpoint_time = -np.inf
-        """Vehicle time of the position our last setpoint answered."""
-        self._received_time = -np.inf
-        """Vehicle time of the newest position received (acted on or not)."""
         self._main: asyncio.Task[object] | None = None
         self._chores: set[asyncio.Task[None]] = set()
-        self.max_search_speed = 0.0
-        """Fastest horizontal speed the vehicle reported while searching, m/s."""
         self.watch = watch
         """The fence and search area against the GPS position (geo-referenced profiles)."""
-        self.gps: GlobalPosition | None = None
         self.start = start
         """Where the search begins (profile frame); None: where the vehicle is."""
         self.vehicle_fence = (
             VehicleFence(link, own_fence, config.vehicle, self.emit) if own_fence else None
         )
         self.lifecycle = LifecycleSteps(self)
-        self.answer = SearchAnswer(self)
+        self.answer = SearchAnswer(
+            self.seen, self._steer_answered, handle=self._handle,
+            searching=lambda: self.phase is Phase.SEARCH and self.end_reason is None,
+            config=config, core=self.core, sensors=self.sensors,
+            acceptance_radius=self.guide.acceptance_radius,
+        )  # fmt: skip
+        """The search's common answer without the decision loop's events (search_answer.py)."""
         failsafe = profile.failsafe
         rate = None if config.max_speedup is None else config.max_speedup * _RATE_MARGIN
         link.guard.limits = TelemetryLimits(
@@ -179,19 +155,17 @@ class VehicleMission:
             self.guide, self.fence, config.setpoints, max(profile.fleet.altitude_step / 2, 1.0)
         )
         self.position_failsafe = PositionFailsafe(self)
+        self.supervision = LinkSupervision(self, self.position_failsafe.check)
         self.exit: MissionExit | None = None
         """How the companion ends (set by the end action's wait, the link's loss, or at the
         end of :meth:`run`); recorded as the log's ``exit``."""
-        self.home: tuple[float, float] | None = None
-        """Where the vehicle was first seen on the ground (profile frame)."""
-        """The search's common answer without the decision loop's events (search_answer.py)."""
 
     # -- public ----------------------------------------------------------------------------
 
     async def run(self) -> str:
         """Fly the mission; returns why it ended."""
         self._main = asyncio.current_task()
-        if not await self._open_link():
+        if not await self.supervision.open_link():
             return self.end_reason or "stopped"
         self.record(events.Start(self.config.vehicle, self.config.profile.name, self.config.seed,
                                  len(self.recovered.confirmed), self.config.altitude))  # fmt: skip
@@ -199,7 +173,7 @@ class VehicleMission:
             async with asyncio.TaskGroup() as tg:
                 loops = [
                     tg.create_task(self._decide(), name=f"v{self.config.vehicle}-decide"),
-                    tg.create_task(self._supervise(), name=f"v{self.config.vehicle}-supervise"),
+                    tg.create_task(self.supervision.run(), name=f"v{self.config.vehicle}-supervise"),
                     tg.create_task(self.sensors.run(), name=f"v{self.config.vehicle}-sensor"),
                 ]  # fmt: skip
                 life = tg.create_task(
@@ -217,7 +191,7 @@ class VehicleMission:
         """The ``exit`` record: set by the end's wait or the link's loss, else from what the
         vehicle was last seen doing; never 0 after the position failsafe."""
         if self.exit is None:
-            hb = self.heartbeat
+            hb = self.seen.heartbeat
             if hb is None:
                 self.exit = MissionExit(1, "the vehicle was never heard")
             elif hb.armed:
@@ -233,7 +207,7 @@ class VehicleMission:
 
     def where(self) -> str:
         """Where the vehicle was last seen, for the exit's line."""
-        return where(self.position, self.home)
+        return where(self.seen.position, self.seen.home)
 
     def request_end(self, reason: str) -> None:
         """End the search and fly the end action (operator signal, mission time, battery)."""
@@ -248,7 +222,8 @@ class VehicleMission:
             if self._main is not None:
                 self._main.cancel()
             return
-        armed = self.heartbeat is not None and self.heartbeat.armed
+        hb = self.seen.heartbeat
+        armed = hb is not None and hb.armed
         doing = (
             f"flying {self.state.end_action.value.upper()} and waiting until it lands and disarms"
             if armed and self.phase not in (Phase.PAUSED, Phase.LINK_LOST)
@@ -259,30 +234,30 @@ class VehicleMission:
 
     def emit(self, event: str, **fields: object) -> None:
         """A record that is not a decision (ticks, texts, measurements)."""
-        self.sink.emit(self.clock.now, event, **fields)
+        self.sink.emit(self.seen.clock.now, event, **fields)
 
     def record(self, event: events.DurableEvent) -> None:
         """A durable event (telemetry/events.py: the same classes read it back)."""
-        self.sink.emit(self.clock.now, event.NAME, **events.to_fields(event))
+        self.sink.emit(self.seen.clock.now, event.NAME, **events.to_fields(event))
 
     # -- operator (MQTT commands): each returns None when obeyed, else why not -------------
 
     def operator_pause(self) -> str | None:
         """Stop commanding and hold (autopilot HOLD) until ``operator_resume``."""
-        return self._ask(OperatorPause(), by="operator")
+        return self.ask(OperatorPause(), by="operator")
 
     def operator_resume(self) -> str | None:
         """Back to the guided mode and the search, as after a link loss."""
-        return self._ask(OperatorResume())
+        return self.ask(OperatorResume())
 
     def operator_end(self, action: FlightMode, reason: str) -> str | None:
         """End the mission now with ``action`` (RTL or LAND) instead of the configured one."""
-        return self._ask(OperatorEnd(action, reason))
+        return self.ask(OperatorEnd(action, reason))
 
     def snapshot(self) -> dict[str, object]:
         """What the vehicle is doing now (the MQTT state message)."""
-        pos, hb, ap, st = self.position, self.heartbeat, self.link.autopilot, self.status
-        t = self.clock.now
+        seen, ap = self.seen, self.link.autopilot
+        pos, hb, st, t = seen.position, seen.heartbeat, seen.status, seen.clock.now
         ci = self.core.index_value(t) if self.core.started else math.nan
         sensor = self.core.sensor()
         return {"vehicle": self.config.vehicle, "t": round(t, 3), "phase": self.phase.value,
@@ -295,7 +270,8 @@ class VehicleMission:
                 **({} if pos is None else {"north": round(pos.north, 1), "east": round(pos.east, 1),
                                            "alt": round(-pos.down, 1)})}  # fmt: skip
 
-    async def _hold(self) -> None:
+    async def hold(self) -> None:
+        """Ask the autopilot's HOLD (a refusal or a lost link is logged)."""
         try:
             result = await self.link.set_mode(FlightMode.HOLD)
             if not result:
@@ -371,12 +347,12 @@ class VehicleMission:
         """Events read together, in order; of several positions only the newest is acted on:
         after a stall (a loaded machine, a sped-up vehicle) the older ones are stale, and a
         setpoint computed from each would steer seconds late."""
-        newest, latest = -1, self._received_time
+        newest = -1
         for i, event in enumerate(batch):
             if isinstance(event, LocalPosition):
-                newest, latest = i, max(latest, event.time)
-        # How far the vehicle's clock has run, for a HOLD queued before the newest position.
-        self._received_time = latest
+                # How far the vehicle's clock has run, for a HOLD queued before the newest one.
+                newest = i
+                self.seen.note_received(event.time)
         for i, event in enumerate(batch):
             if i == newest or not isinstance(event, LocalPosition):
                 self._handle(event)
@@ -395,9 +371,9 @@ class VehicleMission:
         elif isinstance(event, StraySource):
             self.emit("stray", address=event.address, locked=event.locked)
         elif isinstance(event, SystemStatus):
-            self.status = event
+            self.seen.status = event
             self.feed(Battery(event.battery_remaining, self.config.battery_min))
-        self._wake()
+        self.waits.wake()
 
     def _on_text(self, text: StatusText) -> None:
         """The autopilot's own words on the console and in the mission log."""
@@ -407,16 +383,16 @@ class VehicleMission:
             self.emit("statustext", severity=text.severity, text=text.text)
 
     def _on_heartbeat(self, hb: Heartbeat) -> None:
-        self.last_heartbeat_wall = time.perf_counter()
-        previous = self.heartbeat
-        self.heartbeat = hb
+        self.seen.last_heartbeat_wall = time.perf_counter()
+        previous = self.seen.heartbeat
+        self.seen.heartbeat = hb
         ap = self.link.autopilot
         if ap is None:
             return
         guided = ap.is_guided(hb.custom_mode)
         if previous is None or previous.custom_mode != hb.custom_mode:
             self.record(events.ModeChange(ap.mode_name(hb.custom_mode), guided))
-        report = ModeReport(guided, self._hold_mode(hb), self._setpoints_stalled(),
+        report = ModeReport(guided, self.hold_mode(hb), self._setpoints_stalled(),
                             self.core.started)  # fmt: skip
         self.feed(report, mode=ap.mode_name(hb.custom_mode))
 
@@ -426,7 +402,7 @@ class VehicleMission:
         assert not isinstance(result, Refused), result  # only operator requests are refused
         return result
 
-    def _ask(self, event: Event, *, by: str | None = None) -> str | None:
+    def ask(self, event: Event, *, by: str | None = None) -> str | None:
         """An operator's request: None when obeyed, else why not."""
         result = self._step(event, by=by)
         return result.reason if isinstance(result, Refused) else None
@@ -440,7 +416,7 @@ class VehicleMission:
         if isinstance(result, Refused):
             return result
         state, actions = result
-        started = self.search_start if isinstance(event, SearchBegun) else None
+        started = self.seen.search_start if isinstance(event, SearchBegun) else None
         self._apply(state, by=by, search_start=started)
         v = self.config.vehicle
         steps: list[Do] = []
@@ -448,7 +424,7 @@ class VehicleMission:
             if isinstance(action, Do):
                 steps.append(action)
             elif action is Action.HOLD:
-                self.chore(self._hold())
+                self.chore(self.hold())
             elif action is Action.SAY_RESUMING:
                 log.info("vehicle %d back in the guided mode: resuming", v)
             elif action is Action.WARN_FALLBACK:
@@ -467,33 +443,19 @@ class VehicleMission:
         self._chores.add(task)
         task.add_done_callback(self._chores.discard)
 
-    def _note_position(self, pos: LocalPosition) -> float:
-        """The vehicle's clock, period and position from ``pos``; its mission time."""
-        self._received_time = max(self._received_time, pos.time)
-        prev = self.position
-        t = self.clock.update(pos.time)
-        if self.home is None and -pos.down < 1.0:
-            self.home = (pos.north, pos.east)
-        if prev is not None and pos.time > prev.time:
-            self._period += 0.2 * (min(pos.time - prev.time, 1.0) - self._period)
-        self.position = pos
-        self.sensors.observe(t, pos.north, pos.east)
-        return t
-
     def _on_position(self, pos: LocalPosition) -> None:
-        t = self._note_position(pos)
-        if t - self._last_tick >= TICK_S:
-            self._last_tick = t
+        t = self.seen.note_position(pos)
+        self.sensors.observe(t, pos.north, pos.east)
+        if t - self.seen.last_tick >= TICK_S:
+            self.seen.last_tick = t
             self.emit("tick", phase=self.phase.value, level=self.core.level, wall=round(time.time(), 3),
                       north=round(pos.north, 1), east=round(pos.east, 1),
                       alt=round(-pos.down, 1), found=self.core.confirmed_count)  # fmt: skip
         if self.phase is Phase.SEARCH:
             self._search_step(t, pos)
         elif self.phase is Phase.PAUSED:
-            if (
-                self.search_start is not None
-                and t - self.search_start >= self.config.search_duration
-            ):
+            start = self.seen.search_start
+            if start is not None and t - start >= self.config.search_duration:
                 self.request_end("mission time (paused)")  # ends without commanding
             elif not self.control.operator_paused and self._guided_needs_stream():
                 # A pilot hands back by switching to OFFBOARD, which PX4 refuses without a
@@ -507,7 +469,7 @@ class VehicleMission:
             here = np.array([pos.north, pos.east])
             goal = np.array(self.start)
             self._send(guidance.pursuit(here, pos.down, goal, self.guide, self.fence,
-                                        self._period), pos)  # fmt: skip
+                                        self.seen.period), pos)  # fmt: skip
         elif self.phase is Phase.CLIMB and not self.state.climbing_by_command:
             here = np.array([pos.north, pos.east])
             self._send(guidance.pursuit(here, pos.down, here, self.guide, self.fence, 1.0), pos)
@@ -515,7 +477,7 @@ class VehicleMission:
     def _on_gps(self, gps: GlobalPosition) -> None:
         """The fence watch: outside the fence after having been inside it (transit or
         search) ends the search; the end action (RTL) flies the vehicle home, inside."""
-        self.gps = gps
+        self.seen.gps = gps
         watch = self.watch
         if watch is None:
             return
@@ -530,7 +492,7 @@ class VehicleMission:
             self.emit("fence", state="breach", where=breach, lat=gps.lat, lon=gps.lon)
 
     def _search_step(self, t: float, pos: LocalPosition) -> None:
-        self.max_search_speed = max(self.max_search_speed, math.hypot(pos.vn, pos.ve))
+        self.seen.note_search_speed(pos)
         here = np.array([pos.north, pos.east])
         contacts = self.sensors.take()
         # Reached means reached as far as the fence lets the vehicle go: a waypoint between the
@@ -550,7 +512,8 @@ class VehicleMission:
             if d.level != d.previous_level:
                 self.record(events.Level(d.level, self.core.sensor()))
                 self.sensors.select(self.core.sensor(), t)
-        if self.search_start is not None and t - self.search_start >= self.config.search_duration:
+        start = self.seen.search_start
+        if start is not None and t - start >= self.config.search_duration:
             self.request_end("mission time")
         elif self.config.stop_when_all_found and self.core.confirmed_count >= self.real_targets:
             self.request_end("all targets")
@@ -567,11 +530,16 @@ class VehicleMission:
     def pursue(self, pos: LocalPosition, north: float, east: float) -> None:
         """The search's velocity setpoint from ``pos`` towards the waypoint (north, east)."""
         self._send(guidance.pursuit_xy(pos.north, pos.east, pos.down, north, east, self.guide,
-                                       self.fence, self._period), pos)  # fmt: skip
+                                       self.fence, self.seen.period), pos)  # fmt: skip
+
+    def _steer_answered(self, pos: LocalPosition, north: float, east: float) -> None:
+        """The search's common answer steers: :meth:`pursue`, then the waits see the change."""
+        self.pursue(pos, north, east)
+        self.waits.wake()
 
     def send_hold(self) -> None:
         """A setpoint that holds at the last valid position (while none valid comes)."""
-        pos = self.position
+        pos = self.seen.position
         if pos is not None:
             self._send(NedSetpoint(pos.north, pos.east, pos.down, 0.0, 0.0, 0.0), pos,
                        answer=False)  # fmt: skip
@@ -586,7 +554,7 @@ class VehicleMission:
                 return
             sp = safe
         self.link.send_setpoint(sp, self.config.setpoints)
-        self._setpoint_time = pos.time
+        self.seen.setpoint_time = pos.time
         if answer and len(self.latencies) < 200_000:
             self.latencies.append(time.perf_counter() - pos.received)
 
@@ -599,105 +567,17 @@ class VehicleMission:
                       self.config.vehicle, detail, n)  # fmt: skip
             self.record(events.SetpointRefused(kind, detail, n))
 
-    async def _open_link(self) -> bool:
-        """Open the link, retrying with backoff while the endpoint is not up (an autopilot
-        still booting); False when the mission was ended meanwhile."""
-        backoff, attempt = 0.5, 0
-        while True:
-            try:
-                await self.link.open()
-                return True
-            except LinkError as exc:
-                attempt += 1
-                wait = min(backoff * 2 ** (attempt - 1), _OPEN_BACKOFF_MAX_S)
-                log.warning("vehicle %d: %s; retry %d in %.1f s", self.config.vehicle, exc,
-                            attempt, wait)  # fmt: skip
-            deadline = time.monotonic() + wait
-            while time.monotonic() < deadline:
-                if self.end_reason is not None:
-                    return False
-                await asyncio.sleep(0.1)
-
-    # -- link supervision ------------------------------------------------------------------
-
-    async def _supervise(self) -> None:
-        backoff, next_line = 0.5, 0.0
-        wait = self.config.profile.failsafe.link_wait
-        while True:
-            await asyncio.sleep(0.25)
-            self.position_failsafe.check(time.perf_counter())
-            if self.heartbeat is None or self.phase is Phase.DONE:
-                continue
-            silent = time.perf_counter() - self.last_heartbeat_wall
-            if silent <= self.config.link_timeout:
-                backoff = 0.5
-                continue
-            resume = self.phase
-            if resume is not Phase.LINK_LOST:
-                log.warning("vehicle %d: no heartbeat for %.1f s; stop commanding",
-                            self.config.vehicle, silent)  # fmt: skip
-                self.feed(LinkLost())
-                self.record(events.LinkState("lost", round(silent, 1)))
-            if silent >= wait:
-                self._give_up_link(silent)
-                return
-            if time.perf_counter() >= next_line:
-                next_line = time.perf_counter() + _LINK_LINE_S
-                log.warning("vehicle %d: link lost for %.0f s; waiting up to %g s for it",
-                            self.config.vehicle, silent, wait)  # fmt: skip
-            give_up = self.last_heartbeat_wall + wait  # no wait below runs past it
-            left = max(give_up - time.perf_counter(), 0.0)
-            await asyncio.sleep(min(backoff * (1 + random.random()), left))  # jittered backoff
-            backoff = min(backoff * 2, 8.0)
-            try:
-                await self.link.reconnect()
-            except (OSError, LinkError) as exc:
-                log.warning("reconnect failed: %s", exc)
-                continue
-            deadline = min(time.perf_counter() + 2.0 * self.config.link_timeout, give_up)
-            while time.perf_counter() < deadline:
-                await asyncio.sleep(0.1)
-                if time.perf_counter() - self.last_heartbeat_wall < 1.0:
-                    self.record(events.LinkState("restored"))
-                    self._after_link_restored(resume)
-                    break
-
-    def _give_up_link(self, silent: float) -> None:
-        """The link stayed lost for the profile's ``failsafe.link_wait``: the mission ends
-        (exit status 1), saying what the vehicle was last seen doing and where."""
-        hb, ap = self.heartbeat, self.link.autopilot
-        armed = hb is not None and hb.armed
-        if self.state.control.ending:
-            doing = f"{self.state.end_action.value.upper()} under way"
-        elif hb is not None and ap is not None:
-            doing = f"in {ap.mode_name(hb.custom_mode)}"
-        else:
-            doing = "mode unknown"
-        cause = (f"link lost while {'armed' if armed else 'disarmed'} (no heartbeat for "
-                 f"{silent:.0f} s), {doing} {self.where()}")  # fmt: skip
-        log.error("vehicle %d: %s; not waiting longer", self.config.vehicle, cause)
-        self.exit = MissionExit(1, cause)
-        self.request_end("link lost")
-        self._wake()
-
-    def _after_link_restored(self, before: Phase) -> None:
-        hb, ap = self.heartbeat, self.link.autopilot
-        if hb is None or ap is None:
-            event = LinkRestored(before, known=False, guided=False, armed=False, hold=False)
-        else:
-            event = LinkRestored(before, True, ap.is_guided(hb.custom_mode), hb.armed,
-                                 self._hold_mode(hb))  # fmt: skip
-        self.feed(event)
-
     def _setpoints_stalled(self) -> bool:
         """The vehicle's clock ran _SETPOINT_GAP_S or more past our last setpoint's position."""
-        return bool(self._received_time - self._setpoint_time >= _SETPOINT_GAP_S)
+        seen = self.seen
+        return bool(seen.received_time - seen.setpoint_time >= _SETPOINT_GAP_S)
 
     def _guided_needs_stream(self) -> bool:
         ap = self.link.autopilot
         return ap is not None and ap.guided_needs_stream
 
-    def _hold_mode(self, hb: Heartbeat) -> bool:
+    def hold_mode(self, hb: Heartbeat) -> bool:
+        """``hb``'s mode is the autopilot's fall-back (HOLD, LOITER)."""
         ap = self.link.autopilot
         return ap is not None and ap.is_fallback(hb.custom_mode)
 
@@ -716,6 +596,18 @@ class VehicleMission:
     def end_reason(self) -> str | None:
         return self.state.end_reason
 
+    @property
+    def end_action(self) -> FlightMode:
+        return self.state.end_action
+
+    def end_with(self, exit: MissionExit) -> None:
+        """How the companion ends (the end action's wait, the link given up)."""
+        self.exit = exit
+
+    def _ended(self) -> bool:
+        """The waits end: the mission ends, and not with the end action still flying."""
+        return self.end_reason is not None and self.phase is not Phase.RETURN
+
     def _apply(self, state: Mission, *, search_start: float | None = None,
                by: str | None = None) -> None:  # fmt: skip
         """Take the machine's new state; a phase change is a ``phase`` event."""
@@ -726,56 +618,7 @@ class VehicleMission:
             self.answer.forget()
             self.record(events.PhaseChange(state.phase.value, search_start, by))
         if woken:
-            self._wake()
-
-    async def wait_changed(self, timeout: float) -> None:
-        """Until something changed (an event handled, a new state) or ``timeout`` wall s."""
-        self._changed.clear()
-        with contextlib.suppress(TimeoutError):
-            await asyncio.wait_for(self._changed.wait(), timeout)
-
-    async def until(self, predicate: Callable[[], bool], timeout: float | None = None) -> bool:
-        """Wait until ``predicate`` holds or ``timeout`` vehicle seconds pass (or the mission ends)."""
-        waiter = _Waiter(predicate, self.clock.now, timeout,
-                         asyncio.get_running_loop().create_future())  # fmt: skip
-        settled = self._settled(waiter)
-        if settled is not None:
-            return settled
-        self._waiters.append(waiter)
-        try:
-            return await waiter.future
-        finally:
-            self._waiters.remove(waiter)
-
-    def _settled(self, w: _Waiter) -> bool | None:
-        """True: ``w``'s predicate holds; False: timed out or the mission ended; None: wait on."""
-        if w.predicate():
-            return True
-        if self.end_reason is not None and self.phase is not Phase.RETURN:
-            return False
-        if w.timeout is not None and self.clock.now - w.start >= w.timeout:
-            return False
-        return None
-
-    def _wake(self) -> None:
-        """Something changed (an event handled, a new state): wake ``wait_changed``, and settle
-        the waits of :meth:`until` here rather than in their tasks (a task woken for every
-        position only to wait again was one more event-loop iteration per position)."""
-        self._changed.set()
-        for w in self._waiters:
-            if w.future.done():
-                continue
-            try:
-                settled = self._settled(w)
-            except Exception as exc:  # the waiting task gets it, as when it checked itself
-                w.future.set_exception(exc)
-                continue
-            if settled is not None:
-                w.future.set_result(settled)
-
-    async def sleep_vehicle(self, seconds: float) -> None:
-        start = self.clock.now
-        await self.until(lambda: self.clock.now - start >= seconds)
+            self.waits.wake()
 
     def _emit_latency(self) -> None:
         if self.latencies:

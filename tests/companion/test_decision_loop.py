@@ -101,9 +101,9 @@ async def test_of_queued_positions_only_the_newest_is_steered_from(tmp_path: Pat
     mission._handle_queued(_position(0.0, 999.0), link.events)
     assert link.events.empty()
     assert [sp.north for sp in link.setpoints] == [1004.0]
-    assert mission.position is not None
-    assert mission.position.north == 1004.0
-    assert mission.heartbeat is not None  # other events are all handled
+    assert mission.seen.position is not None
+    assert mission.seen.position.north == 1004.0
+    assert mission.seen.heartbeat is not None  # other events are all handled
 
 
 @pytest.mark.asyncio

@@ -88,10 +88,10 @@ async def _fly(out: Path) -> tuple[list[tuple[Any, ...]], VehicleMission]:
         for k in range(TICKS):
             vehicle.sendto(_datagram(mav, k, north, east, vn, ve), ("127.0.0.1", port))
             if k == 0:  # the search starts where the first position is, as once climbed
-                while mission.position is None:
+                while mission.seen.position is None:
                     mission._handle_queued(await link.events.get(), link.events)
                 _begin_search(mission)
-                mission._handle(mission.position)
+                mission._handle(mission.seen.position)
                 decide = asyncio.create_task(mission._decide())
             if k == LOW_BATTERY_AT:  # no answer: the search ends
                 await asyncio.sleep(0.1)
@@ -115,10 +115,10 @@ async def _fly(out: Path) -> tuple[list[tuple[Any, ...]], VehicleMission]:
 
 
 def _begin_search(mission: VehicleMission) -> None:
-    pos = mission.position
+    pos = mission.seen.position
     assert pos is not None
-    t = mission.clock.now
-    mission.search_start = t
+    t = mission.seen.clock.now
+    mission.seen.begin_search(t)
     mission.core.start(np.array([pos.north, pos.east]), t, [KNOWN])
     mission._apply(replace(mission.state, control=enter(mission.control, Phase.SEARCH)))
     mission.sensors.select(mission.core.sensor(), t)
@@ -137,14 +137,16 @@ def _tlog(path: Path) -> list[tuple[str, Any]]:
 
 
 def _state(m: VehicleMission) -> dict[str, Any]:
-    pos = m.position
+    seen = m.seen
+    pos = seen.position
     where = None if pos is None else replace(pos, received=0.0)  # (wall time of arrival)
-    return {"clock": m.clock.now, "period": m._period, "position": where,
-            "speed": m.max_search_speed, "level": m.core.level,
+    return {"clock": seen.clock.now, "period": seen.period, "position": where,
+            "speed": seen.max_search_speed, "level": m.core.level,
             "waypoint": m.core.waypoint.tolist(), "found": m.core.confirmed_count,
             "signal": m.sensors.signal, "end": m.end_reason, "phase": m.phase,
-            "received": m._received_time, "setpoint": m._setpoint_time,
-            "heartbeat": m.heartbeat, "status": m.status}  # fmt: skip
+            "received": seen.received_time, "setpoint": seen.setpoint_time,
+            "heartbeat": seen.heartbeat, "status": seen.status, "home": seen.home,
+            "tick": seen.last_tick}  # fmt: skip
 
 
 def _records(path: Path) -> list[dict[str, Any]]:
@@ -169,8 +171,7 @@ def test_the_answer_flies_as_the_decision_loop(
 
     def checked(self: SearchAnswer, north: float, east: float, goal: tuple[float, float]) -> None:
         # the plan is the policy's waypoint of now (also after a step that did not reach one)
-        m = self.m
-        if (north, east) != tuple(m.core.waypoint) or goal != tuple(m.fence.clamp_xy(north, east)):
+        if (north, east) != tuple(self.core.waypoint) or goal != tuple(FENCE.clamp_xy(north, east)):
             stale.append((north, east, *goal))
         steer_to(self, north, east, goal)
 
