@@ -73,10 +73,10 @@ async def answer(answers: int, out: Path, profile: cProfile.Profile | None) -> t
     # the first position starts the search there, as the lifecycle does once climbed
     while mission.seen.position is None:
         event = await link.events.get()
-        mission._handle_queued(event, link.events)
+        mission.intake.handle_queued(event, link.events)
     _begin_search(mission)
-    mission._handle(mission.seen.position)  # the first answer: the vehicle waits for it
-    decide = asyncio.create_task(mission._decide())
+    mission.intake.handle(mission.seen.position)  # the first answer: the vehicle waits for it
+    decide = asyncio.create_task(mission.intake.decide())
     cpu, wall = time.process_time(), time.perf_counter()
     if profile is not None:
         profile.enable()

@@ -17,6 +17,7 @@ from companion.mission.control import OperatorPause, OperatorResume
 from companion.mission.lifecycle import Event
 from companion.mission.observed import Observed
 from companion.mission.phase import Phase
+from companion.mission.setpoint_out import SetpointOut
 from companion.telemetry import events
 
 log = logging.getLogger(__name__)
@@ -44,12 +45,13 @@ class Guarded(Protocol):
     @property
     def seen(self) -> Observed: ...
     @property
+    def out(self) -> SetpointOut: ...
+    @property
     def phase(self) -> Phase: ...
     @property
     def end_reason(self) -> str | None: ...
     @property
     def end_action(self) -> FlightMode: ...
-    def send_hold(self) -> None: ...
     def ask(self, event: Event, *, by: str | None = None) -> str | None: ...
     def request_end(self, reason: str) -> None: ...
     def record(self, event: events.DurableEvent) -> None: ...
@@ -100,7 +102,7 @@ class PositionFailsafe:
             return
         alive = now - m.seen.last_heartbeat_wall < m.config.link_timeout
         if m.phase in _FLYING and alive and last is not None and now - last >= _STREAM_GAP_S:
-            m.send_hold()
+            m.out.hold_here()
         fresh = last is not None and now - last < self.spec.position_timeout
         if fresh:
             self._since = None

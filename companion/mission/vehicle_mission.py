@@ -6,46 +6,33 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
-import time
 from collections.abc import Coroutine
 from typing import Any
 
-import numpy as np
-
-from companion import guidance
 from companion.autopilots import FlightMode
 from companion.geofence import Geofence
-from companion.guidance import GuidanceConfig, NedSetpoint
+from companion.guidance import GuidanceConfig
 from companion.link.base import LinkError, VehicleLink
 from companion.link.messages import (
-    GlobalPosition,
     Heartbeat,
-    LinkEvent,
     LocalPosition,
-    SensorContact,
-    SensorSignal,
-    StatusText,
-    StraySource,
-    SystemStatus,
 )
 from companion.link.telemetry_guard import TelemetryLimits
 from companion.mission.config import MissionConfig
 from companion.mission.control import (
     Action,
     Control,
-    ModeReport,
     OperatorPause,
     OperatorResume,
     Refused,
 )
 from companion.mission.core_for import core_for
+from companion.mission.event_intake import EventIntake
 from companion.mission.fence_watch import FenceWatch
 from companion.mission.lifecycle import Event, Mission, step
 from companion.mission.lifecycle_events import (
-    Battery,
     Do,
     EndRequested,
-    Gps,
     OperatorEnd,
     SearchBegun,
     Signal,
@@ -55,9 +42,11 @@ from companion.mission.link_supervision import LinkSupervision
 from companion.mission.mission_exit import MissionExit, where
 from companion.mission.observed import Observed
 from companion.mission.phase import Phase
+from companion.mission.phase_steering import PhaseSteering
 from companion.mission.position_failsafe import PositionFailsafe
-from companion.mission.search_answer import TICK_S, SearchAnswer
+from companion.mission.search_answer import SearchAnswer
 from companion.mission.setpoint_guard import SetpointGuard
+from companion.mission.setpoint_out import SetpointOut
 from companion.mission.swarm_core import SwarmCore, SwarmExchange
 from companion.mission.vehicle_clock import VehicleClock
 from companion.mission.vehicle_fence import VehicleFence
@@ -68,17 +57,9 @@ from companion.telemetry import events
 from companion.telemetry.mission_log import EventSink, Recovered
 
 log = logging.getLogger(__name__)
-_SETPOINT_GAP_S = 0.8
-"""A gap in our setpoints this long (vehicle s) can explain a HOLD. PX4 falls back only after
-COM_OF_LOSS_T (1 s stock, read from SITL) without setpoints; the newest position we hold may lag
-that HOLD by one 10 Hz period, so 0.8 still sees every fall-back, while a shorter gap (a loaded
-host descheduling us for 0.17 wall s at 3x gave 0.5) no longer turns a pilot's HOLD into one."""
 _RATE_MARGIN = 1.5
 """The vehicle clock may run this much faster than the speed-up asked (a simulator catching up
 after a stall of its host)."""
-_TEXT_LEVEL = {0: logging.ERROR, 1: logging.ERROR, 2: logging.ERROR, 3: logging.ERROR,
-               4: logging.WARNING, 5: logging.INFO, 6: logging.INFO}  # fmt: skip
-"""MAV_SEVERITY -> log level for the vehicle's STATUSTEXT (7, debug, is logged at DEBUG)."""
 
 
 class VehicleMission:
@@ -127,7 +108,6 @@ class VehicleMission:
         )
         self.state = Mission(end_action=config.end_action)
         """The lifecycle machine's state (mission/lifecycle.py), who is in control included."""
-        self.latencies: list[float] = []
         self.real_targets = sum(not t.false_target for t in profile.targets)
         self._main: asyncio.Task[object] | None = None
         self._chores: set[asyncio.Task[None]] = set()
@@ -138,14 +118,6 @@ class VehicleMission:
         self.vehicle_fence = (
             VehicleFence(link, own_fence, config.vehicle, self.emit) if own_fence else None
         )
-        self.lifecycle = LifecycleSteps(self)
-        self.answer = SearchAnswer(
-            self.seen, self._steer_answered, handle=self._handle,
-            searching=lambda: self.phase is Phase.SEARCH and self.end_reason is None,
-            config=config, core=self.core, sensors=self.sensors,
-            acceptance_radius=self.guide.acceptance_radius,
-        )  # fmt: skip
-        """The search's common answer without the decision loop's events (search_answer.py)."""
         failsafe = profile.failsafe
         rate = None if config.max_speedup is None else config.max_speedup * _RATE_MARGIN
         link.guard.limits = TelemetryLimits(
@@ -154,6 +126,18 @@ class VehicleMission:
         self.setpoint_guard = SetpointGuard(
             self.guide, self.fence, config.setpoints, max(profile.fleet.altitude_step / 2, 1.0)
         )
+        self.out = SetpointOut(config.vehicle, link, self.seen, self.setpoint_guard,
+                               config.setpoints, self.record)  # fmt: skip
+        self.steering = PhaseSteering(self)
+        self.intake = EventIntake(self, self.steering.on_position)
+        self.answer = SearchAnswer(
+            self.seen, self._steer_answered, handle=self.intake.handle,
+            searching=lambda: self.phase is Phase.SEARCH and self.end_reason is None,
+            config=config, core=self.core, sensors=self.sensors,
+            acceptance_radius=self.guide.acceptance_radius,
+        )  # fmt: skip
+        """The search's common answer without the decision loop's events (search_answer.py)."""
+        self.lifecycle = LifecycleSteps(self)
         self.position_failsafe = PositionFailsafe(self)
         self.supervision = LinkSupervision(self, self.position_failsafe.check)
         self.exit: MissionExit | None = None
@@ -172,7 +156,7 @@ class VehicleMission:
         try:
             async with asyncio.TaskGroup() as tg:
                 loops = [
-                    tg.create_task(self._decide(), name=f"v{self.config.vehicle}-decide"),
+                    tg.create_task(self.intake.decide(), name=f"v{self.config.vehicle}-decide"),
                     tg.create_task(self.supervision.run(), name=f"v{self.config.vehicle}-supervise"),
                     tg.create_task(self.sensors.run(), name=f"v{self.config.vehicle}-sensor"),
                 ]  # fmt: skip
@@ -279,123 +263,6 @@ class VehicleMission:
         except LinkError as exc:
             log.error("vehicle %d: hold not sent: %s", self.config.vehicle, exc)
 
-    # -- decision loop ---------------------------------------------------------------------
-
-    async def _decide(self) -> None:
-        events = self.link.events
-        loop = asyncio.get_running_loop()
-        me = asyncio.current_task()
-        failed: list[Exception] = []
-        timer: asyncio.TimerHandle | None = None
-
-        def beat() -> None:
-            # The companion HEARTBEAT every period (wall s), scheduled by this loop and stopped
-            # with it: if the decision loop dies, the vehicle stops hearing the companion. A
-            # timer, not a timeout on a wait: asyncio's cost per wake-up is most of a
-            # companion's CPU at 1000 positions per wall second.
-            nonlocal timer
-            try:
-                self.link.send_heartbeat()
-            except Exception as exc:  # ends the decision loop with this error
-                failed.append(exc)
-                if me is not None:
-                    me.cancel()
-                return
-            timer = loop.call_later(self.config.heartbeat_period, beat)
-
-        def stop(exc: Exception) -> None:
-            failed.append(exc)
-            self.link.listener = None
-            self.link.answerer = None
-            if me is not None:
-                me.cancel()
-
-        def listen(batch: list[LinkEvent]) -> None:
-            # Called by the link as it reads (one batch per socket read): the setpoint leaves
-            # in the same loop iteration as the position came in. An error ends this loop.
-            try:
-                self._handle_batch(batch)
-            except Exception as exc:
-                stop(exc)
-
-        beat()
-        try:
-            if not events.empty():  # what came before the listener
-                self._handle_queued(events.get_nowait(), events)
-            self.link.listener = listen
-            self.answer.failed = stop
-            self.link.answerer = self.answer
-            await loop.create_future()  # until cancelled (the mission ends, an error)
-        except asyncio.CancelledError:
-            if failed:
-                raise failed[0] from None
-            raise
-        finally:
-            self.link.listener = None
-            self.link.answerer = None
-            if timer is not None:
-                timer.cancel()
-
-    def _handle_queued(self, first: LinkEvent, events: asyncio.Queue[LinkEvent]) -> None:
-        """``first`` and the events queued behind it (those that came before the listener)."""
-        batch = [first]
-        while not events.empty():
-            batch.append(events.get_nowait())
-        self._handle_batch(batch)
-
-    def _handle_batch(self, batch: list[LinkEvent]) -> None:
-        """Events read together, in order; of several positions only the newest is acted on:
-        after a stall (a loaded machine, a sped-up vehicle) the older ones are stale, and a
-        setpoint computed from each would steer seconds late."""
-        newest = -1
-        for i, event in enumerate(batch):
-            if isinstance(event, LocalPosition):
-                # How far the vehicle's clock has run, for a HOLD queued before the newest one.
-                newest = i
-                self.seen.note_received(event.time)
-        for i, event in enumerate(batch):
-            if i == newest or not isinstance(event, LocalPosition):
-                self._handle(event)
-
-    def _handle(self, event: LinkEvent) -> None:
-        if isinstance(event, LocalPosition):
-            self._on_position(event)
-        elif isinstance(event, GlobalPosition):
-            self._on_gps(event)
-        elif isinstance(event, SensorContact | SensorSignal):
-            self.sensors.accept(event)
-        elif isinstance(event, Heartbeat):
-            self._on_heartbeat(event)
-        elif isinstance(event, StatusText):
-            self._on_text(event)
-        elif isinstance(event, StraySource):
-            self.emit("stray", address=event.address, locked=event.locked)
-        elif isinstance(event, SystemStatus):
-            self.seen.status = event
-            self.feed(Battery(event.battery_remaining, self.config.battery_min))
-        self.waits.wake()
-
-    def _on_text(self, text: StatusText) -> None:
-        """The autopilot's own words on the console and in the mission log."""
-        log.log(_TEXT_LEVEL.get(text.severity, logging.DEBUG), "vehicle %d says: %s",
-                self.config.vehicle, text.text)  # fmt: skip
-        if text.severity <= 6:
-            self.emit("statustext", severity=text.severity, text=text.text)
-
-    def _on_heartbeat(self, hb: Heartbeat) -> None:
-        self.seen.last_heartbeat_wall = time.perf_counter()
-        previous = self.seen.heartbeat
-        self.seen.heartbeat = hb
-        ap = self.link.autopilot
-        if ap is None:
-            return
-        guided = ap.is_guided(hb.custom_mode)
-        if previous is None or previous.custom_mode != hb.custom_mode:
-            self.record(events.ModeChange(ap.mode_name(hb.custom_mode), guided))
-        report = ModeReport(guided, self.hold_mode(hb), self._setpoints_stalled(),
-                            self.core.started)  # fmt: skip
-        self.feed(report, mode=ap.mode_name(hb.custom_mode))
-
     def feed(self, event: Event, *, mode: str = "") -> tuple[Do, ...]:
         """An event the lifecycle machine never refuses: its steps left for the caller."""
         result = self._step(event, mode=mode)
@@ -443,139 +310,6 @@ class VehicleMission:
         self._chores.add(task)
         task.add_done_callback(self._chores.discard)
 
-    def _on_position(self, pos: LocalPosition) -> None:
-        t = self.seen.note_position(pos)
-        self.sensors.observe(t, pos.north, pos.east)
-        if t - self.seen.last_tick >= TICK_S:
-            self.seen.last_tick = t
-            self.emit("tick", phase=self.phase.value, level=self.core.level, wall=round(time.time(), 3),
-                      north=round(pos.north, 1), east=round(pos.east, 1),
-                      alt=round(-pos.down, 1), found=self.core.confirmed_count)  # fmt: skip
-        if self.phase is Phase.SEARCH:
-            self._search_step(t, pos)
-        elif self.phase is Phase.PAUSED:
-            start = self.seen.search_start
-            if start is not None and t - start >= self.config.search_duration:
-                self.request_end("mission time (paused)")  # ends without commanding
-            elif not self.control.operator_paused and self._guided_needs_stream():
-                # A pilot hands back by switching to OFFBOARD, which PX4 refuses without a
-                # setpoint stream: keep one flowing that holds here (ignored in other modes).
-                self._send(NedSetpoint(pos.north, pos.east, pos.down, 0.0, 0.0, 0.0), pos)
-        elif self.phase is Phase.PREPARE:
-            # Neutral stream before arming: stay where it is (a climb here would start the
-            # moment the mode switches, before the vehicle is armed).
-            self._send(NedSetpoint(pos.north, pos.east, pos.down, 0.0, 0.0, 0.0), pos)
-        elif self.phase is Phase.TRANSIT and self.start is not None:
-            here = np.array([pos.north, pos.east])
-            goal = np.array(self.start)
-            self._send(guidance.pursuit(here, pos.down, goal, self.guide, self.fence,
-                                        self.seen.period), pos)  # fmt: skip
-        elif self.phase is Phase.CLIMB and not self.state.climbing_by_command:
-            here = np.array([pos.north, pos.east])
-            self._send(guidance.pursuit(here, pos.down, here, self.guide, self.fence, 1.0), pos)
-
-    def _on_gps(self, gps: GlobalPosition) -> None:
-        """The fence watch: outside the fence after having been inside it (transit or
-        search) ends the search; the end action (RTL) flies the vehicle home, inside."""
-        self.seen.gps = gps
-        watch = self.watch
-        if watch is None:
-            return
-        breach = watch.breach(gps.north, gps.east)
-        own = self.vehicle_fence
-        if (breach is None and own is not None and own.installed and not own.enabling
-                and self.phase not in (Phase.RETURN, Phase.DONE)):  # fmt: skip
-            self.chore(own.enable())
-        if Do.SAY_BREACH in self.feed(Gps(breach)):
-            log.error("vehicle %d is %s (GPS %.7f, %.7f): ending the search", self.config.vehicle,
-                      breach, gps.lat, gps.lon)  # fmt: skip
-            self.emit("fence", state="breach", where=breach, lat=gps.lat, lon=gps.lon)
-
-    def _search_step(self, t: float, pos: LocalPosition) -> None:
-        self.seen.note_search_speed(pos)
-        here = np.array([pos.north, pos.east])
-        contacts = self.sensors.take()
-        # Reached means reached as far as the fence lets the vehicle go: a waypoint between the
-        # area's edge and the fence is clamped, and the clamped point is where it stops.
-        goal = self.fence.clamp(self.core.waypoint)
-        reached = guidance.reached(here, goal, self.guide.acceptance_radius)
-        if self.core.needs_step(t, here, reached, contacts):
-            d = self.core.step(t, here, reached, contacts)
-            goal = self.fence.clamp(self.core.waypoint)
-            if d.detected:
-                self.record(events.Detection(round(pos.north, 1), round(pos.east, 1), d.level))
-            for north, east in d.confirmed:
-                self.record(events.Confirmation(north, east, d.previous_level,
-                                                self.core.confirmed_count))  # fmt: skip
-            if d.fell_back:
-                self.record(events.Fallback(d.level))
-            if d.level != d.previous_level:
-                self.record(events.Level(d.level, self.core.sensor()))
-                self.sensors.select(self.core.sensor(), t)
-        start = self.seen.search_start
-        if start is not None and t - start >= self.config.search_duration:
-            self.request_end("mission time")
-        elif self.config.stop_when_all_found and self.core.confirmed_count >= self.real_targets:
-            self.request_end("all targets")
-        if self.end_reason is not None:
-            return
-        if self.config.setpoints == "position":  # (goal: the fenced waypoint of now)
-            sp = NedSetpoint(float(goal[0]), float(goal[1]), -self.guide.altitude, 0.0, 0.0, 0.0)
-            self._send(sp, pos)
-            return
-        wn, we = (float(c) for c in self.core.waypoint)
-        self.answer.steer_to(wn, we, (float(goal[0]), float(goal[1])))
-        self.pursue(pos, wn, we)
-
-    def pursue(self, pos: LocalPosition, north: float, east: float) -> None:
-        """The search's velocity setpoint from ``pos`` towards the waypoint (north, east)."""
-        self._send(guidance.pursuit_xy(pos.north, pos.east, pos.down, north, east, self.guide,
-                                       self.fence, self.seen.period), pos)  # fmt: skip
-
-    def _steer_answered(self, pos: LocalPosition, north: float, east: float) -> None:
-        """The search's common answer steers: :meth:`pursue`, then the waits see the change."""
-        self.pursue(pos, north, east)
-        self.waits.wake()
-
-    def send_hold(self) -> None:
-        """A setpoint that holds at the last valid position (while none valid comes)."""
-        pos = self.seen.position
-        if pos is not None:
-            self._send(NedSetpoint(pos.north, pos.east, pos.down, 0.0, 0.0, 0.0), pos,
-                       answer=False)  # fmt: skip
-
-    def _send(self, sp: NedSetpoint, pos: LocalPosition, *, answer: bool = True) -> None:
-        """``sp``, the answer to ``pos`` (its latency measured; not for a hold without a new
-        position), through the last check."""
-        safe, why = self.setpoint_guard.safe(sp)
-        if why is not None:
-            self._refused_setpoint(*why)
-            if safe is None:
-                return
-            sp = safe
-        self.link.send_setpoint(sp, self.config.setpoints)
-        self.seen.setpoint_time = pos.time
-        if answer and len(self.latencies) < 200_000:
-            self.latencies.append(time.perf_counter() - pos.received)
-
-    def _refused_setpoint(self, kind: str, detail: str) -> None:
-        """A setpoint the last check refused: a bug, logged with its cause (the 1st, 10th,
-        100th ... of each kind) and replaced by a hold."""
-        n = self.setpoint_guard.refused[kind]
-        if n == 10 ** (len(str(n)) - 1):
-            log.error("vehicle %d: setpoint not sent (%s; %d so far): a bug; sent a hold instead",
-                      self.config.vehicle, detail, n)  # fmt: skip
-            self.record(events.SetpointRefused(kind, detail, n))
-
-    def _setpoints_stalled(self) -> bool:
-        """The vehicle's clock ran _SETPOINT_GAP_S or more past our last setpoint's position."""
-        seen = self.seen
-        return bool(seen.received_time - seen.setpoint_time >= _SETPOINT_GAP_S)
-
-    def _guided_needs_stream(self) -> bool:
-        ap = self.link.autopilot
-        return ap is not None and ap.guided_needs_stream
-
     def hold_mode(self, hb: Heartbeat) -> bool:
         """``hb``'s mode is the autopilot's fall-back (HOLD, LOITER)."""
         ap = self.link.autopilot
@@ -620,9 +354,12 @@ class VehicleMission:
         if woken:
             self.waits.wake()
 
+    def _steer_answered(self, pos: LocalPosition, north: float, east: float) -> None:
+        """The search's common answer steers: the pursuit, then the waits see the change."""
+        self.out.pursue(pos, north, east)
+        self.waits.wake()
+
     def _emit_latency(self) -> None:
-        if self.latencies:
-            ms = np.array(self.latencies) * 1e3
-            self.emit("latency", n=len(ms), direct=self.answer.answered,
-                      p50_ms=round(float(np.percentile(ms, 50)), 4),
-                      p99_ms=round(float(np.percentile(ms, 99)), 4))  # fmt: skip
+        ms = self.out.latency_ms()
+        if ms is not None:
+            self.emit("latency", n=len(self.out.latencies), direct=self.answer.answered, **ms)

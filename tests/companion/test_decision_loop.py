@@ -98,7 +98,7 @@ async def test_of_queued_positions_only_the_newest_is_steered_from(tmp_path: Pat
     for k in range(5):
         link.events.put_nowait(_position(0.1 * k, 1000.0 + k))
     link.events.put_nowait(Heartbeat(12, 0, False, 3))
-    mission._handle_queued(_position(0.0, 999.0), link.events)
+    mission.intake.handle_queued(_position(0.0, 999.0), link.events)
     assert link.events.empty()
     assert [sp.north for sp in link.setpoints] == [1004.0]
     assert mission.seen.position is not None
@@ -112,9 +112,9 @@ async def test_a_lone_position_is_acted_on(tmp_path: Path) -> None:
     config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
     mission = VehicleMission(config, link, _Sink())
     mission.state = replace(mission.state, control=enter(mission.control, Phase.PREPARE))
-    mission._handle_queued(_position(0.0, 5.0), link.events)
+    mission.intake.handle_queued(_position(0.0, 5.0), link.events)
     link.events.put_nowait(_position(0.1, 6.0))
-    mission._handle_queued(Heartbeat(12, 0, False, 3), link.events)
+    mission.intake.handle_queued(Heartbeat(12, 0, False, 3), link.events)
     assert [sp.north for sp in link.setpoints] == [5.0, 6.0]
 
 
@@ -180,7 +180,7 @@ async def test_heartbeats_flow_while_the_loop_runs_and_stop_with_it(tmp_path: Pa
     link = _BeatingLink()
     mission = _mission(tmp_path, link)
     mission.state = replace(mission.state, control=enter(mission.control, Phase.PREPARE))
-    task = asyncio.create_task(mission._decide())
+    task = asyncio.create_task(mission.intake.decide())
     await asyncio.sleep(0)
     assert link.beats == 1  # one at once
     link.publish([_position(0.1, 7.0)])
@@ -199,4 +199,4 @@ async def test_heartbeats_flow_while_the_loop_runs_and_stop_with_it(tmp_path: Pa
 async def test_a_failing_heartbeat_ends_the_loop_with_its_error(tmp_path: Path) -> None:
     link = _BeatingLink(fail_after=2)
     with pytest.raises(OSError, match="socket gone"):
-        await asyncio.wait_for(_mission(tmp_path, link)._decide(), 5.0)
+        await asyncio.wait_for(_mission(tmp_path, link).intake.decide(), 5.0)

@@ -89,10 +89,10 @@ async def _fly(out: Path) -> tuple[list[tuple[Any, ...]], VehicleMission]:
             vehicle.sendto(_datagram(mav, k, north, east, vn, ve), ("127.0.0.1", port))
             if k == 0:  # the search starts where the first position is, as once climbed
                 while mission.seen.position is None:
-                    mission._handle_queued(await link.events.get(), link.events)
+                    mission.intake.handle_queued(await link.events.get(), link.events)
                 _begin_search(mission)
-                mission._handle(mission.seen.position)
-                decide = asyncio.create_task(mission._decide())
+                mission.intake.handle(mission.seen.position)
+                decide = asyncio.create_task(mission.intake.decide())
             if k == LOW_BATTERY_AT:  # no answer: the search ends
                 await asyncio.sleep(0.1)
                 break
