@@ -4,25 +4,18 @@ machine's; here are only the waits, the commands and what they are told to say."
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import math
 import time
-from collections.abc import Awaitable, Callable, Coroutine
-from typing import Any, Protocol
+from collections.abc import Awaitable, Callable
 
 import numpy as np
 
 from companion import guidance
 from companion.autopilots import FlightMode
-from companion.guidance import GuidanceConfig
-from companion.link.base import VehicleLink
 from companion.link.outcome import CommandResult
-from companion.link.streams import needs
-from companion.mission.config import MissionConfig
-from companion.mission.core_for import MissionCore
-from companion.mission.fence_watch import FenceWatch
-from companion.mission.lifecycle import Event
+from companion.mission.connect_steps import connect
+from companion.mission.flown import Flown
 from companion.mission.lifecycle_events import (
     Began,
     Climbed,
@@ -44,57 +37,10 @@ from companion.mission.lifecycle_events import (
     TransitEnded,
 )
 from companion.mission.mission_exit import MissionExit
-from companion.mission.observed import Observed
 from companion.mission.phase import Phase
-from companion.mission.vehicle_fence import VehicleFence
-from companion.mission.vehicle_waits import VehicleWaits
-from companion.sensors.base import SensorSource
 from companion.telemetry import events
-from companion.telemetry.mission_log import Recovered
 
 log = logging.getLogger(__name__)
-
-
-class Flown(Protocol):
-    """What the lifecycle's steps read of the mission and ask of it (VehicleMission)."""
-
-    @property
-    def config(self) -> MissionConfig: ...
-    @property
-    def link(self) -> VehicleLink: ...
-    @property
-    def recovered(self) -> Recovered: ...
-    @property
-    def seen(self) -> Observed: ...
-    @property
-    def waits(self) -> VehicleWaits: ...
-    @property
-    def core(self) -> MissionCore: ...
-    @property
-    def sensors(self) -> SensorSource: ...
-    @property
-    def guide(self) -> GuidanceConfig: ...
-    @property
-    def watch(self) -> FenceWatch | None: ...
-    @property
-    def start(self) -> tuple[float, float] | None: ...
-    @property
-    def vehicle_fence(self) -> VehicleFence | None: ...
-    @property
-    def phase(self) -> Phase: ...
-    @property
-    def end_reason(self) -> str | None: ...
-    @property
-    def end_action(self) -> FlightMode: ...
-    @property
-    def exit(self) -> MissionExit | None: ...
-    def end_with(self, exit: MissionExit) -> None: ...
-    def feed(self, event: Event, *, mode: str = "") -> tuple[Do, ...]: ...
-    def chore(self, work: Coroutine[Any, Any, None]) -> None: ...
-    def emit(self, event: str, **fields: object) -> None: ...
-    def record(self, event: events.DurableEvent) -> None: ...
-    def request_end(self, reason: str) -> None: ...
-    def where(self) -> str: ...
 
 
 class LifecycleSteps:
@@ -133,12 +79,7 @@ class LifecycleSteps:
     # -- connect -----------------------------------------------------------------------------
 
     async def _connect(self) -> Connected:
-        await self._await_vehicle()
-        if self.config.dedicated_link:
-            await self.link.configure_streams()
-        await self._ensure_streams()
-        await self._learn_origin()
-        await self._check_start()
+        await connect(self.m)
         return Connected()
 
     async def _install_fence(self) -> None:
@@ -157,87 +98,6 @@ class LifecycleSteps:
     async def _retry(self) -> Retried:
         await self.m.waits.sleep_vehicle(1.0)
         return Retried()
-
-    async def _await_vehicle(self) -> None:
-        """Wait for the vehicle's HEARTBEAT, saying every few seconds what is heard instead."""
-        m, period = self.m, self.config.waiting_line_period
-        next_line = time.monotonic() + period
-        while m.seen.heartbeat is None and m.end_reason is None:
-            await m.waits.wait_changed(max(next_line - time.monotonic(), 0.0))
-            if m.seen.heartbeat is not None or time.monotonic() < next_line:
-                continue  # other messages of the vehicle woke us: not yet time for a line
-            next_line = time.monotonic() + period
-            heard = sorted(self.link.heard)
-            log.warning("vehicle %d: waiting on %s for system %d; heard %s%s",
-                        self.config.vehicle, self.link.describe(), self.config.system_id,
-                        f"systems {heard}" if heard else "nothing",
-                        " (no autopilot HEARTBEAT from it yet)"
-                        if self.config.system_id in heard else "")  # fmt: skip
-
-    async def _ensure_streams(self) -> None:
-        """Ask for every message the mission reads; while one is missing, say which and what
-        was tried, and ask again (a vehicle still booting may not answer the first time)."""
-        while self.m.end_reason is None:
-            problems = await self.link.request_streams(
-                needs(global_position=self.link.global_position)
-            )
-            if not problems:
-                return
-            for line in problems:
-                log.warning("vehicle %d: missing %s", self.config.vehicle, line)
-            self.m.emit("streams", missing=problems)
-            await asyncio.sleep(5.0)
-
-    async def _learn_origin(self) -> None:
-        """Geo-referenced profiles: where the vehicle's local frame starts (the link shifts
-        positions into the profile's frame from then on); asked again until known."""
-        if self.link.alignment is None:
-            self.m.chore(self._note_own_origin())
-            return
-        while self.m.end_reason is None:
-            missing = await self.link.learn_origin()
-            origin = self.link.alignment.origin
-            if missing is None and origin is not None:
-                a = self.link.alignment
-                self.m.emit("frame", source=origin.source, lat=round(origin.lat, 7),
-                            lon=round(origin.lon, 7), north=round(a.north, 2),
-                            east=round(a.east, 2))  # fmt: skip
-                return
-            log.warning("vehicle %d: origin of its local frame unknown: %s; asking again",
-                        self.config.vehicle, missing)  # fmt: skip
-            await asyncio.sleep(2.0)
-
-    async def _note_own_origin(self) -> None:
-        """A vehicle flown in its own frame (a profile without ``site``): once it is armed (its
-        origin is set by then), where that frame starts, for the run map (a SITL booted at
-        ArduCopter's default home flies in Australia, not at the profile's default origin)."""
-        m = self.m
-        if not await m.waits.until(lambda: m.seen.heartbeat is not None and m.seen.heartbeat.armed):
-            return
-        origin = await self.link.read_origin()
-        if origin is not None:
-            m.emit("frame", source="own", lat=round(origin[0], 7), lon=round(origin[1], 7),
-                   north=0.0, east=0.0)  # fmt: skip
-
-    async def _check_start(self) -> None:
-        """Refuse to start a vehicle (GPS position) too far outside the search area."""
-        m = self.m
-        if m.watch is None:
-            return
-        m.seen.forget_gps()  # one taken after the origin is known: the GPS has a fix by then
-        await m.waits.until(lambda: m.seen.gps is not None)
-        gps = m.seen.gps
-        if gps is None:
-            return
-        why = m.watch.start_refusal(gps.north, gps.east)
-        if why is None:
-            return
-        refusal = (f"vehicle {self.config.vehicle} (system {self.config.system_id}) at "
-                   f"{gps.lat:.6f}, {gps.lon:.6f} is {why} of profile "
-                   f"{self.config.profile.name}: not starting")  # fmt: skip
-        log.error("%s", refusal)
-        m.emit("refused", command="start", reason=refusal)
-        m.request_end(f"refused: {refusal}")
 
     # -- prepare and climb -------------------------------------------------------------------
 
