@@ -150,12 +150,19 @@ def run_points(
     workers: int,
     scheduler: str | None,
     progress: Callable[[int], None],
+    interrupted: Callable[[], bool] = lambda: False,
 ) -> None:
     """Simulate the points not yet done, ``workers`` at a time (each point is one block of
     runs per 1000; a batch keeps every worker busy), saving each batch as it finishes.
-    Ctrl-C saves the points of the batch that had finished and raises KeyboardInterrupt."""
+    Ctrl-C saves the points of the batch that had finished and raises KeyboardInterrupt.
+
+    ``interrupted``: whether a Ctrl-C came, checked between batches. Its KeyboardInterrupt
+    can be lost: raised in a fork handler (the next batch's workers start), Python prints it
+    as "Exception ignored" and goes on; a worker forked that moment dies of it."""
     batch = max(workers, 1)
     for start in range(0, len(todo), batch):
+        if interrupted():
+            raise KeyboardInterrupt
         group = todo[start : start + batch]
         try:
             results = run_many(
@@ -170,8 +177,14 @@ def run_points(
             for i, res in stop.finished.items():
                 _save(folder, ask, group[i], res)
             raise KeyboardInterrupt from None
+        except RuntimeError:
+            if interrupted():  # a worker killed by the Ctrl-C as it started
+                raise KeyboardInterrupt from None
+            raise
         for point, res in zip(group, results, strict=True):
             _save(folder, ask, point, res)
+    if interrupted():
+        raise KeyboardInterrupt
 
 
 def combined(folder: Path, all_points: list[Point]) -> dict[str, pa.Table]:

@@ -7,10 +7,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from types import FrameType
 
 from tqdm import tqdm
 
@@ -61,6 +63,18 @@ def add_sweep_parser(
     common(p)
 
 
+class _CtrlC:
+    """SIGINT's handler during the runs: KeyboardInterrupt as by default, and remembered, for
+    sweep.run_points to find where Python dropped the exception."""
+
+    def __init__(self) -> None:
+        self.seen = False
+
+    def __call__(self, signum: int, frame: FrameType | None) -> None:
+        self.seen = True
+        raise KeyboardInterrupt
+
+
 def sweep_command(args: argparse.Namespace) -> int:
     ask = SweepAsk(
         profile=args.profile,
@@ -90,9 +104,19 @@ def sweep_command(args: argparse.Namespace) -> int:
         file=sys.stderr,
     )
     workers = args.workers or os.cpu_count() or 1
+    ctrl_c = _CtrlC()
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is signal.default_int_handler:  # not where Ctrl-C is ignored (cmd &)
+        signal.signal(signal.SIGINT, ctrl_c)
     try:
         run_points(
-            folder, ask, todo, workers=workers, scheduler=args.scheduler, progress=bar.update
+            folder,
+            ask,
+            todo,
+            workers=workers,
+            scheduler=args.scheduler,
+            progress=bar.update,
+            interrupted=lambda: ctrl_c.seen,
         )
     except KeyboardInterrupt:
         bar.close()
@@ -103,6 +127,9 @@ def sweep_command(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return INTERRUPTED
+    finally:
+        if previous is signal.default_int_handler:
+            signal.signal(signal.SIGINT, previous)
     bar.close()
     tables = combined(folder, every)
     rows = point_rows(ask, tables[RUNS])
