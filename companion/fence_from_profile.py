@@ -1,7 +1,10 @@
 """The geofence a profile asks for: its field polygon, else the search area's rectangle; and what
-a geo-referenced (site) profile adds: the fence watch, the guidance fence, the start point."""
+a geo-referenced (site) profile adds: the fence watch, the guidance fence. :func:`site_geometry`
+builds them all at once, from one frame and one fence, for a flight."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -11,14 +14,36 @@ from companion.mission.fence_watch import FenceWatch
 from mdm_profiles import MissionProfile
 
 
-def fence_for(profile: MissionProfile) -> Geofence:
-    """Local (north, east) geofence; WGS84 vertices are converted by the link layer's frame."""
+@dataclass(frozen=True)
+class SiteGeometry:
+    """A profile's frame and fences, each built once."""
+
+    frame: LocalFrame
+    """The profile's own frame: NED metres around its origin."""
+    fence: Geofence
+    """The fence as the profile draws it (local north, east)."""
+    guidance: Geofence
+    """What commanded points stay inside: ``fence`` moved ``site.fence_inset`` inwards (room
+    to brake), else the area's rectangle."""
+    watch: FenceWatch | None
+    """The fence and search area checked on the GPS position (site profiles only)."""
+
+
+def site_geometry(profile: MissionProfile) -> SiteGeometry:
+    """``profile``'s frame, fence, guidance fence and fence watch."""
+    frame = profile_frame(profile)
+    fence = _fence(profile, frame)
     site = profile.site
     if site is None:
-        return Geofence.rectangle(profile.area.north, profile.area.east)
-    frame = profile_frame(profile)
-    local = [frame.to_local(p.lat, p.lon, profile.origin.alt)[:2] for p in site.geofence]
-    return Geofence(np.array(local))
+        return SiteGeometry(frame, fence, fence, None)
+    area = Geofence.rectangle(profile.area.north, profile.area.east)
+    watch = FenceWatch(fence, area, site.start_margin)
+    return SiteGeometry(frame, fence, fence.inset(site.fence_inset), watch)
+
+
+def fence_for(profile: MissionProfile) -> Geofence:
+    """Local (north, east) geofence; WGS84 vertices are converted by the link layer's frame."""
+    return _fence(profile, profile_frame(profile))
 
 
 def profile_frame(profile: MissionProfile) -> LocalFrame:
@@ -27,15 +52,18 @@ def profile_frame(profile: MissionProfile) -> LocalFrame:
 
 
 def guidance_fence(profile: MissionProfile) -> Geofence:
-    """What commanded points stay inside: the site fence moved ``site.fence_inset`` inwards
-    (room to brake), else the area's rectangle."""
-    fence = fence_for(profile)
-    return fence if profile.site is None else fence.inset(profile.site.fence_inset)
+    """:attr:`SiteGeometry.guidance` of ``profile``."""
+    return site_geometry(profile).guidance
 
 
 def fence_watch(profile: MissionProfile) -> FenceWatch | None:
-    """The fence and search area checked on the GPS position (site profiles only)."""
-    if profile.site is None:
-        return None
-    area = Geofence.rectangle(profile.area.north, profile.area.east)
-    return FenceWatch(fence_for(profile), area, profile.site.start_margin)
+    """:attr:`SiteGeometry.watch` of ``profile``."""
+    return site_geometry(profile).watch
+
+
+def _fence(profile: MissionProfile, frame: LocalFrame) -> Geofence:
+    site = profile.site
+    if site is None:
+        return Geofence.rectangle(profile.area.north, profile.area.east)
+    local = [frame.to_local(p.lat, p.lon, profile.origin.alt)[:2] for p in site.geofence]
+    return Geofence(np.array(local))

@@ -18,7 +18,7 @@ from collections.abc import AsyncIterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from companion.fence_from_profile import fence_watch, guidance_fence, profile_frame
+from companion.fence_from_profile import site_geometry
 from companion.link.base import VehicleLink
 from companion.mission import MissionConfig, VehicleMission
 from companion.mission.core_for import is_swarm
@@ -126,14 +126,14 @@ async def fly(
         sensors = make_sensor_source(source, profile=profile, seed=config.seed, link=link,
                                      feed=feed)  # fmt: skip
         log.info("vehicle %d: sensor source %s", vehicle, source)
-        fence = guidance_fence(profile)
+        site = site_geometry(profile)  # the frame and fences, built once for the whole flight
         start, own_fence = None, None
         if profile.site is not None:  # geo-referenced: flown in its own frame, from its start
-            link.use_profile_frame(profile_frame(profile))
-            start = start_point(profile, config.seed, vehicle, fence)
+            link.use_profile_frame(site.frame)
+            start = start_point(profile, config.seed, vehicle, site.guidance)
             own_fence = [(p.lat, p.lon) for p in profile.site.geofence]
-        mission = VehicleMission(config, link, sink, recovered=recovered, fence=fence, peers=peers,
-                                 sensors=sensors, watch=fence_watch(profile), start=start,
+        mission = VehicleMission(config, link, sink, recovered=recovered, fence=site.guidance,
+                                 peers=peers, sensors=sensors, watch=site.watch, start=start,
                                  own_fence=own_fence)  # fmt: skip
         task = asyncio.create_task(_run(mission, telemetry, peers), name=f"v{vehicle}-flight")
         try:

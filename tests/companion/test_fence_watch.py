@@ -6,7 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from companion.fence_from_profile import fence_for, fence_watch, guidance_fence
+from companion.fence_from_profile import (
+    fence_for,
+    fence_watch,
+    guidance_fence,
+    profile_frame,
+    site_geometry,
+)
 from companion.geofence import Geofence
 from companion.mission.fence_watch import compass
 from mdm_profiles import load_profile
@@ -39,6 +45,20 @@ def test_guidance_fence_is_the_inset_site_fence_and_paper_profiles_keep_the_area
     paper = load_profile("paper-fixed")
     assert np.array_equal(guidance_fence(paper).vertices, fence_for(paper).vertices)
     assert fence_watch(paper) is None
+
+
+def test_site_geometry_builds_one_fence_that_the_guidance_and_the_watch_share() -> None:
+    field = load_profile("field-duebendorf")
+    assert field.site is not None
+    site = site_geometry(field)
+    assert site.frame == profile_frame(field)
+    assert np.array_equal(site.fence.vertices, fence_for(field).vertices)
+    assert np.allclose(site.guidance.vertices, site.fence.inset(field.site.fence_inset).vertices)
+    assert site.watch is not None
+    assert site.watch.fence is site.fence  # the watch checks the fence built here, not another
+    paper = site_geometry(load_profile("paper-fixed"))
+    assert paper.guidance is paper.fence
+    assert paper.watch is None
 
 
 def test_start_refused_beyond_the_margin_with_distance_and_direction() -> None:
