@@ -18,6 +18,7 @@ from collections.abc import AsyncIterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from companion.errors import InputError
 from companion.fence_from_profile import site_geometry
 from companion.link.base import VehicleLink
 from companion.mission import MissionConfig, VehicleMission
@@ -62,21 +63,21 @@ class Flight:
 
 
 def check_flight(config: MissionConfig, mqtt: MqttSpec | None, source: SensorSourceKind) -> None:
-    """Refuse, naming what is missing, a flight that cannot run (raises ValueError)."""
+    """Refuse, naming what is missing, a flight that cannot run (raises InputError)."""
     vehicles = config.profile.fleet.vehicles
     if not 0 <= config.vehicle < vehicles:
-        raise ValueError(f"vehicle {config.vehicle}: profile has {vehicles} vehicles")
+        raise InputError(f"vehicle {config.vehicle}: profile has {vehicles} vehicles")
     if mqtt is None and is_swarm(config):
-        raise ValueError(
+        raise InputError(
             f"profile {config.profile.name!r}: policy.kind {config.profile.policy.kind!r} "
             "shares the swarm's bests over MQTT; configure a broker (--mqtt HOST[:PORT] or "
             "the profile's mqtt: section)"
         )
     refusal = live_swarm_refusal(config.profile) if is_swarm(config) else None
     if refusal is not None:
-        raise ValueError(refusal)
+        raise InputError(refusal)
     if source == "mqtt" and mqtt is None:
-        raise ValueError(
+        raise InputError(
             "sensor source 'mqtt' reads detections from a broker; configure one "
             "(--mqtt HOST[:PORT] or the profile's mqtt: section)"
         )
@@ -94,7 +95,19 @@ async def fly(
 ) -> AsyncIterator[Flight]:
     """Fly ``vehicle`` of ``profile`` over ``link`` (not yet opened); ``options`` are
     :class:`MissionConfig` fields (``duration``, ``log_dir``, ``end_action``, ...); ``mqtt``
-    tees the events to a broker; ``sensor_source`` defaults to the profile's."""
+    tees the events to a broker; ``sensor_source`` defaults to the profile's.
+
+    Raises:
+        InputError: the flight cannot run as asked (a vehicle the profile does not have, a
+            swarm policy or an MQTT sensor source without a broker, swarm settings the live
+            companion does not fly); raised before any socket or file is opened.
+        LogFormatError: the vehicle's mission log (read to resume) was written by another
+            version.
+        TypeError: ``options`` holds a name that is not a MissionConfig field.
+        OSError: the mission log's folder cannot be written.
+    The mission itself ends with a reason (:meth:`Flight.ended`), not an error: a refused
+    command, a lost link or a failsafe are recorded in the mission log and its ``exit``.
+    """
     config = MissionConfig(vehicle=vehicle, profile=profile, **options)
     source: SensorSourceKind = sensor_source or profile.sensor_source.kind
     check_flight(config, mqtt, source)

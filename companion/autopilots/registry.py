@@ -5,11 +5,12 @@ from __future__ import annotations
 from companion.autopilots.ardupilot import ArduCopter
 from companion.autopilots.base import Autopilot
 from companion.autopilots.px4 import PX4
+from companion.errors import CompanionError
 
 _REGISTRY: dict[int, type[Autopilot]] = {cls.mav_autopilot: cls for cls in (PX4, ArduCopter)}
 
 
-class UnknownAutopilotError(ValueError):
+class UnknownAutopilotError(CompanionError, ValueError):
     """A HEARTBEAT from an autopilot the companion cannot command."""
 
 

@@ -15,13 +15,15 @@ import select
 import socket
 from dataclasses import dataclass
 
+from companion.errors import CompanionError
+
 _LISTEN_S = 1.2
 """How long an explicit base's companion ports are listened on: an emulator's vehicle sends a
 HEARTBEAT every second, so one sending there is heard."""
 _ATTEMPTS = 50
 
 
-class PortError(ValueError):
+class PortError(CompanionError, ValueError):
     """The requested ports cannot be used (the message names the port and why)."""
 
 

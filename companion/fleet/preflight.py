@@ -8,6 +8,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from companion.errors import CompanionError
 from companion.fleet.options import FleetOptions
 from companion.fleet.ports import PortBlock, check_base_port, free_port_block
 from companion.telemetry.events import LogFormatError
@@ -21,7 +22,7 @@ RUN_FILE = "run.json"
 """What the run was asked to do; written before the processes start."""
 
 
-class FleetInputError(ValueError):
+class FleetInputError(CompanionError, ValueError):
     """A fleet run refused before start; the message says what, where and the limit."""
 
 

@@ -6,6 +6,7 @@ import subprocess
 import sys
 import time
 
+from companion.errors import CompanionError
 from companion.fleet import processes
 from companion.fleet.options import FleetOptions
 
@@ -14,7 +15,7 @@ _START_S = 60.0
 """Wall seconds the page has to print its address before the run is refused."""
 
 
-class WebPageError(ValueError):
+class WebPageError(CompanionError, ValueError):
     """The live page did not start (its port is taken, the broker flags are wrong ...)."""
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from companion.errors import InputError
+
 Scheme = Literal["udpin", "udpout", "tcp"]
 _SCHEMES: tuple[Scheme, ...] = ("udpin", "udpout", "tcp")
 
@@ -28,20 +30,20 @@ class Address:
 
 
 def parse_address(url: str) -> Address:
-    """An Address from a URL; raises ValueError naming what is wrong."""
+    """An Address from a URL; raises InputError (a ValueError) naming what is wrong."""
     text = url.strip().replace("://", ":")
     parts = text.split(":")
     if len(parts) != 3:
-        raise ValueError(f"connection {url!r}: expected SCHEME:HOST:PORT, e.g. udpin:0.0.0.0:14540")
+        raise InputError(f"connection {url!r}: expected SCHEME:HOST:PORT, e.g. udpin:0.0.0.0:14540")
     scheme, host, port = parts
     if scheme == "tcpout":
         scheme = "tcp"
     if scheme not in _SCHEMES:
-        raise ValueError(f"connection {url!r}: scheme {scheme!r} not one of {', '.join(_SCHEMES)}")
+        raise InputError(f"connection {url!r}: scheme {scheme!r} not one of {', '.join(_SCHEMES)}")
     try:
         number = int(port)
     except ValueError:
-        raise ValueError(f"connection {url!r}: port {port!r} is not a number") from None
+        raise InputError(f"connection {url!r}: port {port!r} is not a number") from None
     if not 0 < number < 65536:
-        raise ValueError(f"connection {url!r}: port {number} out of range 1..65535")
+        raise InputError(f"connection {url!r}: port {number} out of range 1..65535")
     return Address(scheme, host or "0.0.0.0", number)

@@ -15,6 +15,7 @@ from typing import Literal, Protocol
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.autopilots import Autopilot, FlightMode
+from companion.errors import CompanionError
 from companion.guidance import NedSetpoint
 from companion.link.fence_protocol import FenceTransferError
 from companion.link.local_frame import LocalFrame
@@ -51,7 +52,7 @@ class PositionAnswerer(Protocol):
         ``before`` / ``after``: the other events of its datagram, in order."""
 
 
-class LinkError(RuntimeError):
+class LinkError(CompanionError, RuntimeError):
     """The link cannot be opened or a command could not be delivered."""
 
 
@@ -109,7 +110,12 @@ class VehicleLink(ABC):
 
     @abstractmethod
     async def open(self) -> None:
-        """Start listening / connect. Does not wait for the vehicle."""
+        """Start listening / connect. Does not wait for the vehicle.
+
+        Raises:
+            LinkError: the address cannot be bound or connected to (a port taken, a TCP
+                endpoint not up yet); the mission retries with backoff.
+        """
 
     @abstractmethod
     async def close(self) -> None:

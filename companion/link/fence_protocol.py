@@ -17,6 +17,8 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from companion.errors import CompanionError
+
 FENCE = mavlink2.MAV_MISSION_TYPE_FENCE
 VERTEX = mavlink2.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
 MISSION_KINDS = frozenset({"MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK",
@@ -27,7 +29,7 @@ Vertex = tuple[int, int]
 """(lat, lon) in 1e-7 degrees, as the mission protocol carries them."""
 
 
-class FenceTransferError(RuntimeError):
+class FenceTransferError(CompanionError, RuntimeError):
     """The vehicle did not take (or give) the fence; the message says at which step."""
 
 

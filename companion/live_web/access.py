@@ -9,10 +9,12 @@ import secrets
 from dataclasses import dataclass
 from pathlib import Path
 
+from companion.errors import CompanionError
+
 TOKEN_ENV = "MDM_WEB_TOKEN"
 
 
-class AccessError(Exception):
+class AccessError(CompanionError):
     """A request the page refuses; ``status`` is the HTTP status to answer with."""
 
     def __init__(self, status: int, message: str) -> None:

@@ -7,6 +7,7 @@ import json
 import math
 from dataclasses import dataclass
 
+from companion.errors import CompanionError
 from companion.link.local_frame import LocalFrame
 
 _FIELDS = frozenset({"time", "sensor", "lat", "lon", "north", "east", "confidence"})
@@ -14,7 +15,7 @@ MAX_DISTANCE = 200_000.0
 """Metres from the profile's origin a detection may be (the telemetry check's bound)."""
 
 
-class DetectionError(ValueError):
+class DetectionError(CompanionError, ValueError):
     """A detection payload that cannot be used; the message says what is wrong."""
 
 

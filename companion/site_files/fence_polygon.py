@@ -10,12 +10,14 @@ from dataclasses import dataclass
 from shapely.geometry import Polygon
 from shapely.validation import explain_validity
 
+from companion.errors import CompanionError
+
 CONVEX_TOLERANCE = 1e-9
 """Relative area by which a polygon may fall short of its convex hull and still count as
 convex (rounding of the vertices' last digits)."""
 
 
-class SiteFileError(ValueError):
+class SiteFileError(CompanionError, ValueError):
     """A site file (QGC .plan, KML, GeoJSON) or a profile export that cannot be used; the
     message names the file and what is wrong in it."""
 

@@ -13,6 +13,8 @@ from __future__ import annotations
 from dataclasses import MISSING, asdict, dataclass, fields
 from typing import Any, ClassVar, get_type_hints
 
+from companion.errors import CompanionError
+
 
 @dataclass(frozen=True)
 class Start:
@@ -137,7 +139,7 @@ def to_fields(event: DurableEvent) -> dict[str, Any]:
     return {k: v for k, v in asdict(event).items() if v is not None}
 
 
-class LogFormatError(ValueError):
+class LogFormatError(CompanionError, ValueError):
     """A durable record that does not match its event class (a log written by another version:
     a field renamed, missing, added or of another type)."""
 

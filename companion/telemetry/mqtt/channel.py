@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import aiomqtt
 
+from companion.errors import CompanionError
 from companion.telemetry.mqtt.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -35,8 +36,8 @@ class Received:
 Handler = Callable[[Received], None]
 
 
-class NotConnectedError(aiomqtt.MqttError):
-    """``publish`` while no connection is up."""
+class NotConnectedError(CompanionError, aiomqtt.MqttError):
+    """``publish`` while no connection is up (an aiomqtt.MqttError too, as the client's own)."""
 
 
 class MqttChannel:

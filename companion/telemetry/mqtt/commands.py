@@ -7,13 +7,14 @@ from dataclasses import dataclass
 from typing import Literal, Protocol, get_args
 
 from companion.autopilots import FlightMode
+from companion.errors import CompanionError
 
 CommandName = Literal["pause", "resume", "abort", "land"]
 COMMANDS: tuple[str, ...] = get_args(CommandName)
 _FIELDS = {"command", "id"}
 
 
-class CommandError(ValueError):
+class CommandError(CompanionError, ValueError):
     """A command payload that cannot be obeyed; the message says what is wrong."""
 
 
