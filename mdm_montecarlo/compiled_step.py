@@ -220,8 +220,9 @@ class CompiledPolicy(CompiledWaypoints):
 
     @property
     def area(self) -> FloatArray:
-        """The search area's (north, east) size, metres."""
-        return self._area
+        """The search area's (north, east) size, metres, then the fence's half-planes (what
+        compiled_waypoints._inside reads)."""
+        return self._bounds
 
     @property
     def memory_rule(self) -> int:
@@ -258,7 +259,7 @@ class CompiledPolicy(CompiledWaypoints):
             float(self.config.fallback_blind_time),
             state.waypoint,
             self._table,
-            self._area,
+            self._bounds,
             RULES[self.config.out_of_area],
             self.config.waypoint_origin == "anchor",
             self.config.confine_to_detection,

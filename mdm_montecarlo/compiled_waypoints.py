@@ -146,7 +146,14 @@ def _candidates(
 
 @compiled
 def _inside(x: float, y: float, area: FloatArray) -> bool:
-    return x >= 0.0 and x <= area[0] and y >= 0.0 and y <= area[1]
+    """In the area (area[0], area[1]) and on the inner side of each fence half-plane that
+    follows it (n_north, n_east, offset: SearchPolicy._inside, the same arithmetic)."""
+    inside = x >= 0.0 and x <= area[0] and y >= 0.0 and y <= area[1]
+    j = 2
+    while inside and j < area.shape[0]:
+        inside = x * area[j] + y * area[j + 1] >= area[j + 2]
+        j += 3
+    return inside
 
 
 @compiled
@@ -283,7 +290,7 @@ class CompiledWaypoints(CompiledMemoryPolicy):
                 state.level[lanes],
                 state.anchor[lanes],
                 np.ascontiguousarray(position, dtype=np.float64),
-                self._area,
+                self._bounds,
                 RULES[self.config.out_of_area],
                 self.config.waypoint_origin == "anchor",
                 self.config.confine_to_detection,

@@ -5,6 +5,7 @@ from __future__ import annotations
 from mdm_core.search.distributions import Brownian, Levy, Sampler, Uniform
 from mdm_core.search.levels import DecayIndex, Level, PolicyConfig
 from mdm_core.search.pso import VARIANTS, SwarmConfig
+from mdm_core.world.fence_planes import fence_half_planes
 from mdm_profiles import MissionProfile
 from mdm_profiles.schema import DistributionParams, LevelSpec
 
@@ -57,6 +58,7 @@ def policy_config(profile: MissionProfile) -> PolicyConfig:
         levels=levels,
         area=(profile.area.north, profile.area.east),
         out_of_area=spec.out_of_area,
+        fence=fence_half_planes(profile),
         waypoint_origin=spec.waypoint_origin,
         confine_to_detection=spec.confine_to_detection,
         memory_radius=spec.memory_radius,

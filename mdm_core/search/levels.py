@@ -105,6 +105,10 @@ class PolicyConfig:
     """Search area extent (north, east), metres, from the origin."""
     out_of_area: OutOfArea = "reflect"
     """What to do with a waypoint outside the area: mirror it, clip it, or draw again."""
+    fence: tuple[tuple[float, float, float], ...] = ()
+    """Half-planes (n_north, n_east, offset) of a field's inset fence: with 'redraw', a waypoint
+    counts as inside only where n_north * north + n_east * east >= offset for each one too
+    (mdm_core.world.fence_planes). Empty: the area alone (paper profiles)."""
     waypoint_origin: WaypointOrigin = "position"
     """Levels >= 2: step from the current position (eq. 7) or from the point of detection."""
     confine_to_detection: bool = True

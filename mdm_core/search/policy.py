@@ -105,6 +105,10 @@ class SearchPolicy:
         )
         self._radii = np.array([lv.sensor_radius for lv in config.levels])
         self._area = np.array(config.area, dtype=float)
+        self._fence = np.array(config.fence, dtype=float).reshape(-1, 3)
+        self._bounds = np.concatenate([self._area, self._fence.ravel()])
+        """The area's size, then each fence half-plane's three numbers: what the compiled
+        draws read (mdm_montecarlo.compiled_waypoints._inside)."""
 
     @property
     def n_levels(self) -> int:
@@ -339,8 +343,8 @@ class SearchPolicy:
         rng: np.random.Generator,
     ) -> FloatArray:
         """P_q + delta_k D(S_t) from each origin; with the 'redraw' rule, the first of up to
-        1 + _REDRAWS candidates that lies in the area (the last one mirrored into the area if
-        none does). With 'clip', a candidate clipped onto the vehicle's own ``position`` (a
+        1 + _REDRAWS candidates that lies in the area and inside the fence's half-planes (the
+        last one mirrored into the area if none does). With 'clip', a candidate clipped onto the vehicle's own ``position`` (a
         vehicle at a wall or corner stepping outwards) is mirrored instead: a leg of length 0
         takes no time and the mission would never advance."""
         points = self._candidates(k, origin, anchor, rng)
@@ -371,7 +375,11 @@ class SearchPolicy:
         return points
 
     def _inside(self, points: FloatArray) -> BoolArray:
-        return np.asarray(((points >= 0.0) & (points <= self._area)).all(axis=-1))
+        inside = ((points >= 0.0) & (points <= self._area)).all(axis=-1)
+        for n_north, n_east, offset in self._fence:
+            # the compiled test's arithmetic, operation for operation (no fused multiply-add)
+            inside &= points[..., 0] * n_north + points[..., 1] * n_east >= offset
+        return np.asarray(inside)
 
     def _candidates(
         self, k: int, origin: FloatArray, anchor: FloatArray, rng: np.random.Generator

@@ -41,6 +41,11 @@ def _variants() -> list[PolicyConfig]:
         out.append(
             dataclasses.replace(config, confine_to_detection=False, levels=config.levels[:1])
         )
+    # A field profile's inset fence (half-planes) redrawn into, from the area's size and anchor.
+    field = policy_config(builtin_profile("field-duebendorf"))
+    assert field.fence
+    out.append(dataclasses.replace(field, out_of_area="redraw", waypoint_origin="position"))
+    out.append(dataclasses.replace(field, out_of_area="redraw", waypoint_origin="anchor"))
     return out
 
 
