@@ -5,10 +5,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
-import socket
-import struct
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any, cast
 
@@ -20,6 +17,8 @@ from companion.link import fast_frames
 from companion.link.address import Address, parse_address
 from companion.link.base import LinkError, SetpointKind, VehicleLink
 from companion.link.fence_protocol import MISSION_KINDS, FenceTransfer
+from companion.link.mavlink_commands import PARAM_INT32, MavlinkCommands
+from companion.link.mavlink_transport import MavlinkTransport
 from companion.link.messages import (
     Heartbeat,
     LinkEvent,
@@ -30,7 +29,7 @@ from companion.link.messages import (
     StraySource,
     SystemStatus,
 )
-from companion.link.outcome import CommandResult, Outcome, accepted, denied, timed_out
+from companion.link.outcome import CommandResult, accepted, denied, timed_out
 from companion.link.tlog import TelemetryLog
 from mavlink_signing import SigningState, Verdict
 
@@ -47,7 +46,6 @@ _NOT_AUTOPILOT_TYPES = {
     mavlink2.MAV_TYPE_ADSB,
 }
 _HEALTH_BITS = mavlink2.MAV_SYS_STATUS_SENSOR_GPS | mavlink2.MAV_SYS_STATUS_PREARM_CHECK
-_PARAM_INT32 = mavlink2.MAV_PARAM_TYPE_INT32
 UNREAD_STREAMS = (
     mavlink2.MAVLINK_MSG_ID_ATTITUDE,
     mavlink2.MAVLINK_MSG_ID_SYSTEM_TIME,
@@ -64,29 +62,6 @@ _BESIDE_POSITION = frozenset(
 )
 """What ``_answer`` takes beside the position and the signal: each second's HEARTBEAT and
 SYS_STATUS, the sensor's contacts."""
-_DRAIN_MAX = 256
-"""Datagrams read at once beyond the one asyncio hands over (see ``PymavlinkLink._drain``)."""
-
-
-class _Protocol(asyncio.DatagramProtocol, asyncio.Protocol):
-    def __init__(self, link: PymavlinkLink) -> None:
-        self.link = link
-
-    def datagram_received(self, data: bytes, addr: tuple[str | Any, int]) -> None:
-        link = self.link
-        if link.answerer is not None and link._answer(data, addr):
-            return
-        link._receive(data, addr)
-        link._drain()
-        link._publish_pending()
-
-    def data_received(self, data: bytes) -> None:
-        self.link._receive(data, None)
-        self.link._publish_pending()
-
-    def connection_lost(self, exc: Exception | None) -> None:
-        if exc is not None:
-            log.warning("connection lost: %s", exc)
 
 
 class PymavlinkLink(VehicleLink):
@@ -124,22 +99,20 @@ class PymavlinkLink(VehicleLink):
         self._mav.robust_parsing = True
         self._tlog_path = tlog
         self._tlog: TelemetryLog | None = None
-        self._timeout = command_timeout
-        self._tries = command_tries
-        self._transport: asyncio.BaseTransport | None = None
-        self._sock: socket.socket | None = None
-        self._remote: tuple[str, int] | None = None
-        """udpin: the vehicle's address, locked to the first that sent the target system's
-        messages (released only on reconnect, after the link was lost)."""
+        self._net = MavlinkTransport(self.address, self._on_datagram, self._on_stream)
+        """udpin: ``remote`` is the vehicle's address, locked to the first that sent the target
+        system's messages (released only on reconnect, after the link was lost)."""
         self._strays: set[tuple[str, int]] = set()
-        self._acks: dict[int, asyncio.Future[int]] = {}
-        self._params: dict[str, asyncio.Future[tuple[float, int]]] = {}
         self._time_ms = 0
         self._armed = False
         self.bad_packets = 0
         self._signing = SigningState(signing_key) if signing_key is not None else None
         self.signing_rejected = 0
         self._fence = FenceTransfer(self._mav, self._send, target_system)
+        self._commands = MavlinkCommands(self._mav, self._send, target_system,
+                                         timeout=command_timeout, tries=command_tries,
+                                         with_reason=self._with_reason,
+                                         bytewise=self._bytewise)  # fmt: skip
         self._pending: list[LinkEvent] = []
         """Events of the datagrams read in this callback, published together at its end."""
 
@@ -147,43 +120,21 @@ class PymavlinkLink(VehicleLink):
         return self.address.url()
 
     async def open(self) -> None:
-        loop = asyncio.get_running_loop()
-        a = self.address
         if self._tlog_path is not None and self._tlog is None:
             self._tlog = TelemetryLog(self._tlog_path)
-        try:
-            if a.scheme in ("udpin", "udpout"):
-                # Our own socket (the transport's wrapper cannot read): see _drain.
-                sock = await _udp_socket(loop, a.host, a.port, bind=a.scheme == "udpin")
-                self._transport, _ = await loop.create_datagram_endpoint(
-                    lambda: _Protocol(self), sock=sock
-                )
-                self._sock = sock
-                if a.scheme == "udpout":
-                    self._remote = (a.host, a.port)
-            else:
-                self._transport, _ = await loop.create_connection(
-                    lambda: _Protocol(self), a.host, a.port
-                )
-        except OSError as exc:
-            raise LinkError(f"cannot open {a.url()}: {exc}") from exc
-        log.info("link open on %s for system %d", a.url(), self.target_system)
+        await self._net.open()
+        log.info("link open on %s for system %d", self.address.url(), self.target_system)
 
     async def close(self) -> None:
-        if self._transport is not None:
-            self._transport.close()
-            self._transport = None
-        self._sock = None
-        if self.address.scheme == "udpin":
-            self._remote = None
+        self._net.close()
         if self._tlog is not None:
             self._tlog.close()
             self._tlog = None
 
     async def reconnect(self) -> None:
         """UDP in: keep the bound port (the vehicle sends to it again); others: re-open."""
-        if self.address.scheme == "udpin" and self._transport is not None:
-            self._remote = None  # the vehicle may come back from another port (a restart)
+        if self.address.scheme == "udpin" and self._net.is_open:
+            self._net.remote = None  # the vehicle may come back from another port (a restart)
             self._strays.clear()
             return
         await self.close()
@@ -192,20 +143,16 @@ class PymavlinkLink(VehicleLink):
 
     # -- receiving -------------------------------------------------------------------------
 
-    def _drain(self) -> None:
-        """Read every datagram already waiting. asyncio hands over one datagram per loop
-        iteration, so a companion that fell behind a sped-up vehicle would answer each stale
-        position in turn (seconds of vehicle time late); read at once, the decision loop acts
-        on the newest position only."""
-        sock = self._sock
-        for _ in range(_DRAIN_MAX if sock is not None else 0):
-            try:
-                data, addr = sock.recvfrom(65536)  # type: ignore[union-attr]
-            except (BlockingIOError, InterruptedError):
-                return
-            except OSError:  # ICMP port unreachable and the like: the transport reports them
-                return
-            self._receive(data, addr)
+    def _on_datagram(self, data: bytes, addr: tuple[str | Any, int]) -> None:
+        if self.answerer is not None and self._answer(data, addr):
+            return
+        self._receive(data, addr)
+        self._net.drain(self._receive)
+        self._publish_pending()
+
+    def _on_stream(self, data: bytes) -> None:
+        self._receive(data, None)
+        self._publish_pending()
 
     def _answer(self, data: bytes, addr: tuple[str | Any, int]) -> bool:
         """A datagram of the locked vehicle holding one LOCAL_POSITION_NED, the sensor's signal
@@ -214,9 +161,9 @@ class PymavlinkLink(VehicleLink):
         needs steering, the other messages as events before or after it, in their order. The
         link's own bookkeeping (.tlog, stream rates, the setpoint's time_boot_ms, the
         autopilot) is :meth:`_receive`'s. False: take the events' path (nothing was changed)."""
-        answerer, sock = self.answerer, self._sock
-        if (answerer is None or sock is None or self._signing is not None or self._pending
-                or self.alignment is not None or addr != self._remote):  # fmt: skip
+        answerer, net = self.answerer, self._net
+        if (answerer is None or net.sock is None or self._signing is not None or self._pending
+                or self.alignment is not None or addr != net.remote):  # fmt: skip
             return False
         received = time.perf_counter()
         frames = fast_frames.split(data)
@@ -252,12 +199,7 @@ class PymavlinkLink(VehicleLink):
             return False  # the events' path drops and counts it
         if not answerer.ready(t / 1000.0, x, y):
             return False
-        try:  # another datagram waiting: the batch acts on the newest position only
-            sock.recv(1, socket.MSG_PEEK)
-            return False
-        except (BlockingIOError, InterruptedError):
-            pass
-        except OSError:  # ICMP port unreachable and the like: the transport reports them
+        if net.waiting() is not False:  # another datagram: the batch acts on the newest only
             return False
         if self._tlog is not None:
             for _, _, frame in frames:
@@ -384,15 +326,16 @@ class PymavlinkLink(VehicleLink):
         if addr is None or self.address.scheme != "udpin":
             return True
         source = (str(addr[0]), int(addr[1]))
-        if self._remote is None:
-            self._remote = source
+        remote = self._net.remote
+        if remote is None:
+            self._net.remote = source
             log.info("system %d locked to %s:%d", self.target_system, *source)
             return True
-        if source == self._remote:
+        if source == remote:
             return True
         if source not in self._strays:
             self._strays.add(source)
-            locked = f"{self._remote[0]}:{self._remote[1]}"
+            locked = f"{remote[0]}:{remote[1]}"
             log.warning("ignoring another sender of system %d at %s:%d (locked to %s)",
                         self.target_system, *source, locked)  # fmt: skip
             self._pending.append(StraySource(f"{source[0]}:{source[1]}", locked))
@@ -451,26 +394,17 @@ class PymavlinkLink(VehicleLink):
             return self._sys_status(msg.onboard_control_sensors_present,
                                     msg.onboard_control_sensors_health, msg.battery_remaining)  # fmt: skip
         if kind == "COMMAND_ACK":
-            future = self._acks.get(msg.command)
-            if (
-                future is not None
-                and not future.done()
-                and msg.result != mavlink2.MAV_RESULT_IN_PROGRESS
-            ):
-                future.set_result(msg.result)
+            self._commands.on_ack(msg.command, msg.result)
             return None
         if kind == "PARAM_VALUE":
-            name = _text(msg.param_id)
-            pending = self._params.get(name)
-            if pending is not None and not pending.done():
-                pending.set_result((msg.param_value, msg.param_type))
+            self._commands.on_param_value(_text(msg.param_id), msg.param_value, msg.param_type)
             return None
         return None
 
     # -- sending ---------------------------------------------------------------------------
 
     def _send(self, msg: Any) -> None:
-        if self._transport is None:
+        if not self._net.is_open:
             return
         buf = msg.pack(self._mav)
         if self._signing is not None:
@@ -479,20 +413,10 @@ class PymavlinkLink(VehicleLink):
 
     def _send_frame(self, buf: bytes) -> None:
         """A packed frame out with the next sequence number's turn taken, and into the .tlog."""
-        transport = self._transport
-        if transport is None:
+        if not self._net.is_open:
             return
         self._mav.seq = (self._mav.seq + 1) % 256
-        # (selector datagram transports are not DatagramTransport subclasses: go by scheme)
-        if self.address.scheme == "udpin":
-            if self._remote is None:
-                return  # the vehicle has not spoken yet
-            cast(asyncio.DatagramTransport, transport).sendto(buf, self._remote)
-        elif self.address.scheme == "udpout":
-            cast(asyncio.DatagramTransport, transport).sendto(buf)
-        else:
-            cast(asyncio.WriteTransport, transport).write(buf)
-        if self._tlog is not None:
+        if self._net.send(buf) and self._tlog is not None:
             self._tlog.write(buf)
 
     def send_heartbeat(self) -> None:
@@ -530,41 +454,7 @@ class PymavlinkLink(VehicleLink):
         return await self._fence.download()
 
     async def command_long(self, command: int, *params: float) -> CommandResult:
-        """COMMAND_LONG with retries until a final COMMAND_ACK; a refusal carries the
-        vehicle's STATUSTEXT reason."""
-        name = _command_name(command)
-        full = list(params) + [0.0] * (7 - len(params))
-        future: asyncio.Future[int] = asyncio.get_running_loop().create_future()
-        self._acks[command] = future
-        since = time.monotonic()
-        try:
-            for attempt in range(self._tries):
-                self._send(
-                    self._mav.command_long_encode(self.target_system, 1, command, attempt, *full)
-                )
-                # asyncio.wait, not wait_for: on 3.11 wait_for can swallow a cancel
-                await asyncio.wait({future}, timeout=self._timeout)
-                if future.done():
-                    break
-        finally:
-            self._acks.pop(command, None)
-        if not future.done():
-            result = timed_out(name, f"no COMMAND_ACK after {self._tries} tries")
-        elif future.result() == mavlink2.MAV_RESULT_ACCEPTED:
-            return accepted(name)
-        else:
-            code = future.result()
-            label = (
-                mavlink2.enums["MAV_RESULT"][code].name
-                if code in mavlink2.enums["MAV_RESULT"]
-                else str(code)
-            )
-            result = CommandResult(name, Outcome.DENIED, code, None)
-            result = await self._with_reason(result, since)
-            if result.reason is None:
-                result = CommandResult(name, Outcome.DENIED, code, label)
-        log.warning("%s", result.describe())
-        return result
+        return await self._commands.command_long(command, *params)
 
     def request_data_stream(self, stream_id: int, rate_hz: int) -> None:
         self._send(
@@ -603,80 +493,22 @@ class PymavlinkLink(VehicleLink):
         )
 
     async def _set_sensor(self, index: int) -> CommandResult:
-        echoed = await self.set_param("MDM_SENSOR", float(index), _PARAM_INT32)
+        echoed = await self.set_param("MDM_SENSOR", float(index), PARAM_INT32)
         if echoed is None:
-            return timed_out("MDM_SENSOR", f"no PARAM_VALUE after {self._tries} tries")
+            return timed_out("MDM_SENSOR", f"no PARAM_VALUE after {self._commands.tries} tries")
         if echoed != index:
             return denied("MDM_SENSOR", f"vehicle kept {echoed:g}, asked {index}")
         return accepted("MDM_SENSOR")
 
     async def read_param(self, name: str) -> float | None:
-        return await self._param_exchange(
-            name,
-            lambda: self._mav.param_request_read_encode(self.target_system, 1, name.encode(), -1),
-        )
+        return await self._commands.read_param(name)
 
     async def set_param(self, name: str, value: float, param_type: int) -> float | None:
-        encoded = value
-        if param_type == _PARAM_INT32 and self._bytewise():
-            encoded = struct.unpack("<f", struct.pack("<i", round(value)))[0]
-        return await self._param_exchange(
-            name,
-            lambda: self._mav.param_set_encode(
-                self.target_system, 1, name.encode(), encoded, param_type
-            ),
-        )
-
-    async def _param_exchange(self, name: str, encode: Callable[[], Any]) -> float | None:
-        """Send until a PARAM_VALUE of ``name`` comes back; its decoded value, or None."""
-        for _ in range(self._tries):
-            future: asyncio.Future[tuple[float, int]] = asyncio.get_running_loop().create_future()
-            self._params[name] = future
-            self._send(encode())
-            try:
-                await asyncio.wait({future}, timeout=self._timeout)
-            finally:
-                self._params.pop(name, None)
-            if future.done():
-                return self._param_value(*future.result())
-        log.info("parameter %s: no PARAM_VALUE from system %d after %d tries", name,
-                 self.target_system, self._tries)  # fmt: skip
-        return None
+        return await self._commands.set_param(name, value, param_type)
 
     def _bytewise(self) -> bool:
         """PX4 carries integer parameters bytewise in the float field; ArduPilot casts them."""
         return self.autopilot is not None and self.autopilot.name == "px4"
-
-    def _param_value(self, value: float, param_type: int) -> float:
-        if param_type == _PARAM_INT32 and self._bytewise():
-            return float(struct.unpack("<i", struct.pack("<f", value))[0])
-        return value if math.isfinite(value) else math.nan
-
-
-async def _udp_socket(
-    loop: asyncio.AbstractEventLoop, host: str, port: int, *, bind: bool
-) -> socket.socket:
-    """A non-blocking UDP socket bound to (host, port), or connected to it."""
-    infos = await loop.getaddrinfo(host, port, type=socket.SOCK_DGRAM)
-    if not infos:
-        raise OSError(f"cannot resolve {host}")
-    family, kind, proto, _, where = infos[0]
-    sock = socket.socket(family, kind, proto)
-    try:
-        sock.setblocking(False)
-        if bind:
-            sock.bind(where)
-        else:
-            sock.connect(where)
-    except OSError:
-        sock.close()
-        raise
-    return sock
-
-
-def _command_name(command: int) -> str:
-    entry = mavlink2.enums["MAV_CMD"].get(command)
-    return entry.name if entry is not None else f"command {command}"
 
 
 def _text(raw: str | bytes) -> str:

@@ -19,9 +19,10 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from companion.autopilots import FlightMode
 from companion.guidance import NedSetpoint
 from companion.link.base import SetpointKind, VehicleLink
+from companion.link.mavlink_transport import _Protocol
 from companion.link.messages import Heartbeat, LinkEvent, LocalPosition
 from companion.link.outcome import CommandResult, accepted
-from companion.link.pymavlink_link import PymavlinkLink, _Protocol
+from companion.link.pymavlink_link import PymavlinkLink
 from companion.mission import MissionConfig, VehicleMission
 from companion.mission.control import enter
 from companion.mission.phase import Phase
