@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from companion.fence_from_profile import fence_for
+from companion.mission.layer_watch import LAYER_TOLERANCE_M
 from companion.mission.phase import Phase
 from companion.telemetry.mission_log import read_records
 from mdm_profiles import MissionProfile
@@ -16,9 +17,6 @@ from mdm_profiles import MissionProfile
 NEAR_FENCE_M = 30.0
 """A search sample this close to the fence line (the site's fence, else the area's edge) counts
 as "near the fence"."""
-LAYER_TOLERANCE_M = 2.0
-"""A vehicle is in its layer within this many metres of it (fleet.altitude + i x altitude_step);
-with the profile's 5 m steps, under half the distance to a neighbour's layer."""
 
 
 @dataclass(frozen=True)

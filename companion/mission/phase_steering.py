@@ -16,6 +16,7 @@ from companion.link.base import VehicleLink
 from companion.link.messages import LocalPosition
 from companion.mission.config import MissionConfig
 from companion.mission.core_for import MissionCore
+from companion.mission.layer_watch import LayerWatch
 from companion.mission.lifecycle import Mission
 from companion.mission.observed import Observed
 from companion.mission.phase import Phase
@@ -64,6 +65,7 @@ class PhaseSteering:
 
     def __init__(self, mission: Steered) -> None:
         self.m = mission
+        self.layer = LayerWatch(mission)
 
     def on_position(self, pos: LocalPosition) -> None:
         m, seen, out = self.m, self.m.seen, self.m.out
@@ -75,6 +77,7 @@ class PhaseSteering:
                    north=round(pos.north, 1), east=round(pos.east, 1),
                    alt=round(-pos.down, 1), found=m.core.confirmed_count)  # fmt: skip
         if m.phase is Phase.SEARCH:
+            self.layer.check(t, -pos.down)
             self._search_step(t, pos)
         elif m.phase is Phase.PAUSED:
             start = seen.search_start

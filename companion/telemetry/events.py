@@ -114,6 +114,20 @@ class SetpointRefused:
 
 
 @dataclass(frozen=True)
+class AltitudeLayer:
+    """The vehicle left its altitude layer, or is back in it, during the search
+    (companion/mission/layer_watch.py)."""
+
+    NAME: ClassVar[str] = "altitude_layer"
+    state: str
+    """``outside`` or ``back``."""
+    altitude: float
+    """m above home, as the vehicle reported it."""
+    layer: float
+    tolerance: float
+
+
+@dataclass(frozen=True)
 class Exit:
     """How the companion ends: its exit status and the cause in one line."""
 
@@ -124,12 +138,12 @@ class Exit:
 
 DurableEvent = (
     Start | PhaseChange | Level | Detection | Confirmation | Fallback | ModeChange | LinkState | End
-    | TelemetryDropped | SetpointRefused | Exit
+    | TelemetryDropped | SetpointRefused | AltitudeLayer | Exit
 )  # fmt: skip
 DURABLE: dict[str, type[DurableEvent]] = {
     cls.NAME: cls
     for cls in (Start, PhaseChange, Level, Detection, Confirmation, Fallback, ModeChange,
-                LinkState, End, TelemetryDropped, SetpointRefused, Exit)
+                LinkState, End, TelemetryDropped, SetpointRefused, AltitudeLayer, Exit)
 }  # fmt: skip
 """Event name -> class; these records are fsync'ed."""
 

@@ -58,6 +58,7 @@ def test_every_durable_event_reads_back_as_written(tmp_path: Path) -> None:
         events.End("mission time", 1),
         events.TelemetryDropped("non-finite", 3, 7),
         events.SetpointRefused("speed", "speed 30 m/s above the profile's 20", 1),
+        events.AltitudeLayer("outside", 47.3, 40.0, 2.0),
         events.Exit(1, "link lost while armed"),
     ]
     assert {type(e) for e in written} == set(events.DURABLE.values())
