@@ -185,9 +185,17 @@ class VehicleLink(ABC):
         self.alignment = FrameAlignment(profile)
 
     def _local(
-        self, component: int, t: float, x: float, y: float, z: float, vx: float, vy: float,
-        vz: float, received: float,
-    ) -> LocalPosition | None:  # fmt: skip
+        self,
+        component: int,
+        t: float,
+        x: float,
+        y: float,
+        z: float,
+        vx: float,
+        vy: float,
+        vz: float,
+        received: float,
+    ) -> LocalPosition | None:
         """A LOCAL_POSITION_NED as an event in the profile's frame (None while unaligned, and
         for what ``guard`` drops)."""
         a = self.alignment
@@ -212,8 +220,9 @@ class VehicleLink(ABC):
         n = e = math.nan
         if math.isfinite(lat) and math.isfinite(lon) and abs(lat) <= 90.0 and abs(lon) <= 180.0:
             n, e, _ = a.profile.to_local(lat, lon, a.profile.alt)
-        if not self.guard.global_position(component, t, lat, lon, relative_alt, n, e,
-                                          time.perf_counter()):  # fmt: skip
+        if not self.guard.global_position(
+            component, t, lat, lon, relative_alt, n, e, time.perf_counter()
+        ):
             return None
         return GlobalPosition(t, lat, lon, relative_alt, n, e)
 
@@ -321,10 +330,16 @@ class VehicleLink(ABC):
             result = await self.command_long(
                 mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL, float(need.msg_id), need.interval_us()
             )
-            tried[need.name].append(f"SET_MESSAGE_INTERVAL {need.interval_us():.0f} us: "
-                                    f"{result.outcome.value}")  # fmt: skip
-            log.info("asked system %d for %s every %.0f us: %s", self.target_system, need.name,
-                     need.interval_us(), result.describe())  # fmt: skip
+            tried[need.name].append(
+                f"SET_MESSAGE_INTERVAL {need.interval_us():.0f} us: {result.outcome.value}"
+            )
+            log.info(
+                "asked system %d for %s every %.0f us: %s",
+                self.target_system,
+                need.name,
+                need.interval_us(),
+                result.describe(),
+            )
         if missing:
             missing = await self._await_streams(missing, since, wait)
         for need in missing:
@@ -338,9 +353,11 @@ class VehicleLink(ABC):
         problems = []
         for need in missing:
             measured = self.streams.rate(need.name)
-            got = "nothing" if not self.streams.seen_since(need.name, since) else (
-                f"{measured:.1f} Hz" if measured is not None else "too few to time"
-            )  # fmt: skip
+            got = (
+                "nothing"
+                if not self.streams.seen_since(need.name, since)
+                else (f"{measured:.1f} Hz" if measured is not None else "too few to time")
+            )
             problems.append(
                 f"{need.name} from system {self.target_system}: needed at "
                 f"{need.rate_hz:g} Hz, got {got}; tried {'; '.join(tried[need.name])}"

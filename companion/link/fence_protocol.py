@@ -21,8 +21,9 @@ from companion.errors import CompanionError
 
 FENCE = mavlink2.MAV_MISSION_TYPE_FENCE
 VERTEX = mavlink2.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
-MISSION_KINDS = frozenset({"MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK",
-                           "MISSION_COUNT", "MISSION_ITEM_INT"})  # fmt: skip
+MISSION_KINDS = frozenset(
+    {"MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK", "MISSION_COUNT", "MISSION_ITEM_INT"}
+)
 """Messages of the mission protocol the transfer reads."""
 
 Vertex = tuple[int, int]
@@ -37,8 +38,15 @@ class FenceTransfer:
     """One upload or download at a time over ``send`` (encoded messages out) and ``inbox``
     (the link puts every mission-protocol message of the vehicle there)."""
 
-    def __init__(self, mav: Any, send: Callable[[Any], None], target_system: int, *,
-                 timeout: float = 1.5, tries: int = 3) -> None:  # fmt: skip
+    def __init__(
+        self,
+        mav: Any,
+        send: Callable[[Any], None],
+        target_system: int,
+        *,
+        timeout: float = 1.5,
+        tries: int = 3,
+    ) -> None:
         self._mav = mav
         self._send = send
         self._target = target_system
@@ -74,10 +82,25 @@ class FenceTransfer:
             if not 0 <= seq < n:
                 raise FenceTransferError(f"vehicle asked for item {seq} of {n}")
             lat, lon = vertices[seq]
-            self._send(self._mav.mission_item_int_encode(
-                self._target, 1, seq, mavlink2.MAV_FRAME_GLOBAL, VERTEX, 0, 0, float(n), 0.0,
-                0.0, 0.0, lat, lon, 0.0, FENCE,
-            ))  # fmt: skip
+            self._send(
+                self._mav.mission_item_int_encode(
+                    self._target,
+                    1,
+                    seq,
+                    mavlink2.MAV_FRAME_GLOBAL,
+                    VERTEX,
+                    0,
+                    0,
+                    float(n),
+                    0.0,
+                    0.0,
+                    0.0,
+                    lat,
+                    lon,
+                    0.0,
+                    FENCE,
+                )
+            )
             sent.add(seq)
 
     async def download(self) -> list[Vertex]:
@@ -104,11 +127,13 @@ class FenceTransfer:
             if item is None:
                 raise FenceTransferError(f"no fence item {seq} of {msg.count}")
             if item.command != VERTEX:
-                raise FenceTransferError(f"fence item {seq} is command {item.command}, "
-                                         "not an inclusion-polygon vertex")  # fmt: skip
+                raise FenceTransferError(
+                    f"fence item {seq} is command {item.command}, not an inclusion-polygon vertex"
+                )
             out.append((item.x, item.y))
-        self._send(self._mav.mission_ack_encode(self._target, 1, mavlink2.MAV_MISSION_ACCEPTED,
-                                                FENCE))  # fmt: skip
+        self._send(
+            self._mav.mission_ack_encode(self._target, 1, mavlink2.MAV_MISSION_ACCEPTED, FENCE)
+        )
         return out
 
     def _drain(self) -> None:

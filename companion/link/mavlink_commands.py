@@ -126,8 +126,12 @@ class MavlinkCommands:
                 self._params.pop(name, None)
             if future.done():
                 return self._param_value(*future.result())
-        log.info("parameter %s: no PARAM_VALUE from system %d after %d tries", name,
-                 self.target_system, self.tries)  # fmt: skip
+        log.info(
+            "parameter %s: no PARAM_VALUE from system %d after %d tries",
+            name,
+            self.target_system,
+            self.tries,
+        )
         return None
 
     def _param_value(self, value: float, param_type: int) -> float:

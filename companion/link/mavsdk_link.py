@@ -40,8 +40,17 @@ from companion.link.outcome import CommandResult, accepted, denied, timed_out
 from companion.link.tlog import TelemetryLog
 
 log = logging.getLogger(__name__)
-_SUBSCRIBED = ("HEARTBEAT", "LOCAL_POSITION_NED", "SYS_STATUS", "DEBUG_VECT", "NAMED_VALUE_FLOAT",
-               "STATUSTEXT", "GLOBAL_POSITION_INT", "GPS_GLOBAL_ORIGIN", "HOME_POSITION")  # fmt: skip
+_SUBSCRIBED = (
+    "HEARTBEAT",
+    "LOCAL_POSITION_NED",
+    "SYS_STATUS",
+    "DEBUG_VECT",
+    "NAMED_VALUE_FLOAT",
+    "STATUSTEXT",
+    "GLOBAL_POSITION_INT",
+    "GPS_GLOBAL_ORIGIN",
+    "HOME_POSITION",
+)
 _HEALTH_BITS = mavlink2.MAV_SYS_STATUS_SENSOR_GPS | mavlink2.MAV_SYS_STATUS_PREARM_CHECK
 _NOT_AUTOPILOT_TYPES = (
     mavlink2.MAV_TYPE_GCS,
@@ -112,8 +121,11 @@ class MavsdkLink(VehicleLink):
         while system is None:
             system = await self._mavsdk.first_autopilot(timeout_s=self._discover_timeout)
             if system is None:
-                log.warning("MAVSDK: waiting for system %d on %s; no autopilot heard yet",
-                            self.target_system, self.address.url())  # fmt: skip
+                log.warning(
+                    "MAVSDK: waiting for system %d on %s; no autopilot heard yet",
+                    self.target_system,
+                    self.address.url(),
+                )
         raw = system._system
         self._direct = MavlinkDirect(raw)
         self._action = ActionAsync(system)
@@ -170,18 +182,31 @@ class MavsdkLink(VehicleLink):
         if name == "LOCAL_POSITION_NED":
             self.streams.note(name, f["time_boot_ms"] / 1000.0)
             return self._local(
-                component, f["time_boot_ms"] / 1000.0, _number(f["x"]), _number(f["y"]),
-                _number(f["z"]), _number(f["vx"]), _number(f["vy"]), _number(f["vz"]), received,
-            )  # fmt: skip
+                component,
+                f["time_boot_ms"] / 1000.0,
+                _number(f["x"]),
+                _number(f["y"]),
+                _number(f["z"]),
+                _number(f["vx"]),
+                _number(f["vy"]),
+                _number(f["vz"]),
+                received,
+            )
         if name == "GLOBAL_POSITION_INT":
-            return self._global(component, f["time_boot_ms"] / 1000.0, f["lat"] * 1e-7,
-                                f["lon"] * 1e-7, f["relative_alt"] * 1e-3)  # fmt: skip
+            return self._global(
+                component,
+                f["time_boot_ms"] / 1000.0,
+                f["lat"] * 1e-7,
+                f["lon"] * 1e-7,
+                f["relative_alt"] * 1e-3,
+            )
         if name == "GPS_GLOBAL_ORIGIN":
             self._note_origin(f["latitude"] * 1e-7, f["longitude"] * 1e-7, f["altitude"] * 1e-3)
             return None
         if name == "HOME_POSITION":
-            self._note_home(f["latitude"] * 1e-7, f["longitude"] * 1e-7, f["altitude"] * 1e-3,
-                            f["x"], f["y"])  # fmt: skip
+            self._note_home(
+                f["latitude"] * 1e-7, f["longitude"] * 1e-7, f["altitude"] * 1e-3, f["x"], f["y"]
+            )
             return None
         if name == "DEBUG_VECT":
             label = str(f["name"]).rstrip("\x00")
@@ -202,9 +227,11 @@ class MavsdkLink(VehicleLink):
             if self.autopilot is None or self.autopilot.mav_autopilot != f["autopilot"]:
                 self.autopilot = autopilot_for(int(f["autopilot"]))
             return Heartbeat(
-                int(f["autopilot"]), int(f["custom_mode"]), bool(f["base_mode"] & 128),
+                int(f["autopilot"]),
+                int(f["custom_mode"]),
+                bool(f["base_mode"] & 128),
                 int(f["system_status"]),
-            )  # fmt: skip
+            )
         if name == "STATUSTEXT":
             text = str(f["text"]).rstrip("\x00")
             self._note_text(int(f["severity"]), text)
@@ -221,9 +248,14 @@ class MavsdkLink(VehicleLink):
     def send_heartbeat(self) -> None:
         if self._direct is None:
             return
-        fields = {"type": mavlink2.MAV_TYPE_ONBOARD_CONTROLLER,
-                  "autopilot": mavlink2.MAV_AUTOPILOT_INVALID, "base_mode": 0, "custom_mode": 0,
-                  "system_status": mavlink2.MAV_STATE_ACTIVE, "mavlink_version": 3}  # fmt: skip
+        fields = {
+            "type": mavlink2.MAV_TYPE_ONBOARD_CONTROLLER,
+            "autopilot": mavlink2.MAV_AUTOPILOT_INVALID,
+            "base_mode": 0,
+            "custom_mode": 0,
+            "system_status": mavlink2.MAV_STATE_ACTIVE,
+            "mavlink_version": 3,
+        }
         msg = MavlinkMessage("HEARTBEAT", *self._ids, 0, 0, json.dumps(fields))
         try:
             self._direct.send_message(msg)
@@ -327,10 +359,20 @@ class MavsdkLink(VehicleLink):
         if direct is None:
             raise LinkError(f"{name} before the vehicle was discovered")
         full = list(params) + [0.0] * (7 - len(params))
-        fields = {"target_system": self.target_system, "target_component": 1, "command": command,
-                  "confirmation": 0, **{f"param{i + 1}": v for i, v in enumerate(full)}}  # fmt: skip
-        msg = MavlinkMessage("COMMAND_LONG", *self._ids, self.target_system, 1,
-                             json.dumps(fields).replace("NaN", "null"))  # fmt: skip
+        fields = {
+            "target_system": self.target_system,
+            "target_component": 1,
+            "command": command,
+            "confirmation": 0,
+            **{f"param{i + 1}": v for i, v in enumerate(full)},
+        }
+        msg = MavlinkMessage(
+            "COMMAND_LONG",
+            *self._ids,
+            self.target_system,
+            1,
+            json.dumps(fields).replace("NaN", "null"),
+        )
         since = time.monotonic()
         try:
             ack = await asyncio.get_running_loop().run_in_executor(None, direct.send_command, msg)
@@ -350,10 +392,16 @@ class MavsdkLink(VehicleLink):
     def request_data_stream(self, stream_id: int, rate_hz: int) -> None:
         if self._direct is None:
             return
-        fields = {"target_system": self.target_system, "target_component": 1,
-                  "req_stream_id": stream_id, "req_message_rate": rate_hz, "start_stop": 1}  # fmt: skip
-        msg = MavlinkMessage("REQUEST_DATA_STREAM", *self._ids, self.target_system, 1,
-                             json.dumps(fields))  # fmt: skip
+        fields = {
+            "target_system": self.target_system,
+            "target_component": 1,
+            "req_stream_id": stream_id,
+            "req_message_rate": rate_hz,
+            "start_stop": 1,
+        }
+        msg = MavlinkMessage(
+            "REQUEST_DATA_STREAM", *self._ids, self.target_system, 1, json.dumps(fields)
+        )
         try:
             self._direct.send_message(msg)
         except Exception as exc:

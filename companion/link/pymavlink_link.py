@@ -109,10 +109,15 @@ class PymavlinkLink(VehicleLink):
         self._signing = SigningState(signing_key) if signing_key is not None else None
         self.signing_rejected = 0
         self._fence = FenceTransfer(self._mav, self._send, target_system)
-        self._commands = MavlinkCommands(self._mav, self._send, target_system,
-                                         timeout=command_timeout, tries=command_tries,
-                                         with_reason=self._with_reason,
-                                         bytewise=self._bytewise)  # fmt: skip
+        self._commands = MavlinkCommands(
+            self._mav,
+            self._send,
+            target_system,
+            timeout=command_timeout,
+            tries=command_tries,
+            with_reason=self._with_reason,
+            bytewise=self._bytewise,
+        )
         self._pending: list[LinkEvent] = []
         """Events of the datagrams read in this callback, published together at its end."""
 
@@ -162,8 +167,14 @@ class PymavlinkLink(VehicleLink):
         link's own bookkeeping (.tlog, stream rates, the setpoint's time_boot_ms, the
         autopilot) is :meth:`_receive`'s. False: take the events' path (nothing was changed)."""
         answerer, net = self.answerer, self._net
-        if (answerer is None or net.sock is None or self._signing is not None or self._pending
-                or self.alignment is not None or addr != net.remote):  # fmt: skip
+        if (
+            answerer is None
+            or net.sock is None
+            or self._signing is not None
+            or self._pending
+            or self.alignment is not None
+            or addr != net.remote
+        ):
             return False
         received = time.perf_counter()
         frames = fast_frames.split(data)
@@ -178,8 +189,10 @@ class PymavlinkLink(VehicleLink):
             if msg_id == fast_frames.LOCAL_POSITION_NED:
                 if position is not None:  # two: the batch acts on the newest
                     return False
-                position = cast(tuple[int, float, float, float, float, float, float],
-                                fast_frames.unpack(msg_id, frame))  # fmt: skip
+                position = cast(
+                    tuple[int, float, float, float, float, float, float],
+                    fast_frames.unpack(msg_id, frame),
+                )
                 at, component = i, frame[6]
             elif msg_id == fast_frames.NAMED_VALUE_FLOAT:
                 _, value, name = fast_frames.unpack(msg_id, frame)
@@ -275,8 +288,15 @@ class PymavlinkLink(VehicleLink):
         present, _, health, *_, battery, _, _, _ = cast(tuple[int, ...], f)  # SYS_STATUS
         return self._sys_status(present, health, battery)
 
-    def _heartbeat(self, component: int, kind: int, autopilot: int, base_mode: int,
-                   custom_mode: int, system_status: int) -> Heartbeat | None:  # fmt: skip
+    def _heartbeat(
+        self,
+        component: int,
+        kind: int,
+        autopilot: int,
+        base_mode: int,
+        custom_mode: int,
+        system_status: int,
+    ) -> Heartbeat | None:
         if component != 1 or kind in _NOT_AUTOPILOT_TYPES:
             return None
         if self.autopilot is None or self.autopilot.mav_autopilot != autopilot:
@@ -336,8 +356,12 @@ class PymavlinkLink(VehicleLink):
         if source not in self._strays:
             self._strays.add(source)
             locked = f"{remote[0]}:{remote[1]}"
-            log.warning("ignoring another sender of system %d at %s:%d (locked to %s)",
-                        self.target_system, *source, locked)  # fmt: skip
+            log.warning(
+                "ignoring another sender of system %d at %s:%d (locked to %s)",
+                self.target_system,
+                *source,
+                locked,
+            )
             self._pending.append(StraySource(f"{source[0]}:{source[1]}", locked))
         return False
 
@@ -348,28 +372,48 @@ class PymavlinkLink(VehicleLink):
         self.signing_rejected += 1
         n = self.signing_rejected
         if n == 10 ** (len(str(n)) - 1):
-            log.warning("dropped %s from system %d: %s (%d dropped so far)", msg.get_type(),
-                        self.target_system, verdict.value, n)  # fmt: skip
+            log.warning(
+                "dropped %s from system %d: %s (%d dropped so far)",
+                msg.get_type(),
+                self.target_system,
+                verdict.value,
+                n,
+            )
         return False
 
     def _translate(self, msg: Any, received: float) -> LinkEvent | None:
         kind = msg.get_type()
         if kind == "LOCAL_POSITION_NED":
             self.streams.note(kind, msg.time_boot_ms / 1000.0)
-            local = self._local(msg.get_srcComponent(), msg.time_boot_ms / 1000.0, msg.x, msg.y,
-                                msg.z, msg.vx, msg.vy, msg.vz, received)  # fmt: skip
+            local = self._local(
+                msg.get_srcComponent(),
+                msg.time_boot_ms / 1000.0,
+                msg.x,
+                msg.y,
+                msg.z,
+                msg.vx,
+                msg.vy,
+                msg.vz,
+                received,
+            )
             if local is not None:
                 self._time_ms = msg.time_boot_ms
             return local
         if kind == "GLOBAL_POSITION_INT":
-            return self._global(msg.get_srcComponent(), msg.time_boot_ms / 1000.0,
-                                msg.lat * 1e-7, msg.lon * 1e-7, msg.relative_alt * 1e-3)  # fmt: skip
+            return self._global(
+                msg.get_srcComponent(),
+                msg.time_boot_ms / 1000.0,
+                msg.lat * 1e-7,
+                msg.lon * 1e-7,
+                msg.relative_alt * 1e-3,
+            )
         if kind == "GPS_GLOBAL_ORIGIN":
             self._note_origin(msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3)
             return None
         if kind == "HOME_POSITION":
-            self._note_home(msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3,
-                            msg.x, msg.y)  # fmt: skip
+            self._note_home(
+                msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3, msg.x, msg.y
+            )
             return None
         if kind in MISSION_KINDS:
             self._fence.inbox.put_nowait(msg)
@@ -384,15 +428,24 @@ class PymavlinkLink(VehicleLink):
                 return SensorSignal(msg.time_boot_ms / 1000.0, msg.value)
             return None
         if kind == "HEARTBEAT":
-            return self._heartbeat(msg.get_srcComponent(), msg.type, msg.autopilot,
-                                   msg.base_mode, msg.custom_mode, msg.system_status)  # fmt: skip
+            return self._heartbeat(
+                msg.get_srcComponent(),
+                msg.type,
+                msg.autopilot,
+                msg.base_mode,
+                msg.custom_mode,
+                msg.system_status,
+            )
         if kind == "STATUSTEXT":
             text = _text(msg.text)
             self._note_text(msg.severity, text)
             return StatusText(msg.severity, text)
         if kind == "SYS_STATUS":
-            return self._sys_status(msg.onboard_control_sensors_present,
-                                    msg.onboard_control_sensors_health, msg.battery_remaining)  # fmt: skip
+            return self._sys_status(
+                msg.onboard_control_sensors_present,
+                msg.onboard_control_sensors_health,
+                msg.battery_remaining,
+            )
         if kind == "COMMAND_ACK":
             self._commands.on_ack(msg.command, msg.result)
             return None
@@ -422,10 +475,13 @@ class PymavlinkLink(VehicleLink):
     def send_heartbeat(self) -> None:
         self._send(
             self._mav.heartbeat_encode(
-                mavlink2.MAV_TYPE_ONBOARD_CONTROLLER, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0,
+                mavlink2.MAV_TYPE_ONBOARD_CONTROLLER,
+                mavlink2.MAV_AUTOPILOT_INVALID,
+                0,
+                0,
                 mavlink2.MAV_STATE_ACTIVE,
             )
-        )  # fmt: skip
+        )
 
     def send_setpoint(self, setpoint: NedSetpoint, kind: SetpointKind) -> None:
         mask = VELOCITY_MASK if kind == "velocity" else POSITION_MASK
@@ -434,18 +490,53 @@ class PymavlinkLink(VehicleLink):
         if self._signing is None:  # the frame pymavlink would pack, without its objects
             mav = self._mav
             payload = fast_frames.SETPOINT.pack(
-                self._time_ms, north, east, sp.down, sp.vn, sp.ve, sp.vd, 0.0, 0.0, 0.0, 0.0, 0.0,
-                mask, self.target_system, 1, mavlink2.MAV_FRAME_LOCAL_NED,
-            )  # fmt: skip
-            self._send_frame(fast_frames.frame(fast_frames.SET_POSITION_TARGET_LOCAL_NED, payload,
-                                               mav.seq, mav.srcSystem, mav.srcComponent))  # fmt: skip
+                self._time_ms,
+                north,
+                east,
+                sp.down,
+                sp.vn,
+                sp.ve,
+                sp.vd,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                mask,
+                self.target_system,
+                1,
+                mavlink2.MAV_FRAME_LOCAL_NED,
+            )
+            self._send_frame(
+                fast_frames.frame(
+                    fast_frames.SET_POSITION_TARGET_LOCAL_NED,
+                    payload,
+                    mav.seq,
+                    mav.srcSystem,
+                    mav.srcComponent,
+                )
+            )
             return
         self._send(
             self._mav.set_position_target_local_ned_encode(
-                self._time_ms, self.target_system, 1, mavlink2.MAV_FRAME_LOCAL_NED, mask,
-                north, east, sp.down, sp.vn, sp.ve, sp.vd, 0, 0, 0, 0, 0,
+                self._time_ms,
+                self.target_system,
+                1,
+                mavlink2.MAV_FRAME_LOCAL_NED,
+                mask,
+                north,
+                east,
+                sp.down,
+                sp.vn,
+                sp.ve,
+                sp.vd,
+                0,
+                0,
+                0,
+                0,
+                0,
             )
-        )  # fmt: skip
+        )
 
     async def upload_fence(self, vertices: list[tuple[int, int]]) -> None:
         await self._fence.upload(vertices)

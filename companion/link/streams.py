@@ -42,16 +42,26 @@ FENCE_WATCH_RATE_HZ = 2.0
 def needs(*, global_position: bool) -> tuple[StreamNeed, ...]:
     """What the mission reads: LOCAL_POSITION_NED (the decision loop), SYS_STATUS (health,
     battery) and, for a geo-referenced profile, GLOBAL_POSITION_INT (the fence watch)."""
-    position = StreamNeed("LOCAL_POSITION_NED", mavlink2.MAVLINK_MSG_ID_LOCAL_POSITION_NED,
-                          POSITION_RATE_HZ, mavlink2.MAV_DATA_STREAM_POSITION)  # fmt: skip
+    position = StreamNeed(
+        "LOCAL_POSITION_NED",
+        mavlink2.MAVLINK_MSG_ID_LOCAL_POSITION_NED,
+        POSITION_RATE_HZ,
+        mavlink2.MAV_DATA_STREAM_POSITION,
+    )
     status = StreamNeed(
-        "SYS_STATUS", mavlink2.MAVLINK_MSG_ID_SYS_STATUS, 0.0,
+        "SYS_STATUS",
+        mavlink2.MAVLINK_MSG_ID_SYS_STATUS,
+        0.0,
         mavlink2.MAV_DATA_STREAM_EXTENDED_STATUS,
-    )  # fmt: skip
+    )
     if not global_position:
         return (position, status)
-    gps = StreamNeed("GLOBAL_POSITION_INT", mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
-                     FENCE_WATCH_RATE_HZ, mavlink2.MAV_DATA_STREAM_POSITION)  # fmt: skip
+    gps = StreamNeed(
+        "GLOBAL_POSITION_INT",
+        mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
+        FENCE_WATCH_RATE_HZ,
+        mavlink2.MAV_DATA_STREAM_POSITION,
+    )
     return (position, status, gps)
 
 

@@ -65,8 +65,18 @@ class TelemetryGuard:
         self._tracks: dict[str, _Sample] = {}
         self._candidates: dict[str, list[_Sample]] = {}
 
-    def local(self, component: int, t: float, north: float, east: float, down: float,
-              vn: float, ve: float, vd: float, wall: float) -> bool:  # fmt: skip
+    def local(
+        self,
+        component: int,
+        t: float,
+        north: float,
+        east: float,
+        down: float,
+        vn: float,
+        ve: float,
+        vd: float,
+        wall: float,
+    ) -> bool:
         """Whether to take this LOCAL_POSITION_NED (counted either way)."""
         cause = self._local_cause(component, t, north, east, down, vn, ve, vd)
         ok = self._decide("local", cause, (t, north, east, down, wall))
@@ -74,8 +84,17 @@ class TelemetryGuard:
             self.last_valid_wall = wall
         return ok
 
-    def global_position(self, component: int, t: float, lat: float, lon: float,
-                        relative_alt: float, north: float, east: float, wall: float) -> bool:  # fmt: skip
+    def global_position(
+        self,
+        component: int,
+        t: float,
+        lat: float,
+        lon: float,
+        relative_alt: float,
+        north: float,
+        east: float,
+        wall: float,
+    ) -> bool:
         """Whether to take this GLOBAL_POSITION_INT (``north``/``east``: in the profile's frame)."""
         cause = None
         if not _finite(lat, lon) or not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
@@ -84,8 +103,18 @@ class TelemetryGuard:
             cause = self._static(component, t, north, east, -relative_alt)
         return self._decide("global", cause, (t, north, east, -relative_alt, wall))
 
-    def plausible_local(self, component: int, t: float, north: float, east: float,
-                        down: float, vn: float, ve: float, vd: float, wall: float) -> bool:  # fmt: skip
+    def plausible_local(
+        self,
+        component: int,
+        t: float,
+        north: float,
+        east: float,
+        down: float,
+        vn: float,
+        ve: float,
+        vd: float,
+        wall: float,
+    ) -> bool:
         """Whether :meth:`local` would take this position at once, changing nothing (the
         pymavlink backend's direct answer asks first, then leaves a doubtful one to it)."""
         if self._local_cause(component, t, north, east, down, vn, ve, vd) is not None:
@@ -118,8 +147,17 @@ class TelemetryGuard:
         self._reported = self.dropped.copy()
         return dict(new)
 
-    def _local_cause(self, component: int, t: float, north: float, east: float, down: float,
-                     vn: float, ve: float, vd: float) -> str | None:  # fmt: skip
+    def _local_cause(
+        self,
+        component: int,
+        t: float,
+        north: float,
+        east: float,
+        down: float,
+        vn: float,
+        ve: float,
+        vd: float,
+    ) -> str | None:
         # one sum: NaN and the infinities carry through it (the per-position cost counts)
         if component == AUTOPILOT_COMPONENT and math.isfinite(
             t + north + east + down + vn + ve + vd
@@ -130,8 +168,9 @@ class TelemetryGuard:
             return cause
         return self._static(component, t, north, east, down) or "non-finite"
 
-    def _static(self, component: int, t: float, north: float, east: float,
-                down: float) -> str | None:  # fmt: skip
+    def _static(
+        self, component: int, t: float, north: float, east: float, down: float
+    ) -> str | None:
         if component != AUTOPILOT_COMPONENT:
             return "other component"
         if not _finite(t, north, east, down):

@@ -64,8 +64,12 @@ class FrameAlignment:
         n, e, _ = self.profile.to_local(origin.lat, origin.lon, origin.alt)
         self.origin = origin
         self.north, self.east = n - x, e - y
-        log.info("vehicle frame: local origin %.1f m north, %.1f m east of the profile origin "
-                 "(from %s)", self.north, self.east, origin.source)  # fmt: skip
+        log.info(
+            "vehicle frame: local origin %.1f m north, %.1f m east of the profile origin (from %s)",
+            self.north,
+            self.east,
+            origin.source,
+        )
 
     def to_profile(self, north: float, east: float) -> tuple[float, float]:
         return north + self.north, east + self.east

@@ -33,11 +33,14 @@ async def _await_vehicle(m: Flown) -> None:
             continue  # other messages of the vehicle woke us: not yet time for a line
         next_line = time.monotonic() + period
         heard = sorted(m.link.heard)
-        log.warning("vehicle %d: waiting on %s for system %d; heard %s%s",
-                    m.config.vehicle, m.link.describe(), m.config.system_id,
-                    f"systems {heard}" if heard else "nothing",
-                    " (no autopilot HEARTBEAT from it yet)"
-                    if m.config.system_id in heard else "")  # fmt: skip
+        log.warning(
+            "vehicle %d: waiting on %s for system %d; heard %s%s",
+            m.config.vehicle,
+            m.link.describe(),
+            m.config.system_id,
+            f"systems {heard}" if heard else "nothing",
+            " (no autopilot HEARTBEAT from it yet)" if m.config.system_id in heard else "",
+        )
 
 
 async def _ensure_streams(m: Flown) -> None:
@@ -64,11 +67,20 @@ async def _learn_origin(m: Flown) -> None:
         origin = m.link.alignment.origin
         if missing is None and origin is not None:
             a = m.link.alignment
-            m.emit("frame", source=origin.source, lat=round(origin.lat, 7),
-                   lon=round(origin.lon, 7), north=round(a.north, 2), east=round(a.east, 2))  # fmt: skip
+            m.emit(
+                "frame",
+                source=origin.source,
+                lat=round(origin.lat, 7),
+                lon=round(origin.lon, 7),
+                north=round(a.north, 2),
+                east=round(a.east, 2),
+            )
             return
-        log.warning("vehicle %d: origin of its local frame unknown: %s; asking again",
-                    m.config.vehicle, missing)  # fmt: skip
+        log.warning(
+            "vehicle %d: origin of its local frame unknown: %s; asking again",
+            m.config.vehicle,
+            missing,
+        )
         await asyncio.sleep(2.0)
 
 
@@ -80,8 +92,14 @@ async def _note_own_origin(m: Flown) -> None:
         return
     origin = await m.link.read_origin()
     if origin is not None:
-        m.emit("frame", source="own", lat=round(origin[0], 7), lon=round(origin[1], 7),
-               north=0.0, east=0.0)  # fmt: skip
+        m.emit(
+            "frame",
+            source="own",
+            lat=round(origin[0], 7),
+            lon=round(origin[1], 7),
+            north=0.0,
+            east=0.0,
+        )
 
 
 async def _check_start(m: Flown) -> None:
@@ -96,9 +114,11 @@ async def _check_start(m: Flown) -> None:
     why = m.watch.start_refusal(gps.north, gps.east)
     if why is None:
         return
-    refusal = (f"vehicle {m.config.vehicle} (system {m.config.system_id}) at "
-               f"{gps.lat:.6f}, {gps.lon:.6f} is {why} of profile "
-               f"{m.config.profile.name}: not starting")  # fmt: skip
+    refusal = (
+        f"vehicle {m.config.vehicle} (system {m.config.system_id}) at "
+        f"{gps.lat:.6f}, {gps.lon:.6f} is {why} of profile "
+        f"{m.config.profile.name}: not starting"
+    )
     log.error("%s", refusal)
     m.emit("refused", command="start", reason=refusal)
     m.request_end(f"refused: {refusal}")

@@ -185,8 +185,12 @@ class EventIntake:
 
     def _on_text(self, text: StatusText) -> None:
         """The autopilot's own words on the console and in the mission log."""
-        log.log(_TEXT_LEVEL.get(text.severity, logging.DEBUG), "vehicle %d says: %s",
-                self.m.config.vehicle, text.text)  # fmt: skip
+        log.log(
+            _TEXT_LEVEL.get(text.severity, logging.DEBUG),
+            "vehicle %d says: %s",
+            self.m.config.vehicle,
+            text.text,
+        )
         if text.severity <= 6:
             self.m.emit("statustext", severity=text.severity, text=text.text)
 
@@ -215,10 +219,20 @@ class EventIntake:
             return
         breach = watch.breach(gps.north, gps.east)
         own = m.vehicle_fence
-        if (breach is None and own is not None and own.installed and not own.enabling
-                and m.phase not in (Phase.RETURN, Phase.DONE)):  # fmt: skip
+        if (
+            breach is None
+            and own is not None
+            and own.installed
+            and not own.enabling
+            and m.phase not in (Phase.RETURN, Phase.DONE)
+        ):
             m.chore(own.enable())
         if Do.SAY_BREACH in m.feed(Gps(breach)):
-            log.error("vehicle %d is %s (GPS %.7f, %.7f): ending the search", m.config.vehicle,
-                      breach, gps.lat, gps.lon)  # fmt: skip
+            log.error(
+                "vehicle %d is %s (GPS %.7f, %.7f): ending the search",
+                m.config.vehicle,
+                breach,
+                gps.lat,
+                gps.lon,
+            )
             m.emit("fence", state="breach", where=breach, lat=gps.lat, lon=gps.lon)

@@ -36,8 +36,10 @@ class FenceWatch:
         if d <= self.start_margin:
             return None
         n, e = self.area.nearest(north, east)
-        return (f"{d:.0f} m {compass(north - n, east - e)} of the search area (allowed: "
-                f"{self.start_margin:g} m outside it)")  # fmt: skip
+        return (
+            f"{d:.0f} m {compass(north - n, east - e)} of the search area (allowed: "
+            f"{self.start_margin:g} m outside it)"
+        )
 
     def breach(self, north: float, east: float) -> str | None:
         """How far outside the fence (north, east) is, or None inside."""

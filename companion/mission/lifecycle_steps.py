@@ -160,8 +160,10 @@ class LifecycleSteps:
         # If the autopilot's takeoff stops short (its own takeoff altitude), setpoints
         # finish the climb: wait for the altitude or for the climb to stall airborne.
         m = self.m
-        await m.waits.until(lambda: self._climb_done_or_stalled() or m.phase is not Phase.CLIMB,
-                      self.config.climb_timeout)  # fmt: skip
+        await m.waits.until(
+            lambda: self._climb_done_or_stalled() or m.phase is not Phase.CLIMB,
+            self.config.climb_timeout,
+        )
         return ClimbStopped()
 
     async def _begin_setpoints(self) -> None:
@@ -169,9 +171,18 @@ class LifecycleSteps:
 
     async def _climb(self) -> Climbed:
         m = self.m
-        return Climbed(await m.waits.until(lambda: m.phase is not Phase.CLIMB or (
-            m.seen.position is not None and -m.seen.position.down > 0.95 * self.config.altitude),
-            self.config.climb_timeout))  # fmt: skip
+        return Climbed(
+            await m.waits.until(
+                lambda: (
+                    m.phase is not Phase.CLIMB
+                    or (
+                        m.seen.position is not None
+                        and -m.seen.position.down > 0.95 * self.config.altitude
+                    )
+                ),
+                self.config.climb_timeout,
+            )
+        )
 
     def _climb_done_or_stalled(self) -> bool:
         pos = self.m.seen.position
@@ -197,19 +208,36 @@ class LifecycleSteps:
         assert start is not None
         distance = math.hypot(start[0] - pos.north, start[1] - pos.east)
         self._transit_t0 = m.seen.clock.now
-        m.emit("transit", state="begin", north=round(pos.north, 1), east=round(pos.east, 1),
-               to_north=round(start[0], 1), to_east=round(start[1], 1),
-               distance=round(distance, 1))  # fmt: skip
-        log.info("vehicle %d: transit %.0f m to its start point (%.0f, %.0f)",
-                 self.config.vehicle, distance, *start)  # fmt: skip
+        m.emit(
+            "transit",
+            state="begin",
+            north=round(pos.north, 1),
+            east=round(pos.east, 1),
+            to_north=round(start[0], 1),
+            to_east=round(start[1], 1),
+            distance=round(distance, 1),
+        )
+        log.info(
+            "vehicle %d: transit %.0f m to its start point (%.0f, %.0f)",
+            self.config.vehicle,
+            distance,
+            *start,
+        )
         limit = 60.0 + 3.0 * distance / self.config.profile.fleet.speed
         arrived = await m.waits.until(
-            lambda: m.phase is not Phase.TRANSIT or (
-                m.seen.position is not None and guidance.reached(
-                    np.array([m.seen.position.north, m.seen.position.east]), np.array(start),
-                    m.guide.acceptance_radius)),
+            lambda: (
+                m.phase is not Phase.TRANSIT
+                or (
+                    m.seen.position is not None
+                    and guidance.reached(
+                        np.array([m.seen.position.north, m.seen.position.east]),
+                        np.array(start),
+                        m.guide.acceptance_radius,
+                    )
+                )
+            ),
             limit,
-        )  # fmt: skip
+        )
         return TransitEnded(arrived, limit)
 
     async def _say_transit_done(self) -> None:
@@ -253,8 +281,9 @@ class LifecycleSteps:
         name = action.value.upper()
         result = await self.link.set_mode(action)
         if not result:
-            log.error("vehicle %d refused %s: %s", self.config.vehicle, action.value,
-                      result.describe())  # fmt: skip
+            log.error(
+                "vehicle %d refused %s: %s", self.config.vehicle, action.value, result.describe()
+            )
         if self.config.land_wait <= 0:
             if m.exit is None:
                 m.end_with(
@@ -263,8 +292,12 @@ class LifecycleSteps:
                     else MissionExit(1, f"{name} refused: {result.describe()}")
                 )
             return Landed()
-        log.info("vehicle %d: %s; waiting up to %g vehicle s until it lands and disarms",
-                 self.config.vehicle, name, self.config.land_wait)  # fmt: skip
+        log.info(
+            "vehicle %d: %s; waiting up to %g vehicle s until it lands and disarms",
+            self.config.vehicle,
+            name,
+            self.config.land_wait,
+        )
         how = await self._await_landing()
         if m.exit is not None:  # the link was given up meanwhile
             return Landed()
@@ -307,6 +340,11 @@ class LifecycleSteps:
         asked = self.config.profile.fleet.speed
         m.emit("speed", max_search=round(m.seen.max_search_speed, 2), asked=asked)
         if m.seen.max_search_speed < 0.9 * asked:
-            log.warning("vehicle %d flew at most %.1f m/s while searching; the profile asks "
-                        "%g m/s: the vehicle caps it (%s)", self.config.vehicle,
-                        m.seen.max_search_speed, asked, self._speed_report)  # fmt: skip
+            log.warning(
+                "vehicle %d flew at most %.1f m/s while searching; the profile asks "
+                "%g m/s: the vehicle caps it (%s)",
+                self.config.vehicle,
+                m.seen.max_search_speed,
+                asked,
+                self._speed_report,
+            )

@@ -77,8 +77,9 @@ class LinkSupervision:
             except LinkError as exc:
                 attempt += 1
                 wait = min(backoff * 2 ** (attempt - 1), _OPEN_BACKOFF_MAX_S)
-                log.warning("vehicle %d: %s; retry %d in %.1f s", m.config.vehicle, exc,
-                            attempt, wait)  # fmt: skip
+                log.warning(
+                    "vehicle %d: %s; retry %d in %.1f s", m.config.vehicle, exc, attempt, wait
+                )
             deadline = time.monotonic() + wait
             while time.monotonic() < deadline:
                 if m.end_reason is not None:
@@ -101,8 +102,9 @@ class LinkSupervision:
                 continue
             resume = m.phase
             if resume is not Phase.LINK_LOST:
-                log.warning("vehicle %d: no heartbeat for %.1f s; stop commanding",
-                            m.config.vehicle, silent)  # fmt: skip
+                log.warning(
+                    "vehicle %d: no heartbeat for %.1f s; stop commanding", m.config.vehicle, silent
+                )
                 m.feed(LinkLost())
                 m.record(events.LinkState("lost", round(silent, 1)))
             if silent >= wait:
@@ -110,8 +112,12 @@ class LinkSupervision:
                 return
             if time.perf_counter() >= next_line:
                 next_line = time.perf_counter() + _LINK_LINE_S
-                log.warning("vehicle %d: link lost for %.0f s; waiting up to %g s for it",
-                            m.config.vehicle, silent, wait)  # fmt: skip
+                log.warning(
+                    "vehicle %d: link lost for %.0f s; waiting up to %g s for it",
+                    m.config.vehicle,
+                    silent,
+                    wait,
+                )
             give_up = seen.last_heartbeat_wall + wait  # no wait below runs past it
             left = max(give_up - time.perf_counter(), 0.0)
             await asyncio.sleep(min(backoff * (1 + random.random()), left))  # jittered backoff
@@ -141,8 +147,10 @@ class LinkSupervision:
             doing = f"in {ap.mode_name(hb.custom_mode)}"
         else:
             doing = "mode unknown"
-        cause = (f"link lost while {'armed' if armed else 'disarmed'} (no heartbeat for "
-                 f"{silent:.0f} s), {doing} {m.where()}")  # fmt: skip
+        cause = (
+            f"link lost while {'armed' if armed else 'disarmed'} (no heartbeat for "
+            f"{silent:.0f} s), {doing} {m.where()}"
+        )
         log.error("vehicle %d: %s; not waiting longer", m.config.vehicle, cause)
         m.end_with(MissionExit(1, cause))
         m.request_end("link lost")
@@ -154,6 +162,7 @@ class LinkSupervision:
         if hb is None or ap is None:
             event = LinkRestored(before, known=False, guided=False, armed=False, hold=False)
         else:
-            event = LinkRestored(before, True, ap.is_guided(hb.custom_mode), hb.armed,
-                                 m.hold_mode(hb))  # fmt: skip
+            event = LinkRestored(
+                before, True, ap.is_guided(hb.custom_mode), hb.armed, m.hold_mode(hb)
+            )
         m.feed(event)

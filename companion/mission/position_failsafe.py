@@ -87,8 +87,11 @@ class PositionFailsafe:
             return
         self._next_report = now + REPORT_PERIOD_S
         total = self.m.link.guard.dropped
-        log.warning("vehicle %d: dropped %s", self.m.config.vehicle,
-                    ", ".join(f"{n} position(s): {cause}" for cause, n in sorted(new.items())))  # fmt: skip
+        log.warning(
+            "vehicle %d: dropped %s",
+            self.m.config.vehicle,
+            ", ".join(f"{n} position(s): {cause}" for cause, n in sorted(new.items())),
+        )
         for cause, n in sorted(new.items()):
             self.m.record(events.TelemetryDropped(cause, n, total[cause]))
 
@@ -124,13 +127,21 @@ class PositionFailsafe:
                 and m.ask(OperatorPause(), by=BY) is None
             ):
                 self.holding = True
-                log.error("vehicle %d: no valid position for %.1f s: HOLD (failsafe); the end "
-                          "action in %g s unless positions come back", v, silent,
-                          self.spec.position_hold)  # fmt: skip
+                log.error(
+                    "vehicle %d: no valid position for %.1f s: HOLD (failsafe); the end "
+                    "action in %g s unless positions come back",
+                    v,
+                    silent,
+                    self.spec.position_hold,
+                )
             if self.holding:
                 return
         if self.holding or m.phase in _FLYING:
             self.cause = f"no valid position for {silent:.1f} s"
-            log.error("vehicle %d: %s: ending with %s (failsafe)", v, self.cause,
-                      m.end_action.value.upper())  # fmt: skip
+            log.error(
+                "vehicle %d: %s: ending with %s (failsafe)",
+                v,
+                self.cause,
+                m.end_action.value.upper(),
+            )
             m.request_end(f"failsafe: {self.cause}")

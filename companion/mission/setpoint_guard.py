@@ -20,8 +20,9 @@ _EPS = 1e-6
 class SetpointGuard:
     """Checks every setpoint of one vehicle; counts what it checked and what it replaced."""
 
-    def __init__(self, guide: GuidanceConfig, fence: Geofence, kind: SetpointKind,
-                 layer: float) -> None:  # fmt: skip
+    def __init__(
+        self, guide: GuidanceConfig, fence: Geofence, kind: SetpointKind, layer: float
+    ) -> None:
         self.guide = guide
         self.fence = fence
         self.kind = kind
@@ -50,8 +51,9 @@ class SetpointGuard:
         if not self.fence.contains((sp.north, sp.east)):
             return "fence", f"point ({sp.north:.1f}, {sp.east:.1f}) outside the fence"
         if -sp.down > g.altitude + self.layer + _EPS:
-            return "altitude", (f"altitude {-sp.down:.6g} m above the layer "
-                                f"({g.altitude:g} + {self.layer:g})")  # fmt: skip
+            return "altitude", (
+                f"altitude {-sp.down:.6g} m above the layer ({g.altitude:g} + {self.layer:g})"
+            )
         return None
 
     def safe(self, sp: NedSetpoint) -> tuple[NedSetpoint | None, tuple[str, str] | None]:

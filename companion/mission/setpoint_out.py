@@ -55,15 +55,18 @@ class SetpointOut:
 
     def pursue(self, pos: LocalPosition, north: float, east: float) -> None:
         """The search's velocity setpoint from ``pos`` towards the waypoint (north, east)."""
-        self.send(guidance.pursuit_xy(pos.north, pos.east, pos.down, north, east, self.guide,
-                                      self.fence, self.seen.period), pos)  # fmt: skip
+        self.send(
+            guidance.pursuit_xy(
+                pos.north, pos.east, pos.down, north, east, self.guide, self.fence, self.seen.period
+            ),
+            pos,
+        )
 
     def hold_here(self) -> None:
         """A setpoint that holds at the last valid position (while none valid comes)."""
         pos = self.seen.position
         if pos is not None:
-            self.send(NedSetpoint(pos.north, pos.east, pos.down, 0.0, 0.0, 0.0), pos,
-                      answer=False)  # fmt: skip
+            self.send(NedSetpoint(pos.north, pos.east, pos.down, 0.0, 0.0, 0.0), pos, answer=False)
 
     def send(self, sp: NedSetpoint, pos: LocalPosition, *, answer: bool = True) -> None:
         """``sp``, the answer to ``pos`` (its latency measured; not for a hold without a new
@@ -84,14 +87,20 @@ class SetpointOut:
         if not self.latencies:
             return None
         ms = np.array(self.latencies) * 1e3
-        return {"p50_ms": round(float(np.percentile(ms, 50)), 4),
-                "p99_ms": round(float(np.percentile(ms, 99)), 4)}  # fmt: skip
+        return {
+            "p50_ms": round(float(np.percentile(ms, 50)), 4),
+            "p99_ms": round(float(np.percentile(ms, 99)), 4),
+        }
 
     def _refused(self, kind: str, detail: str) -> None:
         """A setpoint the last check refused: a bug, logged with its cause (the 1st, 10th,
         100th ... of each kind) and replaced by a hold."""
         n = self.guard.refused[kind]
         if n == 10 ** (len(str(n)) - 1):
-            log.error("vehicle %d: setpoint not sent (%s; %d so far): a bug; sent a hold instead",
-                      self.vehicle, detail, n)  # fmt: skip
+            log.error(
+                "vehicle %d: setpoint not sent (%s; %d so far): a bug; sent a hold instead",
+                self.vehicle,
+                detail,
+                n,
+            )
             self.record(events.SetpointRefused(kind, detail, n))

@@ -9,8 +9,9 @@ from mdm_core.world.scenario import Scenario
 from mdm_profiles import MissionProfile
 
 
-def start_point(profile: MissionProfile, seed: int, vehicle: int,
-                fence: Geofence) -> tuple[float, float]:  # fmt: skip
+def start_point(
+    profile: MissionProfile, seed: int, vehicle: int, fence: Geofence
+) -> tuple[float, float]:
     """(north, east) in the profile's frame that ``vehicle`` transits to before its search."""
     start, _ = Scenario.from_profile(profile).live_run(
         seed, profile.fleet.vehicles, profile.fleet.start

@@ -72,9 +72,13 @@ class SwarmExchange(Protocol):
     """The peers' side (companion.telemetry.mqtt.swarm_peers.SwarmPeers)."""
 
     def post(
-        self, time: float, best: tuple[float, float], fitness: float, current: float,
+        self,
+        time: float,
+        best: tuple[float, float],
+        fitness: float,
+        current: float,
         known: list[tuple[float, float]],
-    ) -> None: ...  # fmt: skip
+    ) -> None: ...
 
     def heard(self, now: float) -> tuple[Best, FloatArray]: ...
 
@@ -85,9 +89,13 @@ class SwarmCore:
     """One particle: its bests, the last iteration's state and the vehicle's Generator."""
 
     def __init__(
-        self, profile: MissionProfile, seed: int, vehicle: int, peers: SwarmExchange,
+        self,
+        profile: MissionProfile,
+        seed: int,
+        vehicle: int,
+        peers: SwarmExchange,
         signal: Callable[[], float],
-    ) -> None:  # fmt: skip
+    ) -> None:
         refusal = live_swarm_refusal(profile)
         if refusal is not None:
             raise ValueError(refusal)
@@ -171,8 +179,14 @@ class SwarmCore:
             self._iterate(time, position)
         elif confirmed:
             self._publish(time)  # at once: the mission may end before the next iteration
-        return Decision(level=0, previous_level=0, detected=False, confirmed=confirmed,
-                        fell_back=False, new_waypoint=iterate)  # fmt: skip
+        return Decision(
+            level=0,
+            previous_level=0,
+            detected=False,
+            confirmed=confirmed,
+            fell_back=False,
+            new_waypoint=iterate,
+        )
 
     def index_value(self, time: float) -> float:
         return math.nan
@@ -195,9 +209,13 @@ class SwarmCore:
         known = np.array(self.known).reshape(-1, 2)
         is_known = np.ones((1, max(len(known), 1)), dtype=bool) & (len(known) > 0)
         fitness = fitness_from_signal(
-            self.signal(), self.profile.sensors[-1].radius, self.signal_radius,
-            position, known, self.tolerance,
-        )  # fmt: skip
+            self.signal(),
+            self.profile.sensors[-1].radius,
+            self.signal_radius,
+            position,
+            known,
+            self.tolerance,
+        )
         self.current = np.array([fitness])
         own = attribute(self.own, self.signal_radius, known, self.tolerance)
         self.own, self.previous_best = read_into_best(
@@ -216,12 +234,21 @@ class SwarmCore:
             self._explore_to = explore(self.explorer, here, self.rng)
         last = here if self._last_position is None else self._last_position
         move, self.guided, from_peer = choose_move(
-            self.config, self.explorer, position=here, step=here - last,
-            waypoint=self._explore_to, guided=self.guided, own=self.own, heard=heard,
-            heard_current=heard_current, current=self.current,
-            previous_best=self.previous_best, links=self.links,
-            distance=self.profile.fleet.speed * self.spec.update_interval, rng=self.rng,
-        )  # fmt: skip
+            self.config,
+            self.explorer,
+            position=here,
+            step=here - last,
+            waypoint=self._explore_to,
+            guided=self.guided,
+            own=self.own,
+            heard=heard,
+            heard_current=heard_current,
+            current=self.current,
+            previous_best=self.previous_best,
+            links=self.links,
+            distance=self.profile.fleet.speed * self.spec.update_interval,
+            rng=self.rng,
+        )
         area = np.array([self.profile.area.north, self.profile.area.east])
         self._target = np.clip(here + move, 0.0, area)
         self._last_position = here
@@ -233,16 +260,21 @@ class SwarmCore:
 
     def _publish(self, time: float) -> None:
         best = (float(self.own.position[0, 0]), float(self.own.position[0, 1]))
-        self.peers.post(time, best, float(self.own.fitness[0]), float(self.current[0]),
-                        list(self.known))  # fmt: skip
+        self.peers.post(
+            time, best, float(self.own.fitness[0]), float(self.current[0]), list(self.known)
+        )
 
     def _log_follow(self, heard: Best, position: FloatArray) -> None:
         social, _ = swarm_best(self.own, heard, self.links)
         peer = int(np.argmax(np.where(self.links, heard.fitness, -np.inf)[0]))
         assert self.emit is not None
-        self.emit("swarm_follow", peer=peer, fitness=round(float(social.fitness[0]), 4),
-                  best=[round(float(v), 1) for v in social.position[0]],
-                  pos=[round(float(v), 1) for v in position])  # fmt: skip
+        self.emit(
+            "swarm_follow",
+            peer=peer,
+            fitness=round(float(social.fitness[0]), 4),
+            best=[round(float(v), 1) for v in social.position[0]],
+            pos=[round(float(v), 1) for v in position],
+        )
 
     @property
     def _acceptance(self) -> float:

@@ -20,8 +20,13 @@ log = logging.getLogger(__name__)
 class VehicleFence:
     """One vehicle's copy of the site fence; ``emit`` writes ``vehicle_fence`` events."""
 
-    def __init__(self, link: VehicleLink, polygon: list[tuple[float, float]], vehicle: int,
-                 emit: Callable[..., None]) -> None:  # fmt: skip
+    def __init__(
+        self,
+        link: VehicleLink,
+        polygon: list[tuple[float, float]],
+        vehicle: int,
+        emit: Callable[..., None],
+    ) -> None:
         self.link = link
         self.polygon = polygon
         self.vertices = [(round(lat * 1e7), round(lon * 1e7)) for lat, lon in polygon]
@@ -37,23 +42,34 @@ class VehicleFence:
         ap = self.link.autopilot
         params = ap.fence_params if ap is not None else None
         if params is None or not self.link.uploads_fence:
-            why = (f"not done for {ap.name if ap else 'an unknown autopilot'}" if params is None
-                   else f"the {type(self.link).__name__} backend has no fence upload")  # fmt: skip
-            log.info("vehicle %d: own fence %s; the companion's fence watch still applies",
-                     self.vehicle, why)  # fmt: skip
+            why = (
+                f"not done for {ap.name if ap else 'an unknown autopilot'}"
+                if params is None
+                else f"the {type(self.link).__name__} backend has no fence upload"
+            )
+            log.info(
+                "vehicle %d: own fence %s; the companion's fence watch still applies",
+                self.vehicle,
+                why,
+            )
             self.emit("vehicle_fence", state="skipped", reason=why)
             return
         if params.enable is None:
             home = self.link.home
             # Containment is the same ray casting on (lat, lon) degrees as on metres.
             if home is not None and not Geofence(np.array(self.polygon)).contains(home):
-                why = (f"home {home[0]:.6f}, {home[1]:.6f} is outside the fence: the "
-                       "autopilot would stop the RTL at the fence")  # fmt: skip
+                why = (
+                    f"home {home[0]:.6f}, {home[1]:.6f} is outside the fence: the "
+                    "autopilot would stop the RTL at the fence"
+                )
                 log.warning("vehicle %d: own fence not uploaded: %s", self.vehicle, why)
                 self.emit("vehicle_fence", state="skipped", reason=why)
                 return
-            log.info("vehicle %d: own fence uploaded once the vehicle is inside it "
-                     "(the autopilot enforces any fence it holds)", self.vehicle)  # fmt: skip
+            log.info(
+                "vehicle %d: own fence uploaded once the vehicle is inside it "
+                "(the autopilot enforces any fence it holds)",
+                self.vehicle,
+            )
             self.installed = True
             return
         if not await self._upload():
@@ -65,16 +81,31 @@ class VehicleFence:
             return
         wanted = (int(kind) | params.polygon_bit) & ~params.drop_bits
         if wanted != int(kind):
-            echoed = await self.link.set_param(params.kind, float(wanted),
-                                               mavlink2.MAV_PARAM_TYPE_INT8)  # fmt: skip
+            echoed = await self.link.set_param(
+                params.kind, float(wanted), mavlink2.MAV_PARAM_TYPE_INT8
+            )
             if echoed is None or int(echoed) != wanted:
-                self.emit("vehicle_fence", state="failed",
-                          reason=f"{params.kind} {int(kind)} -> {wanted} not confirmed")  # fmt: skip
+                self.emit(
+                    "vehicle_fence",
+                    state="failed",
+                    reason=f"{params.kind} {int(kind)} -> {wanted} not confirmed",
+                )
                 return
-        log.info("vehicle %d: own fence uploaded, %d vertices read back equal; %s %d -> %d",
-                 self.vehicle, len(self.vertices), params.kind, int(kind), wanted)  # fmt: skip
-        self.emit("vehicle_fence", state="uploaded", vertices=len(self.vertices),
-                  read_back="equal", fence_type=[int(kind), wanted])  # fmt: skip
+        log.info(
+            "vehicle %d: own fence uploaded, %d vertices read back equal; %s %d -> %d",
+            self.vehicle,
+            len(self.vertices),
+            params.kind,
+            int(kind),
+            wanted,
+        )
+        self.emit(
+            "vehicle_fence",
+            state="uploaded",
+            vertices=len(self.vertices),
+            read_back="equal",
+            fence_type=[int(kind), wanted],
+        )
         self.installed = True
 
     async def _upload(self) -> bool:
@@ -87,8 +118,12 @@ class VehicleFence:
             self.emit("vehicle_fence", state="failed", reason=str(exc))
             return False
         if back != self.vertices:
-            log.error("vehicle %d: fence read back differs: sent %s, vehicle has %s",
-                      self.vehicle, self.vertices, back)  # fmt: skip
+            log.error(
+                "vehicle %d: fence read back differs: sent %s, vehicle has %s",
+                self.vehicle,
+                self.vertices,
+                back,
+            )
             self.emit("vehicle_fence", state="mismatch", sent=self.vertices, read=back)
             return False
         return True
@@ -106,10 +141,16 @@ class VehicleFence:
                 return
             action = await self.link.read_param(params.action) if params.action else None
             shown = "unknown" if action is None else f"{action:g}"
-            log.info("vehicle %d: own fence uploaded inside it, %d vertices read back equal; "
-                     "%s %s", self.vehicle, len(self.vertices), params.action, shown)  # fmt: skip
-            self.emit("vehicle_fence", state="uploaded", vertices=len(self.vertices),
-                      read_back="equal")  # fmt: skip
+            log.info(
+                "vehicle %d: own fence uploaded inside it, %d vertices read back equal; %s %s",
+                self.vehicle,
+                len(self.vertices),
+                params.action,
+                shown,
+            )
+            self.emit(
+                "vehicle_fence", state="uploaded", vertices=len(self.vertices), read_back="equal"
+            )
             self.emit("vehicle_fence", state="enabled", param=params.action, value=action)
             return
         name = params.enable

@@ -126,16 +126,21 @@ class VehicleMission:
         self.setpoint_guard = SetpointGuard(
             self.guide, self.fence, config.setpoints, max(profile.fleet.altitude_step / 2, 1.0)
         )
-        self.out = SetpointOut(config.vehicle, link, self.seen, self.setpoint_guard,
-                               config.setpoints, self.record)  # fmt: skip
+        self.out = SetpointOut(
+            config.vehicle, link, self.seen, self.setpoint_guard, config.setpoints, self.record
+        )
         self.steering = PhaseSteering(self)
         self.intake = EventIntake(self, self.steering.on_position)
         self.answer = SearchAnswer(
-            self.seen, self._steer_answered, handle=self.intake.handle,
+            self.seen,
+            self._steer_answered,
+            handle=self.intake.handle,
             searching=lambda: self.phase is Phase.SEARCH and self.end_reason is None,
-            config=config, core=self.core, sensors=self.sensors,
+            config=config,
+            core=self.core,
+            sensors=self.sensors,
             acceptance_radius=self.guide.acceptance_radius,
-        )  # fmt: skip
+        )
         """The search's common answer without the decision loop's events (search_answer.py)."""
         self.lifecycle = LifecycleSteps(self)
         self.position_failsafe = PositionFailsafe(self)
@@ -151,15 +156,24 @@ class VehicleMission:
         self._main = asyncio.current_task()
         if not await self.supervision.open_link():
             return self.end_reason or "stopped"
-        self.record(events.Start(self.config.vehicle, self.config.profile.name, self.config.seed,
-                                 len(self.recovered.confirmed), self.config.altitude))  # fmt: skip
+        self.record(
+            events.Start(
+                self.config.vehicle,
+                self.config.profile.name,
+                self.config.seed,
+                len(self.recovered.confirmed),
+                self.config.altitude,
+            )
+        )
         try:
             async with asyncio.TaskGroup() as tg:
                 loops = [
                     tg.create_task(self.intake.decide(), name=f"v{self.config.vehicle}-decide"),
-                    tg.create_task(self.supervision.run(), name=f"v{self.config.vehicle}-supervise"),
+                    tg.create_task(
+                        self.supervision.run(), name=f"v{self.config.vehicle}-supervise"
+                    ),
                     tg.create_task(self.sensors.run(), name=f"v{self.config.vehicle}-sensor"),
-                ]  # fmt: skip
+                ]
                 life = tg.create_task(
                     self.lifecycle.run(), name=f"v{self.config.vehicle}-lifecycle"
                 )
@@ -213,8 +227,10 @@ class VehicleMission:
             if armed and self.phase not in (Phase.PAUSED, Phase.LINK_LOST)
             else "not commanding the vehicle (not armed, or a pilot has it)"
         )
-        print(f"vehicle {v}: ending ({self.end_reason}): {doing}; signal again to stop at once",
-              flush=True)  # fmt: skip
+        print(
+            f"vehicle {v}: ending ({self.end_reason}): {doing}; signal again to stop at once",
+            flush=True,
+        )
 
     def emit(self, event: str, **fields: object) -> None:
         """A record that is not a decision (ticks, texts, measurements)."""
@@ -244,15 +260,29 @@ class VehicleMission:
         pos, hb, st, t = seen.position, seen.heartbeat, seen.status, seen.clock.now
         ci = self.core.index_value(t) if self.core.started else math.nan
         sensor = self.core.sensor()
-        return {"vehicle": self.config.vehicle, "t": round(t, 3), "phase": self.phase.value,
-                "mode": ap.mode_name(hb.custom_mode) if hb is not None and ap is not None else None,
-                "armed": hb.armed if hb is not None else None, "level": self.core.level,
-                "sensor": sensor, "sensor_name": self.config.profile.sensors[sensor].name,
-                "ci": None if math.isnan(ci) else round(ci, 4), "found": self.core.confirmed_count,
-                # SYS_STATUS battery_remaining, percent; -1 (the autopilot does not know): null
-                "battery": None if st is None or st.battery_remaining < 0 else st.battery_remaining,
-                **({} if pos is None else {"north": round(pos.north, 1), "east": round(pos.east, 1),
-                                           "alt": round(-pos.down, 1)})}  # fmt: skip
+        return {
+            "vehicle": self.config.vehicle,
+            "t": round(t, 3),
+            "phase": self.phase.value,
+            "mode": ap.mode_name(hb.custom_mode) if hb is not None and ap is not None else None,
+            "armed": hb.armed if hb is not None else None,
+            "level": self.core.level,
+            "sensor": sensor,
+            "sensor_name": self.config.profile.sensors[sensor].name,
+            "ci": None if math.isnan(ci) else round(ci, 4),
+            "found": self.core.confirmed_count,
+            # SYS_STATUS battery_remaining, percent; -1 (the autopilot does not know): null
+            "battery": None if st is None or st.battery_remaining < 0 else st.battery_remaining,
+            **(
+                {}
+                if pos is None
+                else {
+                    "north": round(pos.north, 1),
+                    "east": round(pos.east, 1),
+                    "alt": round(-pos.down, 1),
+                }
+            ),
+        }
 
     async def hold(self) -> None:
         """Ask the autopilot's HOLD (a refusal or a lost link is logged)."""
@@ -342,8 +372,9 @@ class VehicleMission:
         """The waits end: the mission ends, and not with the end action still flying."""
         return self.end_reason is not None and self.phase is not Phase.RETURN
 
-    def _apply(self, state: Mission, *, search_start: float | None = None,
-               by: str | None = None) -> None:  # fmt: skip
+    def _apply(
+        self, state: Mission, *, search_start: float | None = None, by: str | None = None
+    ) -> None:
         """Take the machine's new state; a phase change is a ``phase`` event."""
         changed = state.phase is not self.phase
         woken = changed or state.end_reason != self.state.end_reason

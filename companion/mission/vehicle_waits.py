@@ -41,8 +41,9 @@ class VehicleWaits:
 
     async def until(self, predicate: Callable[[], bool], timeout: float | None = None) -> bool:
         """Wait until ``predicate`` holds or ``timeout`` vehicle seconds pass (or the mission ends)."""
-        waiter = _Waiter(predicate, self.clock.now, timeout,
-                         asyncio.get_running_loop().create_future())  # fmt: skip
+        waiter = _Waiter(
+            predicate, self.clock.now, timeout, asyncio.get_running_loop().create_future()
+        )
         settled = self._settled(waiter)
         if settled is not None:
             return settled
