@@ -7,7 +7,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from companion.link.messages import LocalPosition
+from companion.autopilots import Autopilot
+from companion.link.messages import Heartbeat, LocalPosition
 
 
 @dataclass(frozen=True)
@@ -27,3 +28,26 @@ def where(pos: LocalPosition | None, home: tuple[float, float] | None) -> str:
     d = math.hypot(pos.north - home[0], pos.east - home[1])
     far = f"{d / 1000:.1f} km" if d >= 1000 else f"{d:.0f} m"
     return f"{alt}, {far} from home"
+
+
+def final_exit(
+    exit: MissionExit | None,
+    heartbeat: Heartbeat | None,
+    autopilot: Autopilot | None,
+    where: str,
+    failsafe: str | None,
+) -> MissionExit:
+    """The ``exit`` record: ``exit`` when the end's wait or the link's loss set it, else from
+    what the vehicle was last seen doing (``where``: :func:`where`'s words); never 0 after the
+    position failsafe (``failsafe``: its cause, if it ended the mission)."""
+    if exit is None:
+        if heartbeat is None:
+            exit = MissionExit(1, "the vehicle was never heard")
+        elif heartbeat.armed:
+            mode = autopilot.mode_name(heartbeat.custom_mode) if autopilot is not None else "?"
+            exit = MissionExit(1, f"left armed in {mode}, {where}")
+        else:
+            exit = MissionExit(0, "disarmed on the ground")
+    if failsafe is not None and exit.status == 0:
+        exit = MissionExit(1, f"failsafe ({failsafe}); {exit.cause}")
+    return exit

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import math
 from collections.abc import Coroutine
 from typing import Any
 
@@ -39,7 +38,7 @@ from companion.mission.lifecycle_events import (
 )
 from companion.mission.lifecycle_steps import LifecycleSteps
 from companion.mission.link_supervision import LinkSupervision
-from companion.mission.mission_exit import MissionExit, where
+from companion.mission.mission_exit import MissionExit, final_exit, where
 from companion.mission.observed import Observed
 from companion.mission.phase import Phase
 from companion.mission.phase_steering import PhaseSteering
@@ -47,6 +46,7 @@ from companion.mission.position_failsafe import PositionFailsafe
 from companion.mission.search_answer import SearchAnswer
 from companion.mission.setpoint_guard import SetpointGuard
 from companion.mission.setpoint_out import SetpointOut
+from companion.mission.state_message import state_message
 from companion.mission.swarm_core import SwarmCore, SwarmExchange
 from companion.mission.vehicle_clock import VehicleClock
 from companion.mission.vehicle_fence import VehicleFence
@@ -186,21 +186,14 @@ class VehicleMission:
         return self.end_reason or "stopped"
 
     def _record_exit(self) -> None:
-        """The ``exit`` record: set by the end's wait or the link's loss, else from what the
-        vehicle was last seen doing; never 0 after the position failsafe."""
-        if self.exit is None:
-            hb = self.seen.heartbeat
-            if hb is None:
-                self.exit = MissionExit(1, "the vehicle was never heard")
-            elif hb.armed:
-                ap = self.link.autopilot
-                mode = ap.mode_name(hb.custom_mode) if ap is not None else "?"
-                self.exit = MissionExit(1, f"left armed in {mode}, {self.where()}")
-            else:
-                self.exit = MissionExit(0, "disarmed on the ground")
-        failsafe = self.position_failsafe.cause
-        if failsafe is not None and self.exit.status == 0:
-            self.exit = MissionExit(1, f"failsafe ({failsafe}); {self.exit.cause}")
+        """The ``exit`` record (mission_exit.final_exit)."""
+        self.exit = final_exit(
+            self.exit,
+            self.seen.heartbeat,
+            self.link.autopilot,
+            self.where(),
+            self.position_failsafe.cause,
+        )
         self.record(events.Exit(self.exit.status, self.exit.cause))
 
     def where(self) -> str:
@@ -256,33 +249,10 @@ class VehicleMission:
 
     def snapshot(self) -> dict[str, object]:
         """What the vehicle is doing now (the MQTT state message)."""
-        seen, ap = self.seen, self.link.autopilot
-        pos, hb, st, t = seen.position, seen.heartbeat, seen.status, seen.clock.now
-        ci = self.core.index_value(t) if self.core.started else math.nan
-        sensor = self.core.sensor()
-        return {
-            "vehicle": self.config.vehicle,
-            "t": round(t, 3),
-            "phase": self.phase.value,
-            "mode": ap.mode_name(hb.custom_mode) if hb is not None and ap is not None else None,
-            "armed": hb.armed if hb is not None else None,
-            "level": self.core.level,
-            "sensor": sensor,
-            "sensor_name": self.config.profile.sensors[sensor].name,
-            "ci": None if math.isnan(ci) else round(ci, 4),
-            "found": self.core.confirmed_count,
-            # SYS_STATUS battery_remaining, percent; -1 (the autopilot does not know): null
-            "battery": None if st is None or st.battery_remaining < 0 else st.battery_remaining,
-            **(
-                {}
-                if pos is None
-                else {
-                    "north": round(pos.north, 1),
-                    "east": round(pos.east, 1),
-                    "alt": round(-pos.down, 1),
-                }
-            ),
-        }
+        names = [sensor.name for sensor in self.config.profile.sensors]
+        return state_message(
+            self.config.vehicle, names, self.seen, self.core, self.phase, self.link.autopilot
+        )
 
     async def hold(self) -> None:
         """Ask the autopilot's HOLD (a refusal or a lost link is logged)."""

@@ -16,11 +16,11 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from companion.autopilots import FlightMode
+from companion.autopilots import FlightMode, autopilot_for
 from companion.guidance import NedSetpoint
 from companion.link.base import SetpointKind, VehicleLink
 from companion.link.mavlink_transport import _Protocol
-from companion.link.messages import Heartbeat, LinkEvent, LocalPosition
+from companion.link.messages import Heartbeat, LinkEvent, LocalPosition, SystemStatus
 from companion.link.outcome import CommandResult, accepted
 from companion.link.pymavlink_link import PymavlinkLink
 from companion.mission import MissionConfig, VehicleMission
@@ -201,3 +201,24 @@ async def test_a_failing_heartbeat_ends_the_loop_with_its_error(tmp_path: Path) 
     link = _BeatingLink(fail_after=2)
     with pytest.raises(OSError, match="socket gone"):
         await asyncio.wait_for(_mission(tmp_path, link).intake.decide(), 5.0)
+
+
+@pytest.mark.asyncio
+async def test_the_state_message_leaves_out_what_is_not_known_yet(tmp_path: Path) -> None:
+    link = _Link()
+    config = MissionConfig(vehicle=0, profile=load_profile("paper-fixed"), log_dir=tmp_path)
+    mission = VehicleMission(config, link, _Sink())
+    before = mission.snapshot()
+    assert (before["mode"], before["armed"], before["battery"]) == (None, None, None)
+    assert "north" not in before
+    assert before["sensor_name"] == config.profile.sensors[mission.core.sensor()].name
+    link.autopilot = autopilot_for(12)  # PX4, as the link learns it from the first HEARTBEAT
+    mission.intake.handle_batch(
+        [Heartbeat(12, 0, True, 3), SystemStatus(-1, True), _position(0.0, 12.34)]
+    )
+    after = mission.snapshot()
+    assert after["mode"] == link.autopilot.mode_name(0)
+    assert after["armed"] is True
+    assert after["battery"] is None  # -1: the autopilot does not know
+    assert (after["north"], after["east"], after["alt"]) == (12.3, 100.0, 30.0)
+    assert after["phase"] == mission.phase.value
