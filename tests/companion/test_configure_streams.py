@@ -6,6 +6,7 @@ import asyncio
 import socket
 from typing import Any
 
+import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.link.pymavlink_link import PymavlinkLink
@@ -42,25 +43,20 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def test_unread_streams_are_switched_off() -> None:
+@pytest.mark.asyncio
+async def test_unread_streams_are_switched_off() -> None:
     port = _free_port()
-
-    async def main() -> set[int]:
-        loop = asyncio.get_running_loop()
-        link = PymavlinkLink(url=f"udpin:127.0.0.1:{port}", target_system=1, command_timeout=0.5)
-        await link.open()
-        vehicle = _Vehicle()
-        transport, _ = await loop.create_datagram_endpoint(
-            lambda: vehicle, local_addr=("127.0.0.1", 0)
-        )
-        try:
-            hb = vehicle.mav.heartbeat_encode(2, 12, 0, 0, 3)
-            transport.sendto(hb.pack(vehicle.mav), ("127.0.0.1", port))  # the vehicle speaks first
-            await asyncio.sleep(0.05)
-            await asyncio.wait_for(link.configure_streams(), 10.0)
-            return vehicle.off
-        finally:
-            transport.close()
-            await link.close()
-
-    assert asyncio.run(main()) == _UNREAD | {_GPI}
+    loop = asyncio.get_running_loop()
+    link = PymavlinkLink(url=f"udpin:127.0.0.1:{port}", target_system=1, command_timeout=0.5)
+    await link.open()
+    vehicle = _Vehicle()
+    transport, _ = await loop.create_datagram_endpoint(lambda: vehicle, local_addr=("127.0.0.1", 0))
+    try:
+        hb = vehicle.mav.heartbeat_encode(2, 12, 0, 0, 3)
+        transport.sendto(hb.pack(vehicle.mav), ("127.0.0.1", port))  # the vehicle speaks first
+        await asyncio.sleep(0.05)
+        await asyncio.wait_for(link.configure_streams(), 10.0)
+    finally:
+        transport.close()
+        await link.close()
+    assert vehicle.off == _UNREAD | {_GPI}
