@@ -19,6 +19,17 @@ from companion.link.outcome import CommandResult, Outcome, accepted, timed_out
 log = logging.getLogger(__name__)
 
 PARAM_INT32 = mavlink2.MAV_PARAM_TYPE_INT32
+UNREAD_STREAMS = (
+    mavlink2.MAVLINK_MSG_ID_ATTITUDE,
+    mavlink2.MAVLINK_MSG_ID_SYSTEM_TIME,
+    mavlink2.MAVLINK_MSG_ID_GPS_RAW_INT,
+    mavlink2.MAVLINK_MSG_ID_BATTERY_STATUS,
+    mavlink2.MAVLINK_MSG_ID_HOME_POSITION,
+    mavlink2.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
+)
+"""Streams the mission never reads, switched off on a dedicated link (``configure_streams``)."""
+GLOBAL_POSITION_INT = mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT
+"""Switched off too, unless the fence watch reads it."""
 
 
 class MavlinkCommands:
@@ -96,6 +107,19 @@ class MavlinkCommands:
                 result = CommandResult(name, Outcome.DENIED, code, label)
         log.warning("%s", result.describe())
         return result
+
+    async def configure_streams(self, *, keep_global_position: bool) -> None:
+        """SET_MESSAGE_INTERVAL -1 for the streams the mission does not read: ATTITUDE,
+        SYSTEM_TIME, GPS_RAW_INT, BATTERY_STATUS, HOME_POSITION, EXTENDED_SYS_STATE (and
+        GLOBAL_POSITION_INT unless ``keep_global_position``): at high speed-ups every message
+        not parsed is CPU for the rest of the fleet. Only on a dedicated link
+        (``--dedicated-link``): a ground station sharing the link would lose them."""
+        unused = UNREAD_STREAMS + (() if keep_global_position else (GLOBAL_POSITION_INT,))
+        for msg_id in unused:
+            if not await self.command_long(
+                mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL, float(msg_id), -1.0
+            ):
+                log.info("vehicle keeps streaming message %d", msg_id)
 
     async def read_param(self, name: str) -> float | None:
         return await self._param_exchange(

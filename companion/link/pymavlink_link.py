@@ -46,17 +46,6 @@ _NOT_AUTOPILOT_TYPES = {
     mavlink2.MAV_TYPE_ADSB,
 }
 _HEALTH_BITS = mavlink2.MAV_SYS_STATUS_SENSOR_GPS | mavlink2.MAV_SYS_STATUS_PREARM_CHECK
-UNREAD_STREAMS = (
-    mavlink2.MAVLINK_MSG_ID_ATTITUDE,
-    mavlink2.MAVLINK_MSG_ID_SYSTEM_TIME,
-    mavlink2.MAVLINK_MSG_ID_GPS_RAW_INT,
-    mavlink2.MAVLINK_MSG_ID_BATTERY_STATUS,
-    mavlink2.MAVLINK_MSG_ID_HOME_POSITION,
-    mavlink2.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
-)
-"""Streams the mission never reads, switched off on a dedicated link (``configure_streams``)."""
-GLOBAL_POSITION_INT = mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT
-"""Switched off too, unless the fence watch reads it."""
 _BESIDE_POSITION = frozenset(
     {fast_frames.HEARTBEAT, fast_frames.SYS_STATUS, fast_frames.DEBUG_VECT}
 )
@@ -553,17 +542,9 @@ class PymavlinkLink(VehicleLink):
         )
 
     async def configure_streams(self) -> None:
-        """SET_MESSAGE_INTERVAL -1 for the streams the mission does not read: ATTITUDE,
-        SYSTEM_TIME, GPS_RAW_INT, BATTERY_STATUS, HOME_POSITION, EXTENDED_SYS_STATE (and
-        GLOBAL_POSITION_INT unless the fence watch reads it): at high speed-ups every message not parsed is
-        CPU for the rest of the fleet. Only on a dedicated link (``--dedicated-link``): a ground
-        station sharing the link would lose them."""
-        unused = UNREAD_STREAMS + (() if self.global_position else (GLOBAL_POSITION_INT,))
-        for msg_id in unused:
-            if not await self.command_long(
-                mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL, float(msg_id), -1.0
-            ):
-                log.info("vehicle keeps streaming message %d", msg_id)
+        """:meth:`MavlinkCommands.configure_streams`; GLOBAL_POSITION_INT kept while the fence
+        watch reads it."""
+        await self._commands.configure_streams(keep_global_position=self.global_position)
 
     async def set_mode(self, mode: FlightMode) -> CommandResult:
         if self.autopilot is None:
