@@ -69,6 +69,9 @@ class LyingRelay:
         self.stats = RelayStats()
         self.silent = False
         self.all_bad = False
+        self.alt_offset = 0.0
+        """Metres added to the altitude (-z) of every LOCAL_POSITION_NED of the vehicle: a
+        vehicle that reads as off its altitude layer."""
         self._rng = random.Random(seed)
         self._sel = selectors.DefaultSelector()
         self._to_companion = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -167,6 +170,9 @@ class LyingRelay:
             if self.all_bad:
                 buf = self._local(self._liar, msg.time_boot_ms, math.nan, math.nan, math.nan,
                                   msg.vx, msg.vy, msg.vz)  # fmt: skip
+            elif self.alt_offset:
+                buf = self._local(self._liar, msg.time_boot_ms, msg.x, msg.y,
+                                  msg.z - self.alt_offset, msg.vx, msg.vy, msg.vz)  # fmt: skip
         if self.silent:
             return
         self.stats.forwarded += 1

@@ -242,3 +242,34 @@ def test_landing_wait_timeout_ends_non_zero(fly: Callable[..., Flight]) -> None:
     assert rc == 1, f.log()[-3000:]
     cause = f.exit_record()["cause"]
     assert cause.startswith("5 vehicle s after RTL, still armed at"), cause
+
+
+@pytest.mark.timeout(400)
+def test_a_vehicle_read_off_its_altitude_layer_is_reported_during_the_flight(
+    fly: Callable[..., Flight],
+) -> None:
+    """The vehicle's own telemetry says it is 15 m below its layer (the relay lowers every
+    LOCAL_POSITION_NED's altitude, in steps the telemetry check lets through): the companion
+    reports it while still searching (console line, ``altitude_layer`` record), then, as it
+    climbs back to what it reads as its layer, reports it back."""
+    f = fly("px4", "pymavlink", duration=3000.0, land_wait=0.0, kinds=())
+    wait_until(f.phase, BOOT_S, "the search", until=lambda p: p == "search")
+    for k in range(1, 7):
+        f.relay.alt_offset = -2.5 * k
+        time.sleep(0.05)
+
+    def layer_records() -> list[dict[str, Any]]:
+        return [r for r in f.records() if r["event"] == "altitude_layer"]
+
+    wait_until(layer_records, 60, "an altitude_layer record", until=lambda rs: len(rs) >= 2)
+    outside, back = layer_records()[:2]
+    layer = outside["layer"]
+    assert outside["state"] == "outside"
+    assert outside["altitude"] < layer - outside["tolerance"]
+    assert back["state"] == "back"
+    assert abs(back["altitude"] - layer) <= back["tolerance"]
+    assert f.phase() == "search", "reported during the flight, not after it"
+    assert f.companion.poll() is None
+    assert (
+        f"vehicle 0 outside its altitude layer: {outside['altitude']:.1f} m above home" in f.log()
+    )
