@@ -113,8 +113,11 @@ async def fly(
     check_flight(config, mqtt, source)
     recovered = read_log(config.mission_log_path())
     if recovered.confirmed:
-        log.info("resuming with %d confirmed target(s) from %s", len(recovered.confirmed),
-                 config.mission_log_path())  # fmt: skip
+        log.info(
+            "resuming with %d confirmed target(s) from %s",
+            len(recovered.confirmed),
+            config.mission_log_path(),
+        )
     mission_log = MissionLog(config.mission_log_path())
     try:
         sink: EventSink = mission_log
@@ -122,22 +125,30 @@ async def fly(
         if mqtt is not None:  # no broker configured: no MQTT code at all
             from companion.telemetry.mqtt.vehicle_telemetry import VehicleTelemetry
 
-            telemetry = VehicleTelemetry.open(mqtt, profile_name=profile.name, vehicle=vehicle,
-                                              log_dir=config.log_dir)  # fmt: skip
+            telemetry = VehicleTelemetry.open(
+                mqtt, profile_name=profile.name, vehicle=vehicle, log_dir=config.log_dir
+            )
             sink = TeeSink(mission_log, telemetry)
         peers: SwarmPeers | None = None
         if telemetry is not None and is_swarm(config):
             from companion.telemetry.mqtt.swarm_peers import SwarmPeers
 
             swarm = profile.policy.swarm
-            peers = SwarmPeers(telemetry.channel, telemetry.topics.prefix, vehicle,
-                               profile.fleet.vehicles, delay=swarm.message_delay,
-                               drop=swarm.message_drop, seed=config.seed)  # fmt: skip
+            peers = SwarmPeers(
+                telemetry.channel,
+                telemetry.topics.prefix,
+                vehicle,
+                profile.fleet.vehicles,
+                delay=swarm.message_delay,
+                drop=swarm.message_drop,
+                seed=config.seed,
+            )
         feed = None
         if telemetry is not None:
             feed = DetectorFeed(telemetry.channel, telemetry.topics.detections)
-        sensors = make_sensor_source(source, profile=profile, seed=config.seed, link=link,
-                                     feed=feed)  # fmt: skip
+        sensors = make_sensor_source(
+            source, profile=profile, seed=config.seed, link=link, feed=feed
+        )
         log.info("vehicle %d: sensor source %s", vehicle, source)
         site = site_geometry(profile)  # the frame and fences, built once for the whole flight
         start, own_fence = None, None
@@ -145,9 +156,18 @@ async def fly(
             link.use_profile_frame(site.frame)
             start = start_point(profile, config.seed, vehicle, site.guidance)
             own_fence = [(p.lat, p.lon) for p in profile.site.geofence]
-        mission = VehicleMission(config, link, sink, recovered=recovered, fence=site.guidance,
-                                 peers=peers, sensors=sensors, watch=site.watch, start=start,
-                                 own_fence=own_fence)  # fmt: skip
+        mission = VehicleMission(
+            config,
+            link,
+            sink,
+            recovered=recovered,
+            fence=site.guidance,
+            peers=peers,
+            sensors=sensors,
+            watch=site.watch,
+            start=start,
+            own_fence=own_fence,
+        )
         task = asyncio.create_task(_run(mission, telemetry, peers), name=f"v{vehicle}-flight")
         try:
             yield Flight(mission, task)
@@ -180,9 +200,14 @@ async def _run(
                     await asyncio.wait_for(peers.flush(), 2.0)
                 core = mission.core
                 assert isinstance(core, SwarmCore)
-                mission.emit("swarm", sent=peers.sent, received=peers.received,
-                             dropped=peers.dropped, rejected=peers.rejected,
-                             iterations=core.iterations,
-                             peer_bests_used=core.peer_bests_used)  # fmt: skip
+                mission.emit(
+                    "swarm",
+                    sent=peers.sent,
+                    received=peers.received,
+                    dropped=peers.dropped,
+                    rejected=peers.rejected,
+                    iterations=core.iterations,
+                    peer_bests_used=core.peer_bests_used,
+                )
     except asyncio.CancelledError:  # a second stop: the mission's task was cancelled
         return STOPPED_BY_SECOND_SIGNAL

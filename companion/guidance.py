@@ -60,8 +60,16 @@ def pursuit(
     position + v * period is kept inside the fence. (Two-vectors on floats: numpy's per-call
     overhead was most of the cost; np.hypot keeps the norms to the bit.)
     """
-    return pursuit_xy(float(position[0]), float(position[1]), down, float(waypoint[0]),
-                      float(waypoint[1]), config, fence, period)  # fmt: skip
+    return pursuit_xy(
+        float(position[0]),
+        float(position[1]),
+        down,
+        float(waypoint[0]),
+        float(waypoint[1]),
+        config,
+        fence,
+        period,
+    )
 
 
 def pursuit_xy(

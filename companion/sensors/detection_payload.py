@@ -84,8 +84,10 @@ def parse_detection(payload: bytes, names: tuple[str, ...], frame: LocalFrame) -
             raise DetectionError("north and east go together")
         position = (_number(data, "north"), _number(data, "east"))
     if position is not None and max(abs(position[0]), abs(position[1])) > MAX_DISTANCE:
-        raise DetectionError(f"position ({position[0]:g}, {position[1]:g}) m: more than "
-                             f"{MAX_DISTANCE / 1000:g} km from the profile's origin")  # fmt: skip
+        raise DetectionError(
+            f"position ({position[0]:g}, {position[1]:g}) m: more than "
+            f"{MAX_DISTANCE / 1000:g} km from the profile's origin"
+        )
     confidence = None
     if "confidence" in data:
         confidence = _number(data, "confidence")

@@ -79,7 +79,8 @@ class MavlinkSensorSource(SensorSource):
             if result.outcome is Outcome.DENIED:  # no such parameter, or it keeps another value
                 log.warning("sensor switching off: %s", result.describe())
                 return
-            log.warning("vehicle did not confirm sensor %d (%s); retrying", index,
-                        result.describe())  # fmt: skip
+            log.warning(
+                "vehicle did not confirm sensor %d (%s); retrying", index, result.describe()
+            )
             self._wanted.put_nowait(self._active)
             await asyncio.sleep(1.0)

@@ -77,8 +77,7 @@ class MqttSensorSource(SensorSource):
             if not self._silent and silent >= self._silence:
                 self._silent = True
                 log.warning("detector silent for %.1f s on %s", silent, self.topic)
-                self.report("detector", state="silent", silent_s=round(silent, 1),
-                            topic=self.topic)  # fmt: skip
+                self.report("detector", state="silent", silent_s=round(silent, 1), topic=self.topic)
 
     def _on_message(self, msg: Received) -> None:
         if msg.retained:
@@ -107,5 +106,10 @@ class MqttSensorSource(SensorSource):
     def _refuse(self, msg: Received, why: str) -> None:
         self.rejected += 1
         log.warning("detection on %s refused: %s", msg.topic, why)
-        self.report("error", source="detector", topic=msg.topic, error=why,
-                    payload=msg.payload[:200].decode("utf-8", "replace"))  # fmt: skip
+        self.report(
+            "error",
+            source="detector",
+            topic=msg.topic,
+            error=why,
+            payload=msg.payload[:200].decode("utf-8", "replace"),
+        )

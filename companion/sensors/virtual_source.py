@@ -56,9 +56,13 @@ class VirtualSensorSource(SensorSource):
         targets = self.targets_at(time)
         present = spec.appear_times <= time
         mask, strength = contacts(
-            np.array([sensor.radius]), np.array([sensor.confirms]), np.array([[north, east]]),
-            targets[None], present[None], spec.false_mask,
-        )  # fmt: skip
+            np.array([sensor.radius]),
+            np.array([sensor.confirms]),
+            np.array([[north, east]]),
+            targets[None],
+            present[None],
+            spec.false_mask,
+        )
         visible = present & ~(sensor.confirms & spec.false_mask)
         # The strongest reading over every target this sensor can see, as the emulator's SENS_SIG.
         self.signal = float(np.where(visible, strength[0], 0.0).max(initial=0.0))

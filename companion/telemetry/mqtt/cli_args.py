@@ -60,8 +60,16 @@ def parse_broker(value: str) -> tuple[str, int | None]:
 
 def mqtt_spec(args: argparse.Namespace, profile_spec: MqttSpec | None) -> MqttSpec | None:
     """The profile's spec with the flags applied; None when no broker is configured at all."""
-    given = {field: getattr(args, dest) for dest, field in _FLAGS.items() if getattr(args, dest) is not None}  # fmt: skip
-    tls = {field: getattr(args, dest) for dest, field in _TLS_FLAGS.items() if getattr(args, dest) is not None}  # fmt: skip
+    given = {
+        field: getattr(args, dest)
+        for dest, field in _FLAGS.items()
+        if getattr(args, dest) is not None
+    }
+    tls = {
+        field: getattr(args, dest)
+        for dest, field in _TLS_FLAGS.items()
+        if getattr(args, dest) is not None
+    }
     if args.mqtt_insecure:
         tls["insecure"] = True
     if args.mqtt is None and profile_spec is None:

@@ -88,9 +88,16 @@ class SwarmPeers:
     """The swarm exchange of vehicle ``vehicle`` (0-based) of a fleet of ``vehicles``."""
 
     def __init__(
-        self, channel: MqttChannel, prefix: str, vehicle: int, vehicles: int, *,
-        delay: float = 0.0, drop: float = 0.0, seed: int = 0,
-    ) -> None:  # fmt: skip
+        self,
+        channel: MqttChannel,
+        prefix: str,
+        vehicle: int,
+        vehicles: int,
+        *,
+        delay: float = 0.0,
+        drop: float = 0.0,
+        seed: int = 0,
+    ) -> None:
         if not 0 <= vehicle < vehicles:
             raise ValueError(f"vehicle {vehicle} outside a fleet of {vehicles}")
         if not delay >= 0:
@@ -126,9 +133,13 @@ class SwarmPeers:
         self.sent += 1
 
     def post(
-        self, time: float, best: tuple[float, float], fitness: float, current: float,
+        self,
+        time: float,
+        best: tuple[float, float],
+        fitness: float,
+        current: float,
         known: list[tuple[float, float]],
-    ) -> None:  # fmt: skip
+    ) -> None:
         """Queue this vehicle's report for ``run``; a newer one replaces one not yet sent."""
         self._outgoing = PeerReport(time, best, fitness, current, tuple(known))
         self._ready.set()

@@ -118,8 +118,12 @@ class VehicleTelemetry:
             if done:
                 self.outbox.ack(batch[done - 1][0])
             if done < len(batch):
-                log.warning("event %d not delivered (%s); %d waiting", batch[done][0],
-                            results[done], len(self.outbox))  # fmt: skip
+                log.warning(
+                    "event %d not delivered (%s); %d waiting",
+                    batch[done][0],
+                    results[done],
+                    len(self.outbox),
+                )
                 await asyncio.sleep(0.5)  # the connection notices and reconnects
 
     async def _publish_state(self) -> None:
@@ -141,13 +145,20 @@ class VehicleTelemetry:
         while len(self.outbox) and loop.time() < deadline:
             await asyncio.sleep(0.05)
         if len(self.outbox):
-            log.warning("%d event(s) not delivered; kept in %s for the next start",
-                        len(self.outbox), self.outbox.path)  # fmt: skip
+            log.warning(
+                "%d event(s) not delivered; kept in %s for the next start",
+                len(self.outbox),
+                self.outbox.path,
+            )
         if self.channel.connected.is_set():
             with contextlib.suppress(aiomqtt.MqttError):
-                await self.channel.publish(self.topics.status,
-                                           self._status("offline", clean=True), qos=1,
-                                           retain=True, timeout=2.0)  # fmt: skip
+                await self.channel.publish(
+                    self.topics.status,
+                    self._status("offline", clean=True),
+                    qos=1,
+                    retain=True,
+                    timeout=2.0,
+                )
 
     # -- commands --------------------------------------------------------------------------
 
@@ -172,8 +183,13 @@ class VehicleTelemetry:
     @staticmethod
     def _refuse(vehicle: Operated, msg: Received, why: str) -> None:
         log.warning("command on %s refused: %s", msg.topic, why)
-        vehicle.emit("error", source="command", topic=msg.topic, error=why,
-                     payload=msg.payload[:200].decode("utf-8", "replace"))  # fmt: skip
+        vehicle.emit(
+            "error",
+            source="command",
+            topic=msg.topic,
+            error=why,
+            payload=msg.payload[:200].decode("utf-8", "replace"),
+        )
 
     def _status(self, state: str, *, clean: bool = True) -> bytes:
         return _json({"vehicle": self.topics.vehicle, "state": state, "clean": clean})
