@@ -19,13 +19,23 @@ _LOG_NAME = re.compile(r"mission-(\d+)\.jsonl")
 def add_map_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register `companion map`."""
     p = sub.add_parser("map", help="write map.geojson and map.png of a run directory")
-    p.add_argument("--profile", help="the profile the run flew (with --web: default the one "
-                   "its run.json names)")  # fmt: skip
+    p.add_argument(
+        "--profile",
+        help="the profile the run flew (with --web: default the one its run.json names)",
+    )
     p.add_argument("--log-dir", type=Path, help="run directory (mission-I.jsonl)")
-    p.add_argument("--web", type=Path, metavar="RUN_DIR",
-                   help="instead: replay the run on the live page, with a time slider")  # fmt: skip
-    p.add_argument("--web-bind", default="127.0.0.1:8765", metavar="[HOST:]PORT",
-                   help="where --web serves the page (port 0: any free)")  # fmt: skip
+    p.add_argument(
+        "--web",
+        type=Path,
+        metavar="RUN_DIR",
+        help="instead: replay the run on the live page, with a time slider",
+    )
+    p.add_argument(
+        "--web-bind",
+        default="127.0.0.1:8765",
+        metavar="[HOST:]PORT",
+        help="where --web serves the page (port 0: any free)",
+    )
     add_tiles_argument(p)
 
 
@@ -41,8 +51,12 @@ def map_command(args: argparse.Namespace) -> int:
     if args.web is not None:
         from companion.live_web.commands import replay_command
 
-        return replay_command(args.web, load_profile(args.profile or _run_profile(args.web)),
-                              args.web_bind, args.web_tiles)  # fmt: skip
+        return replay_command(
+            args.web,
+            load_profile(args.profile or _run_profile(args.web)),
+            args.web_bind,
+            args.web_tiles,
+        )
     if args.profile is None or args.log_dir is None:
         raise ValueError("companion map needs --profile and --log-dir (or --web RUN_DIR)")
     vehicles = logged_vehicles(args.log_dir)

@@ -40,8 +40,13 @@ def _feature(geometry: dict[str, Any], **properties: Any) -> dict[str, Any]:
 
 def _point(frame: LocalFrame, s: Sample, **properties: Any) -> dict[str, Any]:
     where = _lon_lat(frame, s.north, s.east)
-    return _feature({"type": "Point", "coordinates": where}, t=s.t, north=round(s.north, 1),
-                    east=round(s.east, 1), **properties)  # fmt: skip
+    return _feature(
+        {"type": "Point", "coordinates": where},
+        t=s.t,
+        north=round(s.north, 1),
+        east=round(s.east, 1),
+        **properties,
+    )
 
 
 def map_origin(profile: MissionProfile, tracks: list[VehicleTrack]) -> tuple[float, float]:
@@ -59,23 +64,41 @@ def run_geojson(profile: MissionProfile, tracks: list[VehicleTrack]) -> dict[str
     a = profile.area
     box = np.array([[0.0, 0.0], [a.north, 0.0], [a.north, a.east], [0.0, a.east]])
     features = [
-        _feature({"type": "Polygon", "coordinates": [_ring(frame, fence_for(profile).vertices)]},
-                 kind="fence"),
+        _feature(
+            {"type": "Polygon", "coordinates": [_ring(frame, fence_for(profile).vertices)]},
+            kind="fence",
+        ),
         _feature({"type": "Polygon", "coordinates": [_ring(frame, box)]}, kind="search_area"),
-    ]  # fmt: skip
+    ]
     moving = profile.target_motion is not None
     for k, t in enumerate(profile.targets):
-        features.append(_point(frame, Sample(0.0, t.north, t.east), kind="target", target=k,
-                               false_target=t.false_target, appear=t.appear,
-                               position="start" if moving else "fixed"))  # fmt: skip
+        features.append(
+            _point(
+                frame,
+                Sample(0.0, t.north, t.east),
+                kind="target",
+                target=k,
+                false_target=t.false_target,
+                appear=t.appear,
+                position="start" if moving else "fixed",
+            )
+        )
     for track in tracks:
         v = track.vehicle
         where = frame if track.origin is None else LocalFrame(*track.origin, profile.origin.alt)
         if len(track.path) >= 2:
             line = [_lon_lat(where, s.north, s.east) for s in track.path]
-            features.append(_feature({"type": "LineString", "coordinates": line}, kind="path",
-                                     vehicle=v, samples=len(line), t_first=track.path[0].t,
-                                     t_last=track.path[-1].t, end=track.end_reason))  # fmt: skip
+            features.append(
+                _feature(
+                    {"type": "LineString", "coordinates": line},
+                    kind="path",
+                    vehicle=v,
+                    samples=len(line),
+                    t_first=track.path[0].t,
+                    t_last=track.path[-1].t,
+                    end=track.end_reason,
+                )
+            )
         for s, level in track.detections:
             features.append(_point(where, s, kind="detection", vehicle=v, level=level))
         for s in track.confirmations:

@@ -38,11 +38,28 @@ def draw_png(profile: MissionProfile, tracks: list[VehicleTrack], path: Path, ti
     height = min(9.0, max(3.5, 7.0 * a.north / a.east))
     fig, ax = plt.subplots(figsize=(10.5, height + 1.3), dpi=110)
     fence = fence_for(profile).vertices
-    ax.add_patch(Polygon(np.c_[[0, 0, a.east, a.east], [0, a.north, a.north, 0]], closed=True,
-                         fill=True, facecolor="0.95", edgecolor="0.6", lw=1.0,
-                         label="search area"))  # fmt: skip
-    ax.add_patch(Polygon(fence[:, ::-1], closed=True, fill=False, edgecolor="black", lw=1.6,
-                         ls="--", label="fence"))  # fmt: skip
+    ax.add_patch(
+        Polygon(
+            np.c_[[0, 0, a.east, a.east], [0, a.north, a.north, 0]],
+            closed=True,
+            fill=True,
+            facecolor="0.95",
+            edgecolor="0.6",
+            lw=1.0,
+            label="search area",
+        )
+    )
+    ax.add_patch(
+        Polygon(
+            fence[:, ::-1],
+            closed=True,
+            fill=False,
+            edgecolor="black",
+            lw=1.6,
+            ls="--",
+            label="fence",
+        )
+    )
     radius = profile.sensors[-1].radius
     for t in profile.targets:
         colour = "0.45" if t.false_target else "purple"  # not in the vehicles' colour cycle
@@ -74,11 +91,28 @@ def draw_png(profile: MissionProfile, tracks: list[VehicleTrack], path: Path, ti
     ax.set_xlim(x0 - pad, x1 + pad)
     ax.set_ylim(y0 - pad, y1 + pad)
     bar = scale_bar_length(x1 - x0 + 2 * pad)
-    ax.add_artist(AnchoredSizeBar(ax.transData, bar, _label(bar), loc="lower right", pad=0.6,
-                                  sep=4, size_vertical=(y1 - y0) * 0.006, frameon=True))  # fmt: skip
-    ax.annotate("N", xy=(0.04, 0.95), xytext=(0.04, 0.85), xycoords="axes fraction",
-                ha="center", fontsize=12, fontweight="bold",
-                arrowprops={"arrowstyle": "-|>", "color": "black"})  # fmt: skip
+    ax.add_artist(
+        AnchoredSizeBar(
+            ax.transData,
+            bar,
+            _label(bar),
+            loc="lower right",
+            pad=0.6,
+            sep=4,
+            size_vertical=(y1 - y0) * 0.006,
+            frameon=True,
+        )
+    )
+    ax.annotate(
+        "N",
+        xy=(0.04, 0.95),
+        xytext=(0.04, 0.85),
+        xycoords="axes fraction",
+        ha="center",
+        fontsize=12,
+        fontweight="bold",
+        arrowprops={"arrowstyle": "-|>", "color": "black"},
+    )
     lat, lon = map_origin(profile, tracks)
     ax.set_xlabel(f"east of the origin ({lat:.6f}, {lon:.6f}), m")
     ax.set_ylabel("north of the origin, m")

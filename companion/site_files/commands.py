@@ -29,8 +29,10 @@ def profile_command(args: argparse.Namespace) -> int:
 def _import(args: argparse.Namespace) -> int:
     base_name = args.base or args.into
     if args.base is None and not Path(args.into).is_file():
-        raise SiteFileError(f"--into {args.into}: no such profile; give --base (a profile file "
-                            "or a built-in name such as field-duebendorf) to start from")  # fmt: skip
+        raise SiteFileError(
+            f"--into {args.into}: no such profile; give --base (a profile file "
+            "or a built-in name such as field-duebendorf) to start from"
+        )
     base = load_profile(base_name)
     fence = read_fence_file(args.file)
     how = FenceImport(args.margin, args.keep_area, args.targets, args.alt)
@@ -41,8 +43,10 @@ def _import(args: argparse.Namespace) -> int:
         raise SiteFileError(f"{args.into}: cannot be written: {exc.strerror or exc}") from exc
     o, a = profile.origin, profile.area
     print(f"fence: {len(fence.vertices)} vertices from {args.file}")
-    print(f"origin: {o.lat:.7f}, {o.lon:.7f}, {o.alt:g} m AMSL; area: {a.north:g} m north x "
-          f"{a.east:g} m east{' (kept)' if args.keep_area else ''}")  # fmt: skip
+    print(
+        f"origin: {o.lat:.7f}, {o.lon:.7f}, {o.alt:g} m AMSL; area: {a.north:g} m north x "
+        f"{a.east:g} m east{' (kept)' if args.keep_area else ''}"
+    )
     print(f"wrote {args.into}")
     return 0
 

@@ -56,8 +56,10 @@ def checked_fence(source: str, candidate: Candidate) -> FencePolygon:
     vertices, a ring that crosses or touches itself, a concave ring."""
     where = candidate.where
     if not candidate.inclusion:
-        raise SiteFileError(f"{source}: {where} is an exclusion zone: the companion keeps one "
-                            "inclusion polygon as the fence (remove it, or make it inclusion)")  # fmt: skip
+        raise SiteFileError(
+            f"{source}: {where} is an exclusion zone: the companion keeps one "
+            "inclusion polygon as the fence (remove it, or make it inclusion)"
+        )
     points: list[tuple[float, float]] = []
     for k, vertex in enumerate(candidate.ring):
         at = f"{where} vertex {k}"
@@ -65,25 +67,31 @@ def checked_fence(source: str, candidate: Candidate) -> FencePolygon:
             raise SiteFileError(f"{source}: {at}: needs latitude and longitude, got {vertex!r}")
         lat, lon = _number(source, at, vertex[0]), _number(source, at, vertex[1])
         if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
-            raise SiteFileError(f"{source}: {at}: latitude {lat:g}, longitude {lon:g} out of "
-                                "range (-90..90, -180..180)")  # fmt: skip
+            raise SiteFileError(
+                f"{source}: {at}: latitude {lat:g}, longitude {lon:g} out of "
+                "range (-90..90, -180..180)"
+            )
         points.append((lat, lon))
     # a closed ring's last vertex, and a vertex repeated at once (a double click), add nothing
     points = [p for k, p in enumerate(points) if k == 0 or p != points[k - 1]]
     while len(points) > 1 and points[-1] == points[0]:
         points.pop()
     if len(set(points)) < 3:
-        raise SiteFileError(f"{source}: {where}: a fence needs at least 3 distinct vertices, "
-                            f"got {len(set(points))}")  # fmt: skip
+        raise SiteFileError(
+            f"{source}: {where}: a fence needs at least 3 distinct vertices, got {len(set(points))}"
+        )
     shape = Polygon([(lon, lat) for lat, lon in points])
     if not shape.is_valid:
-        raise SiteFileError(f"{source}: {where} is not a simple polygon: "
-                            f"{explain_validity(shape)} (lon lat)")  # fmt: skip
+        raise SiteFileError(
+            f"{source}: {where} is not a simple polygon: {explain_validity(shape)} (lon lat)"
+        )
     hull = shape.convex_hull.area
     if shape.area < hull * (1.0 - CONVEX_TOLERANCE):
-        raise SiteFileError(f"{source}: {where} is not convex ({shape.area / hull:.1%} of its "
-                            "convex hull): the companion moves the fence inwards by "
-                            "site.fence_inset, which needs a convex polygon")  # fmt: skip
+        raise SiteFileError(
+            f"{source}: {where} is not convex ({shape.area / hull:.1%} of its "
+            "convex hull): the companion moves the fence inwards by "
+            "site.fence_inset, which needs a convex polygon"
+        )
     return FencePolygon(tuple(points))
 
 
@@ -100,6 +108,8 @@ def pick_fence(source: str, candidates: Sequence[Candidate], ignored: str = "") 
     marked = [c for c in candidates if c.marked_fence]
     if len(candidates) > 1 and len(marked) != 1:
         listed = ", ".join(c.where for c in candidates)
-        raise SiteFileError(f"{source}: {len(candidates)} polygons ({listed}): the fence must be "
-                            "the only one, or the only one marked kind=fence")  # fmt: skip
+        raise SiteFileError(
+            f"{source}: {len(candidates)} polygons ({listed}): the fence must be "
+            "the only one, or the only one marked kind=fence"
+        )
     return checked_fence(source, marked[0] if len(candidates) > 1 else candidates[0])

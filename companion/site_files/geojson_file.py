@@ -21,8 +21,11 @@ def _polygons(source: str, where: str, geometry: object, marked: bool) -> list[C
         parts = geometry.get("geometries")
         if not isinstance(parts, list):
             raise SiteFileError(f"{source}: {where}.geometries must be a list")
-        return [c for k, g in enumerate(parts)
-                for c in _polygons(source, f"{where}.geometries[{k}]", g, marked)]  # fmt: skip
+        return [
+            c
+            for k, g in enumerate(parts)
+            for c in _polygons(source, f"{where}.geometries[{k}]", g, marked)
+        ]
     if kind not in ("Polygon", "MultiPolygon"):
         return []
     coordinates = geometry.get("coordinates")
@@ -33,8 +36,9 @@ def _polygons(source: str, where: str, geometry: object, marked: bool) -> list[C
     for k, rings in enumerate(rings_of):
         at = where if kind == "Polygon" else f"{where} polygon {k}"
         if len(rings) != 1:
-            raise SiteFileError(f"{source}: {at} has {len(rings)} rings: a fence is one outer "
-                                "ring, without holes")  # fmt: skip
+            raise SiteFileError(
+                f"{source}: {at} has {len(rings)} rings: a fence is one outer ring, without holes"
+            )
         ring = rings[0]
         if not isinstance(ring, list) or not all(isinstance(p, list) and len(p) >= 2 for p in ring):
             raise SiteFileError(f"{source}: {at}: positions must be [longitude, latitude]")
@@ -61,10 +65,15 @@ def read_geojson(path: Path) -> FencePolygon:
     elif isinstance(kind, str) and kind in _GEOMETRIES:
         items = [("the geometry", {"type": "Feature", "geometry": data, "properties": {}})]
     else:
-        hint = " (a QGroundControl plan: name it .plan)" if isinstance(data, dict) and \
-            data.get("fileType") == "Plan" else ""  # fmt: skip
-        raise SiteFileError(f"{source}: not GeoJSON: no FeatureCollection, Feature or geometry "
-                            f"'type' at the top (got {kind!r}){hint}")  # fmt: skip
+        hint = (
+            " (a QGroundControl plan: name it .plan)"
+            if isinstance(data, dict) and data.get("fileType") == "Plan"
+            else ""
+        )
+        raise SiteFileError(
+            f"{source}: not GeoJSON: no FeatureCollection, Feature or geometry "
+            f"'type' at the top (got {kind!r}){hint}"
+        )
     candidates: list[Candidate] = []
     others = 0
     for where, feature in items:
@@ -78,8 +87,15 @@ def read_geojson(path: Path) -> FencePolygon:
     return pick_fence(source, candidates, f"{others} feature(s) without a polygon")
 
 
-_GEOMETRIES = {"Point", "MultiPoint", "LineString", "MultiLineString", "Polygon",
-               "MultiPolygon", "GeometryCollection"}  # fmt: skip
+_GEOMETRIES = {
+    "Point",
+    "MultiPoint",
+    "LineString",
+    "MultiLineString",
+    "Polygon",
+    "MultiPolygon",
+    "GeometryCollection",
+}
 
 
 def _ring(ring: tuple[LatLon, ...]) -> list[list[float]]:
@@ -95,17 +111,37 @@ def _feature(geometry: dict[str, Any], **properties: Any) -> dict[str, Any]:
 def geojson_document(layers: SiteLayers) -> dict[str, Any]:
     """The profile's layers as one FeatureCollection."""
     features = [
-        _feature({"type": "Polygon", "coordinates": [_ring(layers.fence)]}, kind="fence",
-                 name=f"{layers.name} fence"),
-        _feature({"type": "Polygon", "coordinates": [_ring(layers.area)]}, kind="search_area",
-                 name=f"{layers.name} search area"),
-    ]  # fmt: skip
+        _feature(
+            {"type": "Polygon", "coordinates": [_ring(layers.fence)]},
+            kind="fence",
+            name=f"{layers.name} fence",
+        ),
+        _feature(
+            {"type": "Polygon", "coordinates": [_ring(layers.area)]},
+            kind="search_area",
+            name=f"{layers.name} search area",
+        ),
+    ]
     for s in layers.starts:
-        features.append(_feature({"type": "Point", "coordinates": [s.lon, s.lat]}, kind="start",
-                                 vehicle=s.vehicle, altitude=s.altitude, seed=layers.seed))  # fmt: skip
+        features.append(
+            _feature(
+                {"type": "Point", "coordinates": [s.lon, s.lat]},
+                kind="start",
+                vehicle=s.vehicle,
+                altitude=s.altitude,
+                seed=layers.seed,
+            )
+        )
     for t in layers.targets:
-        features.append(_feature({"type": "Point", "coordinates": [t.lon, t.lat]}, kind="target",
-                                 target=t.index, false_target=t.false_target, appear=t.appear))  # fmt: skip
+        features.append(
+            _feature(
+                {"type": "Point", "coordinates": [t.lon, t.lat]},
+                kind="target",
+                target=t.index,
+                false_target=t.false_target,
+                appear=t.appear,
+            )
+        )
     return {"type": "FeatureCollection", "features": features}
 
 

@@ -28,13 +28,17 @@ def _kind(placemark: Placemark) -> str | None:
 def _candidates(where: str, geometry: object, marked: bool, source: str) -> list[Candidate]:
     if isinstance(geometry, pygeoif.Polygon):
         if list(geometry.interiors):
-            raise SiteFileError(f"{source}: {where} has inner boundaries: a fence is one outer "
-                                "ring, without holes")  # fmt: skip
+            raise SiteFileError(
+                f"{source}: {where} has inner boundaries: a fence is one outer ring, without holes"
+            )
         ring = [(p[1], p[0]) for p in geometry.exterior.coords]
         return [Candidate(where, ring, marked_fence=marked)]
     if isinstance(geometry, pygeoif.MultiPolygon | pygeoif.GeometryCollection):
-        return [c for k, part in enumerate(geometry.geoms)
-                for c in _candidates(f"{where} part {k}", part, marked, source)]  # fmt: skip
+        return [
+            c
+            for k, part in enumerate(geometry.geoms)
+            for c in _candidates(f"{where} part {k}", part, marked, source)
+        ]
     return []
 
 
@@ -90,25 +94,45 @@ def kml_document(layers: SiteLayers) -> KML:
     point per start and per target, every placemark with its ``kind`` in ExtendedData."""
     styles = [
         Style(id="fence", styles=[LineStyle(color="ff0000ff", width=3), PolyStyle(fill=False)]),
-        Style(id="search_area", styles=[LineStyle(color="ff00ffff", width=2),
-                                        PolyStyle(fill=False)]),
-    ]  # fmt: skip
+        Style(
+            id="search_area", styles=[LineStyle(color="ff00ffff", width=2), PolyStyle(fill=False)]
+        ),
+    ]
     features = [
-        Placemark(name="fence", style_url=StyleUrl(url="#fence"),
-                  extended_data=_data(kind="fence"), geometry=_polygon(layers.fence)),
-        Placemark(name="search area", style_url=StyleUrl(url="#search_area"),
-                  extended_data=_data(kind="search_area"), geometry=_polygon(layers.area)),
-    ]  # fmt: skip
+        Placemark(
+            name="fence",
+            style_url=StyleUrl(url="#fence"),
+            extended_data=_data(kind="fence"),
+            geometry=_polygon(layers.fence),
+        ),
+        Placemark(
+            name="search area",
+            style_url=StyleUrl(url="#search_area"),
+            extended_data=_data(kind="search_area"),
+            geometry=_polygon(layers.area),
+        ),
+    ]
     for s in layers.starts:
-        features.append(Placemark(name=f"start {s.vehicle}", geometry=pygeoif.Point(s.lon, s.lat),
-                                  extended_data=_data(kind="start", vehicle=s.vehicle,
-                                                      altitude=s.altitude, seed=layers.seed)))  # fmt: skip
+        features.append(
+            Placemark(
+                name=f"start {s.vehicle}",
+                geometry=pygeoif.Point(s.lon, s.lat),
+                extended_data=_data(
+                    kind="start", vehicle=s.vehicle, altitude=s.altitude, seed=layers.seed
+                ),
+            )
+        )
     for t in layers.targets:
         label = "false target" if t.false_target else "target"
-        features.append(Placemark(name=f"{label} {t.index}", geometry=pygeoif.Point(t.lon, t.lat),
-                                  extended_data=_data(kind="target", target=t.index,
-                                                      false_target=t.false_target,
-                                                      appear=t.appear)))  # fmt: skip
+        features.append(
+            Placemark(
+                name=f"{label} {t.index}",
+                geometry=pygeoif.Point(t.lon, t.lat),
+                extended_data=_data(
+                    kind="target", target=t.index, false_target=t.false_target, appear=t.appear
+                ),
+            )
+        )
     return KML(features=[Document(name=layers.name, styles=styles, features=features)])
 
 

@@ -34,20 +34,27 @@ def read_plan(path: Path) -> FencePolygon:
         raise SiteFileError(f"{source}: not a QGroundControl plan (not JSON: {exc})") from exc
     if not isinstance(plan, dict) or plan.get("fileType") != "Plan":
         kind = plan.get("fileType") if isinstance(plan, dict) else type(plan).__name__
-        raise SiteFileError(f"{source}: not a QGroundControl plan (fileType {kind!r}, "
-                            "expected 'Plan')")  # fmt: skip
+        raise SiteFileError(
+            f"{source}: not a QGroundControl plan (fileType {kind!r}, expected 'Plan')"
+        )
     fence = plan.get("geoFence")
     if not isinstance(fence, dict):
-        raise SiteFileError(f"{source}: the plan has no geoFence: draw the fence in QGC's Plan "
-                            "view (Fence) and save the plan again")  # fmt: skip
+        raise SiteFileError(
+            f"{source}: the plan has no geoFence: draw the fence in QGC's Plan "
+            "view (Fence) and save the plan again"
+        )
     if fence.get("version") != GEOFENCE_VERSION:
-        raise SiteFileError(f"{source}: geoFence version {fence.get('version')!r}: only version "
-                            f"{GEOFENCE_VERSION} is read (QGroundControl ignores older fences "
-                            "too); open and save the plan in a current QGC")  # fmt: skip
+        raise SiteFileError(
+            f"{source}: geoFence version {fence.get('version')!r}: only version "
+            f"{GEOFENCE_VERSION} is read (QGroundControl ignores older fences "
+            "too); open and save the plan in a current QGC"
+        )
     circles = _as_list(source, "geoFence.circles", fence.get("circles", []))
     if circles:
-        raise SiteFileError(f"{source}: geoFence.circles[0] is a circular fence: the companion "
-                            "keeps one inclusion polygon; draw the fence as a polygon")  # fmt: skip
+        raise SiteFileError(
+            f"{source}: geoFence.circles[0] is a circular fence: the companion "
+            "keeps one inclusion polygon; draw the fence as a polygon"
+        )
     candidates = []
     for k, item in enumerate(_as_list(source, "geoFence.polygons", fence.get("polygons", []))):
         where = f"geoFence.polygons[{k}]"

@@ -51,8 +51,9 @@ def _bounds(frame: LocalFrame, fence: FencePolygon) -> tuple[float, float, float
     return min(norths), min(easts), max(norths), max(easts)
 
 
-def _origin(fence: FencePolygon, alt: float, margin: float,
-            source: str) -> tuple[LocalFrame, float, float]:  # fmt: skip
+def _origin(
+    fence: FencePolygon, alt: float, margin: float, source: str
+) -> tuple[LocalFrame, float, float]:
     """The frame whose (0, 0) lies ``margin`` south and west of the fence's bounds, and the
     area's (north, east) extent."""
     frame = LocalFrame(*fence.vertices[0], alt)
@@ -69,8 +70,9 @@ def _round_up(value: float) -> float:
     return round(math.ceil(value / AREA_STEP - 1e-9) * AREA_STEP, 1)
 
 
-def _move_targets(data: dict[str, Any], base: MissionProfile, frame: LocalFrame,
-                  rule: TargetRule) -> None:  # fmt: skip
+def _move_targets(
+    data: dict[str, Any], base: MissionProfile, frame: LocalFrame, rule: TargetRule
+) -> None:
     """Re-place ``data``'s targets (base's, in its frame) in the new ``frame`` and area."""
     old = LocalFrame(base.origin.lat, base.origin.lon, base.origin.alt)
     for t in data["targets"]:
@@ -85,8 +87,9 @@ def _move_targets(data: dict[str, Any], base: MissionProfile, frame: LocalFrame,
         t["north"], t["east"] = round(n, 1), round(e, 1)
 
 
-def profile_with_fence(base: MissionProfile, fence: FencePolygon, source: str,
-                       how: FenceImport) -> MissionProfile:  # fmt: skip
+def profile_with_fence(
+    base: MissionProfile, fence: FencePolygon, source: str, how: FenceImport
+) -> MissionProfile:
     """``base`` flying inside ``fence`` (read from ``source``, named in every error): the new
     profile is validated as a loaded one is, and its fence must take the guidance's inset."""
     data = base.model_dump(mode="json")
@@ -112,16 +115,22 @@ def profile_with_fence(base: MissionProfile, fence: FencePolygon, source: str,
     except ValidationError as exc:
         described = describe_errors(f"{base.name} with the fence of {source}", exc)
         if "outside the area" in described:
-            described += (f"\n  (targets are placed by --targets {how.targets}: rehearsal "
-                          "targets must lie inside the new search area)")  # fmt: skip
+            described += (
+                f"\n  (targets are placed by --targets {how.targets}: rehearsal "
+                "targets must lie inside the new search area)"
+            )
         raise SiteFileError(described) from None
     try:
         inner = guidance_fence(profile)
     except ValueError as exc:
-        raise SiteFileError(f"{source}: {exc} (site.fence_inset "
-                            f"{profile.site.fence_inset if profile.site else 0:g} m)") from exc  # fmt: skip
+        raise SiteFileError(
+            f"{source}: {exc} (site.fence_inset "
+            f"{profile.site.fence_inset if profile.site else 0:g} m)"
+        ) from exc
     area = box(0.0, 0.0, profile.area.north, profile.area.east)
     if not Polygon(inner.vertices).intersects(area):
-        raise SiteFileError(f"{source}: the fence lies {Polygon(inner.vertices).distance(area):.0f}"
-                            " m from the profile's search area (--keep-area): another site?")  # fmt: skip
+        raise SiteFileError(
+            f"{source}: the fence lies {Polygon(inner.vertices).distance(area):.0f}"
+            " m from the profile's search area (--keep-area): another site?"
+        )
     return profile

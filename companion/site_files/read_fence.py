@@ -20,8 +20,9 @@ def read_fence_file(path: Path) -> FencePolygon:
         raise SiteFileError(f"{path}: a KMZ (zip) file: unzip it and import its doc.kml")
     reader = READERS.get(suffix)
     if reader is None:
-        raise SiteFileError(f"{path}: not a site file this reads ({', '.join(SUFFIXES)}): "
-                            f"{suffix or 'no suffix'}")  # fmt: skip
+        raise SiteFileError(
+            f"{path}: not a site file this reads ({', '.join(SUFFIXES)}): {suffix or 'no suffix'}"
+        )
     if not path.is_file():
         raise SiteFileError(f"{path}: no such file")
     try:

@@ -78,8 +78,9 @@ def site_layers(profile: MissionProfile, seed: int) -> SiteLayers:
         for k, t in enumerate(profile.targets)
     )
     o = profile.origin
-    return SiteLayers(profile.name, fence, area, (o.lat, o.lon, o.alt), fleet.speed,
-                      tuple(starts), targets, seed)  # fmt: skip
+    return SiteLayers(
+        profile.name, fence, area, (o.lat, o.lon, o.alt), fleet.speed, tuple(starts), targets, seed
+    )
 
 
 def _turn(ring: Sequence[LatLon]) -> float:
