@@ -73,9 +73,16 @@ class PhaseSteering:
         m.sensors.observe(t, pos.north, pos.east)
         if t - seen.last_tick >= TICK_S:
             seen.last_tick = t
-            m.emit("tick", phase=m.phase.value, level=m.core.level, wall=round(time.time(), 3),
-                   north=round(pos.north, 1), east=round(pos.east, 1),
-                   alt=round(-pos.down, 1), found=m.core.confirmed_count)  # fmt: skip
+            m.emit(
+                "tick",
+                phase=m.phase.value,
+                level=m.core.level,
+                wall=round(time.time(), 3),
+                north=round(pos.north, 1),
+                east=round(pos.east, 1),
+                alt=round(-pos.down, 1),
+                found=m.core.confirmed_count,
+            )
         if m.phase is Phase.SEARCH:
             self.layer.check(t, -pos.down)
             self._search_step(t, pos)
@@ -94,8 +101,7 @@ class PhaseSteering:
         elif m.phase is Phase.TRANSIT and m.start is not None:
             here = np.array([pos.north, pos.east])
             goal = np.array(m.start)
-            out.send(guidance.pursuit(here, pos.down, goal, out.guide, out.fence,
-                                      seen.period), pos)  # fmt: skip
+            out.send(guidance.pursuit(here, pos.down, goal, out.guide, out.fence, seen.period), pos)
         elif m.phase is Phase.CLIMB and not m.state.climbing_by_command:
             here = np.array([pos.north, pos.east])
             out.send(guidance.pursuit(here, pos.down, here, out.guide, out.fence, 1.0), pos)
@@ -115,8 +121,7 @@ class PhaseSteering:
             if d.detected:
                 m.record(events.Detection(round(pos.north, 1), round(pos.east, 1), d.level))
             for north, east in d.confirmed:
-                m.record(events.Confirmation(north, east, d.previous_level,
-                                             core.confirmed_count))  # fmt: skip
+                m.record(events.Confirmation(north, east, d.previous_level, core.confirmed_count))
             if d.fell_back:
                 m.record(events.Fallback(d.level))
             if d.level != d.previous_level:
