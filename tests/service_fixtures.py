@@ -60,16 +60,29 @@ def mosquitto(tmp_path: Path) -> Iterator[Callable[..., Broker]]:
 
 
 @pytest.fixture
-def chromium() -> Iterator[webdriver.Chrome]:
+def chromium(tmp_path: Path) -> Iterator[webdriver.Chrome]:
     """A headless Chromium (``chromium`` and ``chromedriver`` from PATH, as Debian's chromium and
-    chromium-driver packages put them in /usr/bin) driven through Selenium; nothing is
-    downloaded. Quit at teardown."""
+    chromium-driver packages put them in /usr/bin) driven through Selenium, with a fresh profile
+    in the test's folder and none of its background connections (this machine's network is
+    closed: they would fail, many at a time); nothing is downloaded. Quit at teardown."""
     reason = chromium_missing()
     if reason is not None:
         missing(reason)
     options = Options()
     options.binary_location = str(shutil.which("chromium"))
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage"):
+    for arg in (
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-dev-shm-usage",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--window-size=1600,1000",
+        f"--user-data-dir={tmp_path / 'chromium-profile'}",
+    ):
         options.add_argument(arg)
     session = webdriver.Chrome(
         options=options, service=Service(executable_path=str(shutil.which("chromedriver")))
