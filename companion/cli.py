@@ -18,6 +18,7 @@ from companion.autopilots import FlightMode
 from companion.fleet.cli_args import add_fleet_parser
 from companion.fly import REFUSED, STOPPED_BY_SECOND_SIGNAL, check_flight, fly
 from companion.link.factory import BACKENDS, Backend, make_link
+from companion.live_web.cli_args import add_watch_parser
 from companion.mission import MissionConfig
 from companion.mission.mission_exit import MissionExit
 from companion.run_map.cli_args import add_map_parser, map_after_run, map_command
@@ -75,6 +76,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_fleet_parser(sub)
     add_map_parser(sub)
     add_profile_parser(sub)
+    add_watch_parser(sub)
     return parser
 
 
@@ -94,6 +96,10 @@ def main(argv: list[str] | None = None) -> int:
             from companion.site_files.commands import profile_command
 
             return profile_command(args)
+        if args.command == "watch":
+            from companion.live_web.commands import watch_command
+
+            return watch_command(args)
         from companion.fleet.command import fleet_command
 
         return fleet_command(args)
