@@ -38,7 +38,7 @@ from pathlib import Path
 
 from emulator_common import SINK, fly_everyone, load_note
 
-from companion.link.pymavlink_link import GLOBAL_POSITION_INT, UNREAD_STREAMS
+from companion.link.mavlink_commands import GLOBAL_POSITION_INT, UNREAD_STREAMS
 from mdm_profiles import builtin_profile
 from sim_vehicle_stub.config import EmulatorConfig, system_id
 from sim_vehicle_stub.emulator import Emulator
