@@ -62,7 +62,8 @@ def vehicle_end(out: Path, vehicle: int, exit_code: int | None, earlier: str | N
     reason = None if end is None else end.reason
     exits = logged.of(Exit)
     if reason is not None and exits and exits[-1].status != 0:  # how the vehicle was left
-        reason = f"{reason}: {exits[-1].cause}"
+        cause = exits[-1].cause
+        reason = cause if cause.startswith(reason) else f"{reason}: {cause}"
     strays = tuple(f"{r.get('address')} (locked to {r.get('locked')})" for r in read_records(path)
                    if r.get("event") == "stray")  # fmt: skip
     if exit_code is None:

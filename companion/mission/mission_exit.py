@@ -1,6 +1,7 @@
 """How a companion ends: exit status 0 only when the vehicle was seen landed and disarmed (or
-the end action was accepted where the run asked not to wait for the landing); anything else is
-1, with the cause in one line that says where the vehicle was left."""
+the end action was accepted where the run asked not to wait for the landing) after a mission
+that was not cut short by a fault; anything else is 1, with the cause in one line that says
+where the vehicle was left."""
 
 from __future__ import annotations
 
@@ -9,6 +10,10 @@ from dataclasses import dataclass
 
 from companion.autopilots import Autopilot
 from companion.link.messages import Heartbeat, LocalPosition
+
+FAULT_ENDS = ("climb timeout", "transit not done", "outside the fence", "battery")
+"""End reasons (their beginnings) of a mission cut short by a fault: the exit is 1 however
+safely the vehicle came down (a run that failed never reports success)."""
 
 
 @dataclass(frozen=True)
@@ -36,10 +41,12 @@ def final_exit(
     autopilot: Autopilot | None,
     where: str,
     failsafe: str | None,
+    end_reason: str | None = None,
 ) -> MissionExit:
     """The ``exit`` record: ``exit`` when the end's wait or the link's loss set it, else from
     what the vehicle was last seen doing (``where``: :func:`where`'s words); never 0 after the
-    position failsafe (``failsafe``: its cause, if it ended the mission)."""
+    position failsafe (``failsafe``: its cause, if it ended the mission) or after a mission
+    that ended for a fault (``end_reason`` one of :data:`FAULT_ENDS`)."""
     if exit is None:
         if heartbeat is None:
             exit = MissionExit(1, "the vehicle was never heard")
@@ -50,4 +57,6 @@ def final_exit(
             exit = MissionExit(0, "disarmed on the ground")
     if failsafe is not None and exit.status == 0:
         exit = MissionExit(1, f"failsafe ({failsafe}); {exit.cause}")
+    if end_reason is not None and end_reason.startswith(FAULT_ENDS) and exit.status == 0:
+        exit = MissionExit(1, f"{end_reason}; {exit.cause}")
     return exit

@@ -193,6 +193,7 @@ class VehicleMission:
             self.link.autopilot,
             self.where(),
             self.position_failsafe.cause,
+            self.end_reason,
         )
         self.record(events.Exit(self.exit.status, self.exit.cause))
 

@@ -25,7 +25,9 @@ def test_vehicles_that_never_climb_fail_the_run(tmp_path: Path) -> None:
     assert done.returncode == 1, done.stdout + done.stderr
     assert "NOT COMPLETE (3 process(es) did not end normally)" in done.stdout
     for i in range(3):
-        row = re.compile(rf"vehicle {i} +climb timeout +- +{re.escape(str(out))}/companion-{i}.log")
+        how = "climb timeout; RTL accepted; not waiting for the landing, exit code 1"
+        log = f"{re.escape(str(out))}/companion-{i}.log"
+        row = re.compile(rf"vehicle {i} +{re.escape(how)} +- +{log}")
         assert row.search(done.stdout), done.stdout
     result = json.loads((out / "results.json").read_text())
     assert result["complete"] is False
