@@ -42,6 +42,9 @@ from companion.telemetry import events
 
 log = logging.getLogger(__name__)
 
+_HEARTBEAT_FRESH_S = 2.0
+"""A HEARTBEAT this recent (wall s) means the link is alive (they come at 1 Hz or faster)."""
+
 
 class LifecycleSteps:
     """Drives one mission's lifecycle: feeds outcomes to the machine, performs its steps."""
@@ -313,7 +316,9 @@ class LifecycleSteps:
     async def _await_landing(self) -> str:
         """Until the vehicle disarms (``landed``), ``land_wait`` vehicle s pass, or its clock
         stands still (no valid position) for the failsafe's position_timeout + position_hold
-        wall s; while the link is lost, until the supervision gives it up (``m.exit``)."""
+        wall s while its HEARTBEATs still come (a vehicle gone silent altogether is the link
+        supervision's: a lost link, not a bad estimator); while the link is lost, until the
+        supervision gives it up (``m.exit``)."""
         m, wait = self.m, self.config.land_wait
         spec = self.config.profile.failsafe
         stall = spec.position_timeout + spec.position_hold
@@ -325,7 +330,11 @@ class LifecycleSteps:
                 return f"{wait:g} vehicle s"
             if m.seen.clock.now != last:
                 last, moved = m.seen.clock.now, time.monotonic()
-            elif m.phase is not Phase.LINK_LOST and time.monotonic() - moved >= stall:
+            elif (
+                m.phase is not Phase.LINK_LOST
+                and time.perf_counter() - m.seen.last_heartbeat_wall < _HEARTBEAT_FRESH_S
+                and time.monotonic() - moved >= stall
+            ):
                 return f"no valid position for {time.monotonic() - moved:.0f} s ({m.seen.clock.now - start:.0f} vehicle s)"
             await m.waits.wait_changed(0.5)
         return "link given up"

@@ -71,7 +71,8 @@ def test_fleet_publishes_every_event_in_order_state_and_status(tmp_path: Path) -
         ]
         names = {e["event"] for e in published}
         assert {"start", "phase", "level", "end"} <= names, names
-        assert published[-1]["event"] == "latency"  # the last record a companion writes
+        assert published[-1]["event"] == "exit"  # the last record a companion writes
+        assert published[-1]["status"] == 0, published[-1]
 
         states = [m.json() for m in sub.messages("state") if f"/uav{i}/" in m.topic]
         assert len(states) >= 10, f"vehicle {i}: only {len(states)} state messages"
