@@ -51,7 +51,9 @@ def test_compose_flies_a_signed_mission_with_events_on_the_broker(
     stack.compose("up", "-d")
     codes = stack.wait_exit(COMPANIONS, MISSION_WALL_S)
     print(f"mission (up to the last companion's exit): {time.monotonic() - start:.1f} s")
-    assert codes == ["0"] * VEHICLES, f"companion exit codes {codes}"
+    assert codes == ["0"] * VEHICLES, (
+        f"companion exit codes {codes}\n" + stack.compose("logs", "--tail", "8", *COMPANIONS).stdout
+    )
     assert all(m.topic.startswith("mdm/probe/") for m in spy.messages()), (
         "a companion's account published a command"
     )
