@@ -9,6 +9,7 @@ import contextlib
 import os
 import shutil
 import signal
+import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -60,11 +61,12 @@ def mosquitto(tmp_path: Path) -> Iterator[Callable[..., Broker]]:
 
 
 @pytest.fixture
-def chromium(tmp_path: Path) -> Iterator[webdriver.Chrome]:
+def chromium() -> Iterator[webdriver.Chrome]:
     """A headless Chromium (``chromium`` and ``chromedriver`` from PATH, as Debian's chromium and
     chromium-driver packages put them in /usr/bin) driven through Selenium, with a fresh profile
-    in the test's folder and none of its background connections (this machine's network is
-    closed: they would fail, many at a time); nothing is downloaded. Quit at teardown."""
+    in a folder of its own (outside the test's, which ``fleet_processes`` watches) and none of
+    its background connections (this machine's network is closed: they would fail, many at a
+    time); nothing is downloaded. Quit at teardown."""
     reason = chromium_missing()
     if reason is not None:
         missing(reason)
@@ -81,9 +83,10 @@ def chromium(tmp_path: Path) -> Iterator[webdriver.Chrome]:
         "--disable-component-update",
         "--disable-sync",
         "--window-size=1600,1000",
-        f"--user-data-dir={tmp_path / 'chromium-profile'}",
     ):
         options.add_argument(arg)
+    profile = tempfile.mkdtemp(prefix="mdm-chromium-")
+    options.add_argument(f"--user-data-dir={profile}")
     session = webdriver.Chrome(
         options=options, service=Service(executable_path=str(shutil.which("chromedriver")))
     )
@@ -91,6 +94,7 @@ def chromium(tmp_path: Path) -> Iterator[webdriver.Chrome]:
         yield session
     finally:
         session.quit()
+        shutil.rmtree(profile, ignore_errors=True)
 
 
 @pytest.fixture
