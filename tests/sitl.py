@@ -15,12 +15,13 @@ from __future__ import annotations
 import os
 import shutil
 import signal
-import socket
 import subprocess
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
+
+from companion.fleet.sitl_team import ports_free, sitl_ports
 
 Kind = Literal["arducopter", "px4"]
 
@@ -49,25 +50,6 @@ def skip_reason(kind: Kind) -> str:
         f"no {kind} SITL: set {_ENV[kind]} to the folder holding {_SCRIPT[kind]} "
         f"(looked in {os.environ.get(_ENV[kind]) or _SHARED[kind]}; README 'Tests')"
     )
-
-
-def _ports(kind: Kind, index: int) -> tuple[list[int], list[int]]:
-    """(TCP, UDP) ports instance ``index`` of ``kind`` binds or is sent to."""
-    if kind == "arducopter":
-        base = 5760 + 10 * index
-        return [base, base + 2, base + 3], [5501 + 10 * index]
-    return [], [14540 + index, 14580 + index, 18570 + index]
-
-
-def _free(tcp: list[int], udp: list[int]) -> bool:
-    for kind, ports in ((socket.SOCK_STREAM, tcp), (socket.SOCK_DGRAM, udp)):
-        for port in ports:
-            with socket.socket(socket.AF_INET, kind) as s:
-                try:
-                    s.bind(("0.0.0.0", port))
-                except OSError:
-                    return False
-    return True
 
 
 @dataclass
@@ -119,7 +101,7 @@ def free_index(kind: Kind) -> int:
     """The first instance index, from ``MDM_SITL_INSTANCE_BASE`` up, whose ports are all free."""
     base = int(os.environ.get(INSTANCE_BASE_ENV, "0"))
     for index in range(base, _MAX_INSTANCE[kind] + 1):
-        if _free(*_ports(kind, index)):
+        if ports_free(*sitl_ports(kind, index)):
             return index
     raise RuntimeError(
         f"no free {kind} SITL instance index in {base}..{_MAX_INSTANCE[kind]} "
@@ -219,7 +201,7 @@ def _await_bound(
     while time.monotonic() < deadline:
         if instance.process.poll() is not None:
             raise RuntimeError(f"{instance.kind} SITL exited: {instance.log()}")
-        if not _free(*ports):
+        if not ports_free(*ports):
             return
         time.sleep(0.2)
     instance.stop()

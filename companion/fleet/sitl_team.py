@@ -84,7 +84,7 @@ def kinds_for(sitl: str, vehicles: list[int]) -> dict[int, Autopilot]:
     return dict.fromkeys(vehicles, kind)
 
 
-def _ports(kind: Autopilot, index: int) -> tuple[list[int], list[int]]:
+def sitl_ports(kind: Autopilot, index: int) -> tuple[list[int], list[int]]:
     """(TCP, UDP) ports instance ``index`` of ``kind`` binds or is sent to."""
     if kind == "arducopter":
         base = 5760 + 10 * index
@@ -92,7 +92,8 @@ def _ports(kind: Autopilot, index: int) -> tuple[list[int], list[int]]:
     return [], [14540 + index, 14580 + index, 18570 + index]
 
 
-def _free(tcp: list[int], udp: list[int]) -> bool:
+def ports_free(tcp: list[int], udp: list[int]) -> bool:
+    """Whether every one of these TCP and UDP ports can be bound here now."""
     for kind, ports in ((socket.SOCK_STREAM, tcp), (socket.SOCK_DGRAM, udp)):
         for port in ports:
             with socket.socket(socket.AF_INET, kind) as s:
@@ -155,7 +156,8 @@ def start_team(
         for v in vehicles:
             kind = kinds[v]
             index = next(
-                (i for i in range(index + 1, _MAX_INDEX + 1) if _free(*_ports(kind, i))), -1
+                (i for i in range(index + 1, _MAX_INDEX + 1) if ports_free(*sitl_ports(kind, i))),
+                -1,
             )
             if index < 0:
                 raise FleetInputError(f"--sitl: no free SITL instance index left for vehicle {v} "
@@ -191,7 +193,7 @@ def _start(
     # ArduCopter's one client slot on SERIAL0 too early).
     watch = ([5760 + 10 * index], []) if kind == "arducopter" else ([], [18570 + index])
     deadline = time.monotonic() + _BIND_S
-    while _free(*watch):
+    while ports_free(*watch):
         if process.poll() is not None or time.monotonic() > deadline:
             member.stop()
             raise FleetInputError(f"--sitl: the {kind} SITL of vehicle {vehicle} did not start "
