@@ -44,6 +44,9 @@ log = logging.getLogger(__name__)
 
 _HEARTBEAT_FRESH_S = 2.0
 """A HEARTBEAT this recent (wall s) means the link is alive (they come at 1 Hz or faster)."""
+_MODE_SEEN_S = 3.0
+"""How long (wall s) a companion that does not wait for the landing waits for a HEARTBEAT to
+report the end action's mode: three HEARTBEAT periods at real time."""
 
 
 class LifecycleSteps:
@@ -288,6 +291,8 @@ class LifecycleSteps:
                 "vehicle %d refused %s: %s", self.config.vehicle, action.value, result.describe()
             )
         if self.config.land_wait <= 0:
+            if result:
+                await self._await_mode(action)
             if m.exit is None:
                 m.end_with(
                     MissionExit(0, f"{name} accepted; not waiting for the landing")
@@ -312,6 +317,21 @@ class LifecycleSteps:
             m.end_with(end)
             log.error("vehicle %d: %s", self.config.vehicle, end.cause)
         return Landed()
+
+    async def _await_mode(self, action: FlightMode) -> None:
+        """Until a HEARTBEAT reports ``action``'s mode (so that the last state message says
+        what the vehicle flies when the companion leaves without waiting for the landing), at
+        most _MODE_SEEN_S wall s."""
+        m, ap = self.m, self.link.autopilot
+        if ap is None:
+            return
+        wanted = ap.mode_name(ap.custom_mode(action))
+        deadline = time.monotonic() + _MODE_SEEN_S
+        while m.exit is None and time.monotonic() < deadline:
+            hb = m.seen.heartbeat
+            if hb is not None and ap.mode_name(hb.custom_mode) == wanted:
+                return
+            await m.waits.wait_changed(0.2)
 
     async def _await_landing(self) -> str:
         """Until the vehicle disarms (``landed``), ``land_wait`` vehicle s pass, or its clock

@@ -76,6 +76,8 @@ def test_live_page_shows_the_team_moving_and_confirming_and_one_abort_flies_rtl(
                    until=lambda text: "abort -> uav0" in text and "uav0: accepted" in text)  # fmt: skip
         wait_until(lambda: _emulator_modes(run, 0), 30, "vehicle 0 in RTL (emulator's log)",
                    until=lambda modes: modes and modes[-1] == "RTL")  # fmt: skip
+        wait_until(lambda: cell(chromium, 0, 1), 30, "RTL shown for vehicle 0",
+                   until=lambda mode: mode == "RTL")  # fmt: skip
         screenshot(chromium, tmp_path, "live-fleet-after-abort")
 
         wait_until(lambda: count(chromium, "#marks .confirmation"), 120,

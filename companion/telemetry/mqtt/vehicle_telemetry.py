@@ -152,6 +152,10 @@ class VehicleTelemetry:
             )
         if self.channel.connected.is_set():
             with contextlib.suppress(aiomqtt.MqttError):
+                if self.vehicle is not None:  # the last state: the end action's mode, landed
+                    await self.channel.publish(
+                        self.topics.state, _json(self.vehicle.snapshot()), timeout=2.0
+                    )
                 await self.channel.publish(
                     self.topics.status,
                     self._status("offline", clean=True),
