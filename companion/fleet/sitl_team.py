@@ -28,6 +28,7 @@ _FOLDER = {"arducopter": "ardupilot", "px4": "px4"}
 _SCRIPT = {"arducopter": "start-arducopter", "px4": "start-px4"}
 _MAX_INDEX = 9
 """PX4 instance I sends its offboard link to UDP 14540+I; I = 10 would be the GCS port 14550."""
+INSTANCE_BASE_ENV = "MDM_SITL_INSTANCE_BASE"
 _BIND_S = 30.0
 ARDUCOPTER_PACK_MAH = 20000
 """BATT_CAPACITY of each ArduCopter instance: SITL's stock 3300 mAh ends a search of a few
@@ -145,13 +146,14 @@ def start_team(
 ) -> list[SitlVehicle]:
     """One instance per vehicle on free instance indices (system id = index + 1, distinct
     across ArduCopter and PX4); on any failure the ones started are stopped again."""
+    first = instance_base()
     kinds = kinds_for(sitl, vehicles)
     folders = {k: sitl_folder(k) for k in set(kinds.values())}
     homes = boot_points(profile, seed, vehicles)
     if not speedup > 0:
         raise FleetInputError(f"--sitl-speedup {speedup:g}: must be > 0")
     team: list[SitlVehicle] = []
-    index = -1
+    index = first - 1
     try:
         for v in vehicles:
             kind = kinds[v]
@@ -160,14 +162,31 @@ def start_team(
                 -1,
             )
             if index < 0:
-                raise FleetInputError(f"--sitl: no free SITL instance index left for vehicle {v} "
-                                      f"(0..{_MAX_INDEX}, each with its own ports)")  # fmt: skip
+                raise FleetInputError(
+                    f"--sitl: no free SITL instance index left for vehicle {v} "
+                    f"({first}..{_MAX_INDEX}, each with its own ports)"
+                )
             team.append(_start(kind, folders[kind], index, v, homes[v], speedup, out))
     except BaseException:
         for member in team:
             member.stop()
         raise
     return team
+
+
+def instance_base() -> int:
+    """The first SITL instance index a team may take: ``MDM_SITL_INSTANCE_BASE`` (default 0),
+    so that two runs on one machine at once take indices apart."""
+    raw = os.environ.get(INSTANCE_BASE_ENV, "0")
+    try:
+        base = int(raw)
+    except ValueError:
+        base = -1
+    if not 0 <= base <= _MAX_INDEX:
+        raise FleetInputError(
+            f"{INSTANCE_BASE_ENV}={raw!r}: expected an instance index 0..{_MAX_INDEX}"
+        )
+    return base
 
 
 def _start(

@@ -162,3 +162,16 @@ def test_sitl_without_a_build_is_refused_naming_the_variable(
     assert code == 2, err
     assert f"--sitl: no px4 SITL (start-px4) in {tmp_path / 'nowhere'}; set MDM_PX4_SITL to " \
            "its folder" in err  # fmt: skip
+
+
+@pytest.mark.parametrize("base", ["x", "10", "-1"])
+def test_a_sitl_instance_base_outside_0_to_9_is_refused_naming_the_variable(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch, base: str
+) -> None:
+    monkeypatch.setenv("MDM_SITL_INSTANCE_BASE", base)
+    code = main(["fleet", "--quiet", "--profile", "field-duebendorf", "--sitl", "arducopter",
+                 "--vehicles", "2", "--out", str(tmp_path / "run")])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert f"MDM_SITL_INSTANCE_BASE={base!r}: expected an instance index 0..9" in err
+    assert not list((tmp_path / "run").glob("sitl-*.log")), "an instance was started"
