@@ -11,10 +11,12 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink import mavutil
 
+from mavlink_conformance.errors import ConformanceError
+
 __all__ = ["LinkClosedError", "Session", "mavutil"]
 
 
-class LinkClosedError(ConnectionError):
+class LinkClosedError(ConformanceError, ConnectionError):
     """The vehicle closed the connection (TCP EOF or reset): nothing more can be checked."""
 
 

@@ -12,12 +12,14 @@ import os
 from collections.abc import Mapping
 from pathlib import Path
 
+from mavlink_signing.errors import SigningError
+
 ENV_VAR = "MDM_MAVLINK_KEY"
 """Environment variable holding the passphrase; unset or empty means signing off."""
 MIN_PASSPHRASE = 8
 
 
-class SigningKeyError(ValueError):
+class SigningKeyError(SigningError, ValueError):
     """A key file or variable that is missing, unreadable or malformed; names what and where."""
 
 

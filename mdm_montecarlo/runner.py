@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 
 from mdm_core import metrics
 from mdm_montecarlo.engine import BLOCK_RUNS, BlockResult, run_block
+from mdm_montecarlo.errors import MontecarloError
 from mdm_montecarlo.local_pool import imap_unordered
 from mdm_montecarlo.social_engine import SWARM_KINDS, run_swarm_block
 from mdm_profiles import MissionProfile
@@ -68,7 +69,7 @@ class MissionResults:
         return metrics.time_to_all(self.team_times, self.real, self.profile.mission.ts_cap)
 
 
-class RunInterruptedError(Exception):
+class RunInterruptedError(MontecarloError):
     """Ctrl-C during ``run_many``: the workers are stopped; ``finished`` holds the profiles
     (by index) all of whose blocks were done, ``partial`` those with only some blocks done
     (their results cover fewer runs than asked)."""

@@ -1,5 +1,6 @@
 """Mission profiles: the validated schema and the YAML loader, shared by every layer."""
 
+from mdm_profiles.errors import ProfilesError
 from mdm_profiles.loader import (
     ProfileError,
     builtin_profile,
@@ -32,6 +33,7 @@ __all__ = [
     "Origin",
     "PolicySpec",
     "ProfileError",
+    "ProfilesError",
     "RandomWalkSpec",
     "SensorSourceKind",
     "SensorSourceSpec",

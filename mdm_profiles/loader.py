@@ -9,10 +9,11 @@ from typing import get_args
 import yaml
 from pydantic import BaseModel, ValidationError
 
+from mdm_profiles.errors import ProfilesError
 from mdm_profiles.schema import MissionProfile
 
 
-class ProfileError(ValueError):
+class ProfileError(ProfilesError, ValueError):
     """A profile that cannot be used, with every problem listed as file: field: message."""
 
 
