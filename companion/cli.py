@@ -39,8 +39,11 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--profile", required=True, help="profile file or built-in name")
     p.add_argument("--vehicle", type=int, required=True, help="0-based vehicle index")
     p.add_argument("--connect", help="link URL (default udpin:0.0.0.0:BASE_PORT+I)")
-    p.add_argument("--system-id", type=int,
-                   help="the vehicle's MAVLink system id, 1-255 (default: --vehicle + 1)")  # fmt: skip
+    p.add_argument(
+        "--system-id",
+        type=int,
+        help="the vehicle's MAVLink system id, 1-255 (default: --vehicle + 1)",
+    )
     p.add_argument("--base-port", type=int, default=VEHICLE_UDP_BASE)
     p.add_argument("--backend", choices=BACKENDS, default="pymavlink")
     p.add_argument("--setpoints", choices=("velocity", "position"), default="velocity")
@@ -49,20 +52,35 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--duration", type=float, help="search time, vehicle s (default: profile)")
     p.add_argument("--end-action", choices=("rtl", "land"), help="default: profile site, else rtl")
     p.add_argument("--land-wait", type=float, default=600.0, help="vehicle s to wait to land")
-    p.add_argument("--max-speedup", type=float,
-                   help="vehicle s per wall s the vehicle runs at (a simulator's speed-up): "
-                        "positions whose clock runs faster are dropped (default: unknown)")  # fmt: skip
+    p.add_argument(
+        "--max-speedup",
+        type=float,
+        help="vehicle s per wall s the vehicle runs at (a simulator's speed-up): "
+        "positions whose clock runs faster are dropped (default: unknown)",
+    )
     p.add_argument("--no-tlog", action="store_true", help="do not write the .tlog")
-    p.add_argument("--no-map", action="store_true",
-                   help="draw no map-I.geojson / map-I.png at the end (a fleet draws one map of "
-                        "every vehicle instead)")  # fmt: skip
-    p.add_argument("--sensor-source", choices=SENSOR_SOURCES,
-                   help="where readings come from (default: the profile's sensor_source.kind)")  # fmt: skip
-    p.add_argument("--dedicated-link", action="store_true",
-                   help="the link carries only this companion: switch off streams it does not "
-                        "read (never with a ground station on the same link)")  # fmt: skip
-    p.add_argument("--signing-key-file", type=Path,
-                   help=f"MAVLink 2 signing passphrase file (default: ${ENV_VAR}; neither: off)")  # fmt: skip
+    p.add_argument(
+        "--no-map",
+        action="store_true",
+        help="draw no map-I.geojson / map-I.png at the end (a fleet draws one map of "
+        "every vehicle instead)",
+    )
+    p.add_argument(
+        "--sensor-source",
+        choices=SENSOR_SOURCES,
+        help="where readings come from (default: the profile's sensor_source.kind)",
+    )
+    p.add_argument(
+        "--dedicated-link",
+        action="store_true",
+        help="the link carries only this companion: switch off streams it does not "
+        "read (never with a ground station on the same link)",
+    )
+    p.add_argument(
+        "--signing-key-file",
+        type=Path,
+        help=f"MAVLink 2 signing passphrase file (default: ${ENV_VAR}; neither: off)",
+    )
     p.add_argument("-v", "--verbose", action="store_true")
     add_mqtt_arguments(p)
 
@@ -144,8 +162,15 @@ def run_command(args: argparse.Namespace) -> int:
     sensor_source: SensorSourceKind = args.sensor_source or profile.sensor_source.kind
     check_flight(config, mqtt, sensor_source)  # before any socket or file
     signing_key = load_signing_key(args.signing_key_file)
-    fly = _fly(config, url, args.backend, tlog=not args.no_tlog, mqtt=mqtt, signing_key=signing_key,
-               sensor_source=sensor_source)  # fmt: skip
+    fly = _fly(
+        config,
+        url,
+        args.backend,
+        tlog=not args.no_tlog,
+        mqtt=mqtt,
+        signing_key=signing_key,
+        sensor_source=sensor_source,
+    )
     if args.backend == "mavsdk":
         reason, end = _run_mavsdk(fly)
         _say_end(args.vehicle, reason, end)
@@ -203,9 +228,15 @@ def _dump_tasks() -> None:
 
 
 async def _fly(
-    config: MissionConfig, url: str, backend: Backend, *, tlog: bool, mqtt: MqttSpec | None,
-    signing_key: bytes | None, sensor_source: SensorSourceKind,
-) -> tuple[str, MissionExit | None]:  # fmt: skip
+    config: MissionConfig,
+    url: str,
+    backend: Backend,
+    *,
+    tlog: bool,
+    mqtt: MqttSpec | None,
+    signing_key: bytes | None,
+    sensor_source: SensorSourceKind,
+) -> tuple[str, MissionExit | None]:
     link = make_link(
         backend,
         url=url,
@@ -215,8 +246,9 @@ async def _fly(
     )
     options = {f.name: getattr(config, f.name) for f in fields(config)}
     del options["profile"], options["vehicle"]
-    async with fly(config.profile, config.vehicle, link, mqtt=mqtt, sensor_source=sensor_source,
-                   **options) as flight:  # fmt: skip
+    async with fly(
+        config.profile, config.vehicle, link, mqtt=mqtt, sensor_source=sensor_source, **options
+    ) as flight:
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.add_signal_handler(sig, flight.stop)

@@ -379,8 +379,11 @@ def _fence_download(s: Session) -> list[Any] | None:
     items = []
     for seq in range(count.count):
         s.mav.mission_request_int_send(s.sysid, s.compid, seq, _FENCE)
-        item = s.recv({"MISSION_ITEM_INT"}, s.timeout,
-                      lambda m, seq=seq: m.mission_type == _FENCE and m.seq == seq)  # fmt: skip
+        item = s.recv(
+            {"MISSION_ITEM_INT"},
+            s.timeout,
+            lambda m, seq=seq: m.mission_type == _FENCE and m.seq == seq,
+        )
         if item is None:
             return None
         items.append(item)
@@ -396,8 +399,11 @@ def _fence_upload(s: Session, items: list[tuple[Any, ...]]) -> str:
     else:
         s.mav.mission_count_send(s.sysid, s.compid, len(items), _FENCE)
     while True:
-        m = s.recv({"MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK"}, s.timeout,
-                   lambda m: m.mission_type == _FENCE)  # fmt: skip
+        m = s.recv(
+            {"MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK"},
+            s.timeout,
+            lambda m: m.mission_type == _FENCE,
+        )
         if m is None:
             return "no answer"
         if m.get_type() == "MISSION_ACK":
@@ -416,8 +422,14 @@ def _fields(item: Any) -> tuple[Any, ...]:
 def check_fence(s: Session) -> CheckResult:
     """A fence (an inclusion square around the vehicle, mission_type FENCE) is taken, read back
     equal, and the vehicle's own fence (none, or what it held) put back."""
-    where = next((m for kind in ("HOME_POSITION", "GLOBAL_POSITION_INT")
-                  for _, m in reversed(s.seen.get(kind, []))), None)  # fmt: skip
+    where = next(
+        (
+            m
+            for kind in ("HOME_POSITION", "GLOBAL_POSITION_INT")
+            for _, m in reversed(s.seen.get(kind, []))
+        ),
+        None,
+    )
     if where is None:
         return CheckResult("fence", False, "no HOME_POSITION or GLOBAL_POSITION_INT to centre on")
     home = where.get_type() == "HOME_POSITION"
@@ -428,8 +440,9 @@ def check_fence(s: Session) -> CheckResult:
     d = _FENCE_HALF_SIDE
     square = [(lat - d, lon - d), (lat + d, lon - d), (lat + d, lon + d), (lat - d, lon + d)]
     vertex = ml.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
-    items = [(ml.MAV_FRAME_GLOBAL, vertex, 0, 1, 4.0, 0.0, 0.0, 0.0, la, lo, 0.0)
-             for la, lo in square]  # fmt: skip
+    items = [
+        (ml.MAV_FRAME_GLOBAL, vertex, 0, 1, 4.0, 0.0, 0.0, 0.0, la, lo, 0.0) for la, lo in square
+    ]
     refused = _fence_upload(s, items)
     back = _fence_download(s) if not refused else None
     restored = _fence_upload(s, [_fields(m) for m in before])

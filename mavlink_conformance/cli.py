@@ -28,8 +28,11 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
     if args.hostile:
-        print("warning: --hostile sends NaN parameters; they may crash the autopilot "
-              "(ArduCopter SITL aborts on a NaN takeoff)", file=sys.stderr)  # fmt: skip
+        print(
+            "warning: --hostile sends NaN parameters; they may crash the autopilot "
+            "(ArduCopter SITL aborts on a NaN takeoff)",
+            file=sys.stderr,
+        )
     results = run_checks(
         args.address,
         sysid=args.sysid,

@@ -188,11 +188,21 @@ def plot_section3b(
     t = np.linspace(0.0, horizon, 201)
     fig, ax = plt.subplots(figsize=(7.5, 4.5))
     ax.plot(t, p_cs(t, geometry), color=_COLOURS[0], label="P_CS(t), eq. (18)")
-    ax.plot(t, confirmed_share(single.team_times, t), color=_COLOURS[0], ls="--",
-            label="simulated, single sensor (US)")  # fmt: skip
+    ax.plot(
+        t,
+        confirmed_share(single.team_times, t),
+        color=_COLOURS[0],
+        ls="--",
+        label="simulated, single sensor (US)",
+    )
     ax.plot(t, p_cm(t, geometry), color=_COLOURS[3], label="P_CM(t), eqs. (19)-(20), t_d ~ P_D")
-    ax.plot(t, confirmed_share(mdm.team_times, t), color=_COLOURS[3], ls="--",
-            label="simulated, MDM (LS+BS)")  # fmt: skip
+    ax.plot(
+        t,
+        confirmed_share(mdm.team_times, t),
+        color=_COLOURS[3],
+        ls="--",
+        label="simulated, MDM (LS+BS)",
+    )
     ax.set_xlabel("mission time t (s)")
     ax.set_ylabel("P(one UAV has confirmed a given target by t)")
     ax.set_title(

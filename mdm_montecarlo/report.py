@@ -95,8 +95,11 @@ def summary(measured: list[MeasuredRow], docs: str, claims: list[Claim]) -> list
             f"- Claims about Figs. 4-9: {held} of {len(claims)} hold "
             "([checked below](#claims-about-figs-4-9))."
         )
-    lines += ["", "Details: [means outside tolerance](#means-outside-tolerance), then every "
-              "table.", ""]  # fmt: skip
+    lines += [
+        "",
+        "Details: [means outside tolerance](#means-outside-tolerance), then every table.",
+        "",
+    ]
     return lines
 
 

@@ -13,22 +13,30 @@ class FailsafeSpec(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     position_timeout: float = Field(
-        default=2.0, gt=0, le=3600,
+        default=2.0,
+        gt=0,
+        le=3600,
         description="No valid position for this long (wall s) while flying: the vehicle is "
         "told to HOLD.",
-    )  # fmt: skip
+    )
     position_hold: float = Field(
-        default=10.0, ge=0, le=3600,
+        default=10.0,
+        ge=0,
+        le=3600,
         description="Still none after this much more HOLD (wall s): the mission ends with its "
         "end action (RTL or land), exit status 1.",
-    )  # fmt: skip
+    )
     link_wait: float = Field(
-        default=30.0, gt=0, le=86400,
+        default=30.0,
+        gt=0,
+        le=86400,
         description="A lost link (no HEARTBEAT) is waited for this long (wall s), then the "
         "companion ends with exit status 1.",
-    )  # fmt: skip
+    )
     speed_margin: float = Field(
-        default=2.0, ge=1, le=100,
+        default=2.0,
+        ge=1,
+        le=100,
         description="A position that moved faster than this times fleet.speed (plus 5 m), or "
         "reports such a velocity, is dropped.",
-    )  # fmt: skip
+    )

@@ -192,15 +192,19 @@ class SiteSpec(_Strict):
     end_action: Literal["rtl", "land"] = "rtl"
     battery_min: float = Field(default=25.0, ge=0, le=100, description="End below this, %.")
     start_margin: float = Field(
-        default=100.0, ge=0, le=1e5,
+        default=100.0,
+        ge=0,
+        le=1e5,
         description="The companion refuses to start a vehicle farther than this (m) outside "
         "the search area.",
-    )  # fmt: skip
+    )
     fence_inset: float = Field(
-        default=20.0, ge=0, le=1e4,
+        default=20.0,
+        ge=0,
+        le=1e4,
         description="Commanded points stay this far (m) inside the geofence: room for the "
         "vehicle to brake without crossing it.",
-    )  # fmt: skip
+    )
 
 
 class MissionProfile(_Strict):

@@ -76,8 +76,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--speedup", type=_speedup, default=1.0, help="sim/wall ratio; 0 or max")
     p.add_argument("--sim-step", type=float, default=0.05, help="physics step, sim s")
     p.add_argument("--telemetry-hz", type=float, default=10.0, help="streams, per sim s")
-    p.add_argument("--lockstep", action="store_true",
-                   help="hold sim time until the streaming clients' setpoints are current")  # fmt: skip
+    p.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="hold sim time until the streaming clients' setpoints are current",
+    )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--events", type=Path, help="JSON-lines ground-truth and event log")
     p.add_argument("--stats", type=Path, help="write link counters as JSON on exit")

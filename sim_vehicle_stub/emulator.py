@@ -84,9 +84,11 @@ class Emulator:
         self.scenario = Scenario.from_profile(profile)
         given = config.start_positions
         start, tracks = self.scenario.live_run(
-            config.seed, n, profile.fleet.start,
+            config.seed,
+            n,
+            profile.fleet.start,
             None if given is None else np.array(given, dtype=float).reshape(n, 2),
-        )  # fmt: skip
+        )
         self.clock = SimClock(config.speedup)
         self.events = EventLog(config.events)
         self.fleet = Fleet(start, LagModel(profile.fleet.tau), profile.fleet.speed)
@@ -166,8 +168,12 @@ class Emulator:
                 await server.start(cfg.bind_host, cfg.tcp_base + TCP_STRIDE * i)
                 self.tcp.append(server)
         self._task = asyncio.create_task(self._loop(), name="sim-loop")
-        log.info("emulator up: %d vehicles, speedup %s, MAVLink signing %s", len(self.nodes),
-                 cfg.speedup or "max", "on" if cfg.signing_key else "off")  # fmt: skip
+        log.info(
+            "emulator up: %d vehicles, speedup %s, MAVLink signing %s",
+            len(self.nodes),
+            cfg.speedup or "max",
+            "on" if cfg.signing_key else "off",
+        )
 
     @property
     def running(self) -> bool:
@@ -266,8 +272,9 @@ class Emulator:
                 except Exception:  # a bug must not stop every vehicle: log it and go on
                     self.tick_errors += 1
                     if self.tick_errors % 100 == 1:
-                        log.exception("tick at t=%.2f failed (%d so far)", self.clock.now,
-                                      self.tick_errors)  # fmt: skip
+                        log.exception(
+                            "tick at t=%.2f failed (%d so far)", self.clock.now, self.tick_errors
+                        )
                 if cfg.lockstep:
                     await self._await_setpoints()
             wait = self.clock.wait_time()
@@ -313,8 +320,12 @@ class Emulator:
                 if remaining <= 0:
                     self._silent.update(waiting)
                     for i in sorted(waiting):
-                        self.events.write(self.clock.now, "lockstep_silent", vehicle=i,
-                                          wall=self.config.lockstep_wall)  # fmt: skip
+                        self.events.write(
+                            self.clock.now,
+                            "lockstep_silent",
+                            vehicle=i,
+                            wall=self.config.lockstep_wall,
+                        )
                     return
                 self._waiting = waiting  # _deliver takes each answer off
                 held = self._held = loop.create_future()

@@ -12,8 +12,9 @@ from typing import Any
 from sim_vehicle_stub.mavlink import dialect as d
 
 FENCE = d.MAV_MISSION_TYPE_FENCE
-_FENCE_COMMANDS = frozenset(range(d.MAV_CMD_NAV_FENCE_RETURN_POINT,
-                                  d.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION + 1))  # fmt: skip
+_FENCE_COMMANDS = frozenset(
+    range(d.MAV_CMD_NAV_FENCE_RETURN_POINT, d.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION + 1)
+)
 """5000 return point, 5001/5002 polygon vertex inclusion/exclusion, 5003/5004 circles."""
 ACCEPTED: int = d.MAV_MISSION_ACCEPTED
 NO_SPACE: int = d.MAV_MISSION_NO_SPACE
@@ -63,9 +64,16 @@ class FenceStore:
         if msg.command not in _FENCE_COMMANDS:
             self._pending = None
             return None, UNSUPPORTED
-        pending.append(FenceItem(msg.command, msg.frame,
-                                 (msg.param1, msg.param2, msg.param3, msg.param4),
-                                 msg.x, msg.y, msg.z))  # fmt: skip
+        pending.append(
+            FenceItem(
+                msg.command,
+                msg.frame,
+                (msg.param1, msg.param2, msg.param3, msg.param4),
+                msg.x,
+                msg.y,
+                msg.z,
+            )
+        )
         if len(pending) < self._expected:
             return len(pending), None
         self.items, self._pending = pending, None

@@ -75,16 +75,29 @@ class MessageHandler:
         result = DENIED if mode is None else v.set_mode(mode)
         if result != ACCEPTED:
             node.stats.nacks += 1
-        node.send([d.MAVLink_command_ack_message(d.MAVLINK_MSG_ID_SET_MODE, result, 0, 0,
-                                                 msg.get_srcSystem(), msg.get_srcComponent())])  # fmt: skip
+        node.send(
+            [
+                d.MAVLink_command_ack_message(
+                    d.MAVLINK_MSG_ID_SET_MODE,
+                    result,
+                    0,
+                    0,
+                    msg.get_srcSystem(),
+                    msg.get_srcComponent(),
+                )
+            ]
+        )
 
     # ----- parameters
     def _param_value(self, node: VehicleNode, name: str) -> Any:
         table = node.vehicle.params
         return d.MAVLink_param_value_message(
-            name.encode(), table.wire_value(name), int(table.spec(name).kind), len(table),
+            name.encode(),
+            table.wire_value(name),
+            int(table.spec(name).kind),
+            len(table),
             table.index(name),
-        )  # fmt: skip
+        )
 
     def _param_list(self, node: VehicleNode, msg: Any) -> None:
         node.send([self._param_value(node, n) for n in node.vehicle.params.names()])
@@ -138,16 +151,34 @@ class MessageHandler:
     def _mission_list(self, node: VehicleNode, msg: Any) -> None:
         kind = getattr(msg, "mission_type", 0)
         count = len(self._fence(node).items) if kind == FENCE else 0
-        node.send([d.MAVLink_mission_count_message(msg.get_srcSystem(), msg.get_srcComponent(),
-                                                   count, kind)])  # fmt: skip
+        node.send(
+            [
+                d.MAVLink_mission_count_message(
+                    msg.get_srcSystem(), msg.get_srcComponent(), count, kind
+                )
+            ]
+        )
 
     def _ask_item(self, node: VehicleNode, msg: Any, seq: int) -> None:
-        node.send([d.MAVLink_mission_request_int_message(
-            msg.get_srcSystem(), msg.get_srcComponent(), seq, FENCE)])  # fmt: skip
+        node.send(
+            [
+                d.MAVLink_mission_request_int_message(
+                    msg.get_srcSystem(), msg.get_srcComponent(), seq, FENCE
+                )
+            ]
+        )
 
     def _mission_ack(self, node: VehicleNode, msg: Any, result: int) -> None:
-        node.send([d.MAVLink_mission_ack_message(msg.get_srcSystem(), msg.get_srcComponent(),
-                                                 result, getattr(msg, "mission_type", 0))])  # fmt: skip
+        node.send(
+            [
+                d.MAVLink_mission_ack_message(
+                    msg.get_srcSystem(),
+                    msg.get_srcComponent(),
+                    result,
+                    getattr(msg, "mission_type", 0),
+                )
+            ]
+        )
 
     def _mission_count(self, node: VehicleNode, msg: Any) -> None:
         if getattr(msg, "mission_type", 0) == FENCE:
@@ -201,8 +232,13 @@ class MessageHandler:
         reply[4] = 1  # size
         reply[5] = req[3]  # the opcode being refused
         reply[12] = _FTP_ERR_FAIL
-        node.send([d.MAVLink_file_transfer_protocol_message(
-            0, msg.get_srcSystem(), msg.get_srcComponent(), list(reply))])  # fmt: skip
+        node.send(
+            [
+                d.MAVLink_file_transfer_protocol_message(
+                    0, msg.get_srcSystem(), msg.get_srcComponent(), list(reply)
+                )
+            ]
+        )
 
     def _timesync(self, node: VehicleNode, msg: Any) -> None:
         if msg.tc1 == 0:

@@ -43,8 +43,9 @@ def _command(rng: np.random.Generator, target: int) -> Any:
     if rng.random() < 0.5:
         return d.MAVLink_command_long_message(target, 1, cmd, 0, *p)
     frame = int(rng.integers(0, 12))
-    return d.MAVLink_command_int_message(target, 1, frame, cmd, 0, 0, *p[:4],
-                                         _int32(p[4] * 1e7), _int32(p[5] * 1e7), p[6])  # fmt: skip
+    return d.MAVLink_command_int_message(
+        target, 1, frame, cmd, 0, 0, *p[:4], _int32(p[4] * 1e7), _int32(p[5] * 1e7), p[6]
+    )
 
 
 def _local_target(rng: np.random.Generator, target: int) -> Any:
@@ -59,8 +60,7 @@ def _global_target(rng: np.random.Generator, target: int) -> Any:
     frame = int((0, 3, 5, 6, 10, 11, 2)[int(rng.integers(7))])
     lat, lon = (int(rng.integers(-(2**31), 2**31 - 1)) for _ in range(2))
     mask = int(rng.integers(0, 4096))
-    return d.MAVLink_set_position_target_global_int_message(0, target, 1, frame, mask, lat, lon,
-                                                            *v)  # fmt: skip
+    return d.MAVLink_set_position_target_global_int_message(0, target, 1, frame, mask, lat, lon, *v)
 
 
 def _param_set(rng: np.random.Generator, target: int) -> Any:
@@ -75,20 +75,23 @@ def _set_mode(rng: np.random.Generator, target: int) -> Any:
 
 def _mission(rng: np.random.Generator, target: int) -> Any:
     if rng.random() < 0.5:
-        return d.MAVLink_mission_count_message(target, 1, int(rng.integers(0, 65536)),
-                                               int(rng.integers(0, 256)))  # fmt: skip
+        return d.MAVLink_mission_count_message(
+            target, 1, int(rng.integers(0, 65536)), int(rng.integers(0, 256))
+        )
     return d.MAVLink_mission_clear_all_message(target, 1, int(rng.integers(0, 256)))
 
 
 def _other(rng: np.random.Generator, target: int) -> Any:
     k = int(rng.integers(4))
     if k == 0:
-        return d.MAVLink_heartbeat_message(int(rng.integers(0, 40)), int(rng.integers(0, 20)),
-                                           int(rng.integers(0, 256)), 0, 0, 3)  # fmt: skip
+        return d.MAVLink_heartbeat_message(
+            int(rng.integers(0, 40)), int(rng.integers(0, 20)), int(rng.integers(0, 256)), 0, 0, 3
+        )
     if k == 1:
         q = [_f32(_value(rng)) for _ in range(4)]
-        return d.MAVLink_set_attitude_target_message(0, target, 1, int(rng.integers(0, 256)), q,
-                                                     *(_f32(_value(rng)) for _ in range(4)))  # fmt: skip
+        return d.MAVLink_set_attitude_target_message(
+            0, target, 1, int(rng.integers(0, 256)), q, *(_f32(_value(rng)) for _ in range(4))
+        )
     if k == 2:
         return d.MAVLink_timesync_message(int(rng.integers(-(2**62), 2**62)), 0)
     return d.MAVLink_param_request_read_message(target, 1, b"", int(rng.integers(-1, 32768)))

@@ -65,8 +65,15 @@ class VehicleNode:
             count = stats.signing_rejected
             if count == 10 ** (len(str(count)) - 1):
                 v = self.vehicle
-                v.events.write(v.now, "signing_rejected", vehicle=v.index, reason=verdict.value,
-                               message=msg.get_type(), source=msg.get_srcSystem(), count=count)  # fmt: skip
+                v.events.write(
+                    v.now,
+                    "signing_rejected",
+                    vehicle=v.index,
+                    reason=verdict.value,
+                    message=msg.get_type(),
+                    source=msg.get_srcSystem(),
+                    count=count,
+                )
         return out
 
     def send(self, messages: list[Any]) -> None:

@@ -52,8 +52,16 @@ class SensorWorld:
         self._next_appearance = -math.inf
         # the readout kernel compiled or loaded now, not in the first tick of a running loop
         none = np.zeros(0, dtype=np.intp)
-        readout(np.zeros((0, m), dtype=bool), np.zeros((0, m)), self._present,
-                np.zeros(0, dtype=bool), scenario.targets.false_mask, self._in_range, none, none)  # fmt: skip
+        readout(
+            np.zeros((0, m), dtype=bool),
+            np.zeros((0, m)),
+            self._present,
+            np.zeros(0, dtype=bool),
+            scenario.targets.false_mask,
+            self._in_range,
+            none,
+            none,
+        )
 
     def targets_at(self, t: float) -> FloatArray:
         if not self.tracks.moving and self._static is not None:
@@ -79,10 +87,12 @@ class SensorWorld:
         sensor = active[on]
         confirms = sensor == self.n_sensors - 1
         # contacts() broadcasts (m,)-shaped targets and presence over the vehicles
-        mask, strength = contacts(radius[on], confirms, vehicles[on], targets, present,
-                                  spec.false_mask)  # fmt: skip
-        strongest, entered = readout(mask, strength, present, confirms, spec.false_mask,
-                                     self._in_range, on, sensor)  # fmt: skip
+        mask, strength = contacts(
+            radius[on], confirms, vehicles[on], targets, present, spec.false_mask
+        )
+        strongest, entered = readout(
+            mask, strength, present, confirms, spec.false_mask, self._in_range, on, sensor
+        )
         signal = strongest.tolist()
         if entered.any():
             for row, k in zip(*np.nonzero(entered), strict=True):
@@ -107,9 +117,13 @@ class SensorWorld:
         for k in np.flatnonzero(self._present & ~self._appeared):
             self._appeared[k] = True
             self.events.write(
-                t, "target_appeared", target=int(k), north=float(targets[k, 0]),
-                east=float(targets[k, 1]), false_target=bool(spec.false_mask[k]),
-            )  # fmt: skip
+                t,
+                "target_appeared",
+                target=int(k),
+                north=float(targets[k, 0]),
+                east=float(targets[k, 1]),
+                false_target=bool(spec.false_mask[k]),
+            )
         later = spec.appear_times[~self._present]
         self._next_appearance = float(later.min()) if len(later) else math.inf
 
@@ -121,5 +135,6 @@ class SensorWorld:
         seen = self._confirmed if is_conf else self._detected
         if not seen[i, k]:
             seen[i, k] = True
-            self.events.write(t, "confirmed" if is_conf else "detected", vehicle=i, target=k,
-                              sensor=name, **where)  # fmt: skip
+            self.events.write(
+                t, "confirmed" if is_conf else "detected", vehicle=i, target=k, sensor=name, **where
+            )

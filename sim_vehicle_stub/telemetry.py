@@ -124,12 +124,14 @@ class Telemetry:
         self.builders: dict[int, Callable[[Vehicle], Any]] = {
             k: functools.partial(_message, d.mavlink_map[k], args) for k, args in self.args.items()
         }
-        self.builders.update({
-            d.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self.global_position_int,
-            d.MAVLINK_MSG_ID_LOCAL_POSITION_NED: self.local_position_ned,
-            d.MAVLINK_MSG_ID_ATTITUDE: self.attitude,
-            d.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
-        })  # fmt: skip
+        self.builders.update(
+            {
+                d.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self.global_position_int,
+                d.MAVLINK_MSG_ID_LOCAL_POSITION_NED: self.local_position_ned,
+                d.MAVLINK_MSG_ID_ATTITUDE: self.attitude,
+                d.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
+            }
+        )
 
     def _geodetic(self) -> GeoCache:
         c = self._geo

@@ -31,18 +31,35 @@ def fleet_command(args: argparse.Namespace) -> int:
     if args.gcs is not None:
         parse_gcs(args.gcs)
         if args.vehicles_file is not None or args.sitl is not None:
-            raise ValueError("--gcs forwards the emulator's vehicles; SITL and real vehicles have "
-                             "their own ground-station ports (docs/live_web.md, 'Ground station')")  # fmt: skip
+            raise ValueError(
+                "--gcs forwards the emulator's vehicles; SITL and real vehicles have "
+                "their own ground-station ports (docs/live_web.md, 'Ground station')"
+            )
     opts = FleetOptions(
-        profile=args.profile, out=out, vehicles=args.vehicles, speedup=args.speedup,
-        duration=args.duration, backend=args.backend, persona=args.persona,
-        setpoints=args.setpoints, seed=args.seed, base_port=args.base_port,
-        quiet=args.quiet or args.json, land_wait=args.land_wait, resume=args.resume,
-        mqtt_args=tuple(mqtt_argv(args)), signing_key_file=args.signing_key_file,
-        lockstep=args.lockstep, sensor_source=args.sensor_source,
-        vehicles_file=args.vehicles_file, sitl=args.sitl, sitl_speedup=args.sitl_speedup,
-        link_timeout=args.link_timeout, web=web, gcs=args.gcs,
-    )  # fmt: skip
+        profile=args.profile,
+        out=out,
+        vehicles=args.vehicles,
+        speedup=args.speedup,
+        duration=args.duration,
+        backend=args.backend,
+        persona=args.persona,
+        setpoints=args.setpoints,
+        seed=args.seed,
+        base_port=args.base_port,
+        quiet=args.quiet or args.json,
+        land_wait=args.land_wait,
+        resume=args.resume,
+        mqtt_args=tuple(mqtt_argv(args)),
+        signing_key_file=args.signing_key_file,
+        lockstep=args.lockstep,
+        sensor_source=args.sensor_source,
+        vehicles_file=args.vehicles_file,
+        sitl=args.sitl,
+        sitl_speedup=args.sitl_speedup,
+        link_timeout=args.link_timeout,
+        web=web,
+        gcs=args.gcs,
+    )
     started = time.perf_counter()
     result = run_fleet(opts)
     wall = time.perf_counter() - started
@@ -57,12 +74,15 @@ def _web_argv(args: argparse.Namespace, mqtt: bool) -> tuple[str, ...]:
     """The `companion watch` flags of --web (checked here, before anything starts)."""
     if args.web is None:
         if args.web_read_only or args.web_token_file or args.web_tiles:
-            raise ValueError("--web-read-only, --web-token-file and --web-tiles need --web "
-                             "[HOST:]PORT")  # fmt: skip
+            raise ValueError(
+                "--web-read-only, --web-token-file and --web-tiles need --web [HOST:]PORT"
+            )
         return ()
     parse_web(args.web)
     check_tiles(args.web_tiles)
     if not mqtt:
-        raise ValueError("--web shows the team from its MQTT topics and commands it over them: "
-                         "give --mqtt HOST[:PORT] (or a profile with an mqtt: section)")  # fmt: skip
+        raise ValueError(
+            "--web shows the team from its MQTT topics and commands it over them: "
+            "give --mqtt HOST[:PORT] (or a profile with an mqtt: section)"
+        )
     return ("--web", args.web, *web_argv(args))

@@ -39,9 +39,11 @@ class FlightCheck:
         """A line for the summary when the vehicle left its layer."""
         if not self.outside_layer:
             return None
-        return (f"vehicle {self.vehicle} left its altitude layer {self.layer:g} m: "
-                f"{self.outside_layer} of {self.samples} search samples more than "
-                f"{LAYER_TOLERANCE_M:g} m off (worst {self.worst_altitude} m)")  # fmt: skip
+        return (
+            f"vehicle {self.vehicle} left its altitude layer {self.layer:g} m: "
+            f"{self.outside_layer} of {self.samples} search samples more than "
+            f"{LAYER_TOLERANCE_M:g} m off (worst {self.worst_altitude} m)"
+        )
 
 
 def flight_checks(profile: MissionProfile, out: Path, vehicles: int) -> list[FlightCheck]:
@@ -51,16 +53,26 @@ def flight_checks(profile: MissionProfile, out: Path, vehicles: int) -> list[Fli
     checks = []
     for i in range(vehicles):
         layer = fleet.altitude + i * fleet.altitude_step
-        search = [r for r in read_records(out / f"mission-{i}.jsonl")
-                  if r.get("event") == "tick" and r.get("phase") == Phase.SEARCH.value
-                  and all(isinstance(r.get(k), int | float) for k in ("north", "east", "alt"))]  # fmt: skip
+        search = [
+            r
+            for r in read_records(out / f"mission-{i}.jsonl")
+            if r.get("event") == "tick"
+            and r.get("phase") == Phase.SEARCH.value
+            and all(isinstance(r.get(k), int | float) for k in ("north", "east", "alt"))
+        ]
         off = [float(r["alt"]) for r in search if abs(float(r["alt"]) - layer) > LAYER_TOLERANCE_M]
         worst = max(search, key=lambda r: abs(float(r["alt"]) - layer), default=None)
-        near = sum(fence.distance(float(r["north"]), float(r["east"])) <= NEAR_FENCE_M
-                   for r in search)  # fmt: skip
-        checks.append(FlightCheck(
-            vehicle=i, layer=layer, samples=len(search), outside_layer=len(off),
-            worst_altitude=None if worst is None else float(worst["alt"]),
-            near_fence=near / len(search) if search else None,
-        ))  # fmt: skip
+        near = sum(
+            fence.distance(float(r["north"]), float(r["east"])) <= NEAR_FENCE_M for r in search
+        )
+        checks.append(
+            FlightCheck(
+                vehicle=i,
+                layer=layer,
+                samples=len(search),
+                outside_layer=len(off),
+                worst_altitude=None if worst is None else float(worst["alt"]),
+                near_fence=near / len(search) if search else None,
+            )
+        )
     return checks

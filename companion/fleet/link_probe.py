@@ -34,8 +34,9 @@ class ProbeResult:
 
 def _probe(entry: VehicleEntry, timeout: float) -> ProbeResult:
     try:
-        conn = mavutil.mavlink_connection(entry.link, source_system=245, source_component=191,
-                                          autoreconnect=False)  # fmt: skip
+        conn = mavutil.mavlink_connection(
+            entry.link, source_system=245, source_component=191, autoreconnect=False
+        )
     except (OSError, ValueError) as exc:
         return ProbeResult(refusal=f"link {entry.link} cannot be opened: {exc}")
     try:
@@ -53,8 +54,9 @@ def _listen(conn: mavutil.mavfile, entry: VehicleEntry, timeout: float) -> Probe
     while time.monotonic() < heard_until:
         try:
             conn.mav.heartbeat_send(_GCS, 8, 0, 0, 0)  # a GCS-like peer: PX4 and ArduPilot answer
-            msg = conn.recv_match(type=["HEARTBEAT", "EXTENDED_SYS_STATE"], blocking=True,
-                                  timeout=0.5)  # fmt: skip
+            msg = conn.recv_match(
+                type=["HEARTBEAT", "EXTENDED_SYS_STATE"], blocking=True, timeout=0.5
+            )
         except OSError as exc:
             return ProbeResult(refusal=f"link {entry.link} failed: {exc}")
         if msg is None:
@@ -72,12 +74,15 @@ def _listen(conn: mavutil.mavfile, entry: VehicleEntry, timeout: float) -> Probe
             break
     if beat is None:
         others = f"heard systems {sorted(heard)}" if heard else "heard nothing"
-        return ProbeResult(refusal=f"no autopilot HEARTBEAT from system {entry.system_id} on "
-                                   f"{entry.link} within {timeout:g} s ({others})")  # fmt: skip
+        return ProbeResult(
+            refusal=f"no autopilot HEARTBEAT from system {entry.system_id} on "
+            f"{entry.link} within {timeout:g} s ({others})"
+        )
     autopilot = _AUTOPILOTS[beat.autopilot]
     if entry.autopilot is not None and entry.autopilot != autopilot:
-        return ProbeResult(autopilot, f"the file says autopilot {entry.autopilot}, its HEARTBEAT "
-                                      f"says {autopilot}")  # fmt: skip
+        return ProbeResult(
+            autopilot, f"the file says autopilot {entry.autopilot}, its HEARTBEAT says {autopilot}"
+        )
     if beat.base_mode & _ARMED:
         return ProbeResult(autopilot, "already armed: land and disarm it before a fleet start")
     if landed is not None and landed not in (0, 1):

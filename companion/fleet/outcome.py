@@ -64,8 +64,11 @@ def vehicle_end(out: Path, vehicle: int, exit_code: int | None, earlier: str | N
     if reason is not None and exits and exits[-1].status != 0:  # how the vehicle was left
         cause = exits[-1].cause
         reason = cause if cause.startswith(reason) else f"{reason}: {cause}"
-    strays = tuple(f"{r.get('address')} (locked to {r.get('locked')})" for r in read_records(path)
-                   if r.get("event") == "stray")  # fmt: skip
+    strays = tuple(
+        f"{r.get('address')} (locked to {r.get('locked')})"
+        for r in read_records(path)
+        if r.get("event") == "stray"
+    )
     if exit_code is None:
         how = f"{earlier or reason} (earlier run)"
         ok = (earlier or reason) in NORMAL_ENDS

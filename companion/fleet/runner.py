@@ -138,8 +138,9 @@ def run_fleet(o: FleetOptions) -> FleetResult:
     # a bad key or a backend that cannot sign fails here, not in every process
     check_signing_support(o.backend, load_signing_key(o.signing_key_file))
     size = team_size(o, profile)
-    plan = plan_fleet(o if size is None else replace(o, vehicles=size), profile,
-                      emulator=not is_real(o))  # fmt: skip
+    plan = plan_fleet(
+        o if size is None else replace(o, vehicles=size), profile, emulator=not is_real(o)
+    )
     if plan.ports is None:
         team = open_team(o, profile, plan.vehicles)
         try:
@@ -168,8 +169,12 @@ def _fly(
     if plan.ports is not None:
         # present from the start, so a run whose emulator never wrote is scored (nothing in range)
         (o.out / EMULATOR_EVENTS).touch()
-        emulator = processes.start(emulator_command(o, plan.vehicles, plan.ports.base),
-                                   o.out / "emulator.log", env, append=o.resume)  # fmt: skip
+        emulator = processes.start(
+            emulator_command(o, plan.vehicles, plan.ports.base),
+            o.out / "emulator.log",
+            env,
+            append=o.resume,
+        )
     companions: dict[int, subprocess.Popen[bytes]] = {}
     stopped = _Stopped()
     requests = StopRequests()
@@ -177,10 +182,16 @@ def _fly(
         try:
             for i in plan.start:
                 companions[i] = processes.start(
-                    companion_command(o, i, plan.ports.base if plan.ports else 0,
-                                      team.entries[i] if team else None),
-                    o.out / f"companion-{i}.log", env, append=o.resume,
-                )  # fmt: skip
+                    companion_command(
+                        o,
+                        i,
+                        plan.ports.base if plan.ports else 0,
+                        team.entries[i] if team else None,
+                    ),
+                    o.out / f"companion-{i}.log",
+                    env,
+                    append=o.resume,
+                )
             stopped = _watch(o, profile, plan, companions, emulator, requests, team)
         finally:
             if stopped.at_once or any(p.poll() is None for p in companions.values()):
@@ -192,19 +203,32 @@ def _fly(
     return _finish(o, profile, plan, companions, emulator, stopped, started)
 
 
-def _write_run_file(o: FleetOptions, profile: MissionProfile, plan: FleetPlan,
-                    team: Team | None) -> None:  # fmt: skip
+def _write_run_file(
+    o: FleetOptions, profile: MissionProfile, plan: FleetPlan, team: Team | None
+) -> None:
     run = {
-        "profile": profile.name, "profile_arg": o.profile, "vehicles": plan.vehicles,
-        "seed": o.seed, "duration": o.duration, "speedup": o.speedup, "backend": o.backend,
-        "persona": o.persona, "base_port": plan.ports.base if plan.ports else None,
-        "started": time.time(), "resumed_vehicles": list(plan.start) if o.resume else None,
-    }  # fmt: skip
+        "profile": profile.name,
+        "profile_arg": o.profile,
+        "vehicles": plan.vehicles,
+        "seed": o.seed,
+        "duration": o.duration,
+        "speedup": o.speedup,
+        "backend": o.backend,
+        "persona": o.persona,
+        "base_port": plan.ports.base if plan.ports else None,
+        "started": time.time(),
+        "resumed_vehicles": list(plan.start) if o.resume else None,
+    }
     if team is not None:
-        run |= {"vehicles_file": str(o.vehicles_file) if o.vehicles_file else None,
-                "sitl": o.sitl, "sitl_speedup": o.sitl_speedup if o.sitl else None,
-                "team": [e.model_dump() | {"heard_autopilot": team.autopilots[i]}
-                         for i, e in sorted(team.entries.items())]}  # fmt: skip
+        run |= {
+            "vehicles_file": str(o.vehicles_file) if o.vehicles_file else None,
+            "sitl": o.sitl,
+            "sitl_speedup": o.sitl_speedup if o.sitl else None,
+            "team": [
+                e.model_dump() | {"heard_autopilot": team.autopilots[i]}
+                for i, e in sorted(team.entries.items())
+            ],
+        }
     if o.resume:  # keep the first run's description; note the restart beside it
         earlier = json.loads((o.out / RUN_FILE).read_text(encoding="utf-8"))
         run = earlier | {"resumes": [*earlier.get("resumes", []), run]}
@@ -247,24 +271,29 @@ def _watch(
         if team is not None:
             _lose_vehicles(o, team, companions, stopped, silent_since, now)
         if emulator is not None and emulator.poll() is not None:
-            log.error("the emulator exited (code %s); see %s", emulator.returncode,
-                      o.out / "emulator.log")  # fmt: skip
+            log.error(
+                "the emulator exited (code %s); see %s", emulator.returncode, o.out / "emulator.log"
+            )
             stopped.by = stopped.by or "the emulator's exit"
             stopped.emulator_early = True
             return stopped
         if stop_at is None and (requests.count or now - started > o.wall_limit):
             stopped.by = requests.signal_name if requests.count else "wall limit"
             stop_at = now
-            _say(f"fleet: {stopped.by}: every vehicle flies its end action; waiting for the "
-                 "companions and the landing (Ctrl-C again to stop at once)")  # fmt: skip
+            _say(
+                f"fleet: {stopped.by}: every vehicle flies its end action; waiting for the "
+                "companions and the landing (Ctrl-C again to stop at once)"
+            )
             for p in companions.values():
                 processes.signal_one(p, signal.SIGINT)
             stopped.signalled = True
         alive = {i: p for i, p in companions.items() if p.poll() is None}
         if alive:
             if stop_at is not None and now - stop_at > grace:
-                _say(f"fleet: companions of vehicles {sorted(alive)} still running "
-                     f"{grace:.0f} s after the stop; stopping them at once")  # fmt: skip
+                _say(
+                    f"fleet: companions of vehicles {sorted(alive)} still running "
+                    f"{grace:.0f} s after the stop; stopping them at once"
+                )
                 stopped.at_once = True
                 return stopped
             if now - last_look >= 2.0:
@@ -300,8 +329,10 @@ def _watch(
         if land_by is None:
             wall = o.land_wait / o.speedup if o.speedup > 0 else o.land_wait / 50.0
             land_by = now + wall
-            _say(f"fleet: waiting up to {wall:.0f} s wall ({o.land_wait:.0f} sim s) for "
-                 f"{len(flying)} vehicle(s) to land: {flying}")  # fmt: skip
+            _say(
+                f"fleet: waiting up to {wall:.0f} s wall ({o.land_wait:.0f} sim s) for "
+                f"{len(flying)} vehicle(s) to land: {flying}"
+            )
         elif now > land_by:
             _say(f"fleet: still in the air after {o.land_wait:.0f} sim s: {flying}")
             return stopped
@@ -322,12 +353,17 @@ def _lose_vehicles(
     for member in team.sitl:
         code = member.process.poll()
         if code is not None:
-            causes[member.entry.index] = (f"its {member.entry.autopilot} SITL process exited"
-                                          f"{exit_words(code)} (log {member.log})")  # fmt: skip
+            causes[member.entry.index] = (
+                f"its {member.entry.autopilot} SITL process exited"
+                f"{exit_words(code)} (log {member.log})"
+            )
     for i, since in silent_since.items():
         if now - since > o.link_timeout:
-            causes.setdefault(i, f"link lost: no HEARTBEAT on {team.entries[i].link} for "
-                                 f"{o.link_timeout:g} s after every other vehicle ended")  # fmt: skip
+            causes.setdefault(
+                i,
+                f"link lost: no HEARTBEAT on {team.entries[i].link} for "
+                f"{o.link_timeout:g} s after every other vehicle ended",
+            )
     for i, cause in causes.items():
         if i in stopped.lost:
             continue
@@ -352,8 +388,10 @@ def _end_hung(
             continue
         since = done_at.setdefault(i, now)
         if now - since > _EXIT_GRACE_S:
-            _say(f"fleet: vehicle {i}'s companion still running {_EXIT_GRACE_S:.0f} s after its "
-                 f"mission ended; killing it (its tasks: {o.out / f'companion-{i}.log'})")  # fmt: skip
+            _say(
+                f"fleet: vehicle {i}'s companion still running {_EXIT_GRACE_S:.0f} s after its "
+                f"mission ended; killing it (its tasks: {o.out / f'companion-{i}.log'})"
+            )
             processes.signal_one(p, signal.SIGUSR1)  # `companion run` logs its asyncio tasks
             processes.wait_all([p], 1.0)
             processes.kill_group(p)
@@ -369,8 +407,9 @@ def _progress(
 ) -> str:
     for i, p in companions.items():
         views[i].failed = p.poll() not in (None, 0)
-    found = score(profile, o.out, plan.vehicles, o.duration,
-                  virtual_seed=_virtual_seed(o, profile)).tnc  # fmt: skip
+    found = score(
+        profile, o.out, plan.vehicles, o.duration, virtual_seed=_virtual_seed(o, profile)
+    ).tnc
     return progress_line(views, found, real)
 
 
@@ -402,16 +441,19 @@ def _finish(
     stopped: _Stopped,
     started: float,
 ) -> FleetResult:
-    result = score(profile, o.out, plan.vehicles, o.duration,
-                   virtual_seed=_virtual_seed(o, profile))  # fmt: skip
+    result = score(
+        profile, o.out, plan.vehicles, o.duration, virtual_seed=_virtual_seed(o, profile)
+    )
     result.ends = [
-        vehicle_end(o.out, i, companions[i].returncode if i in companions else None,
-                    plan.earlier.get(i))
+        vehicle_end(
+            o.out, i, companions[i].returncode if i in companions else None, plan.earlier.get(i)
+        )
         for i in range(plan.vehicles)
-    ]  # fmt: skip
+    ]
     for i, cause in stopped.lost.items():
-        result.ends[i] = replace(result.ends[i], how=f"lost: {cause}; {result.ends[i].how}",
-                                 ok=False)  # fmt: skip
+        result.ends[i] = replace(
+            result.ends[i], how=f"lost: {cause}; {result.ends[i].how}", ok=False
+        )
     if emulator is not None:
         result.ends.append(emulator_end(o.out, emulator.returncode, stopped.emulator_early))
     result.flight_checks = flight_checks(profile, o.out, plan.vehicles)

@@ -130,8 +130,11 @@ def _confirmations(path: Path) -> tuple[list[tuple[float, float, np.ndarray]], s
     north/east) in log order, and its last end reason (None: it never ended)."""
     logged = read_log(path)
     start = logged.search_start or 0.0
-    out = [(e.t, e.t - start, np.array([e.event.north, e.event.east], dtype=float))
-           for e in logged.events if isinstance(e.event, events.Confirmation)]  # fmt: skip
+    out = [
+        (e.t, e.t - start, np.array([e.event.north, e.event.east], dtype=float))
+        for e in logged.events
+        if isinstance(e.event, events.Confirmation)
+    ]
     end = logged.end()
     return out, None if end is None else end.reason
 
@@ -249,8 +252,9 @@ def _score_virtual(
             gaps = np.linalg.norm(tracks.positions(run, np.array([at]))[0] - where, axis=1)
             k = int(np.argmin(gaps))
             ok = bool(real[k] and gaps[k] <= radius)
-            found.append(Confirmation(i, t, float(where[0]), float(where[1]), k,
-                                      float(gaps[k]), ok))  # fmt: skip
+            found.append(
+                Confirmation(i, t, float(where[0]), float(where[1]), k, float(gaps[k]), ok)
+            )
             if ok:
                 per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
     return _result(profile, log_dir, vehicles, duration, per_vehicle, real, found, reasons)

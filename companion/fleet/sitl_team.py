@@ -194,8 +194,14 @@ def _start(
 ) -> SitlVehicle:
     workdir = out / f"sitl-{vehicle}"
     workdir.mkdir(parents=True, exist_ok=True)
-    cmd = [str(folder / _SCRIPT[kind]), str(index), "--dir", str(workdir),
-           "--speedup", f"{speedup:g}"]  # fmt: skip
+    cmd = [
+        str(folder / _SCRIPT[kind]),
+        str(index),
+        "--dir",
+        str(workdir),
+        "--speedup",
+        f"{speedup:g}",
+    ]
     if kind == "arducopter":
         pack = workdir / "rehearsal.parm"
         pack.write_text(f"BATT_CAPACITY {ARDUCOPTER_PACK_MAH}\n")
@@ -205,8 +211,9 @@ def _start(
     log = out / f"sitl-{vehicle}.log"
     # its own process group, and SIGTERM when the fleet dies without stopping it
     process = processes.start(cmd, log, dict(os.environ), append=False)
-    entry = VehicleEntry(index=vehicle, link=_link(kind, index), system_id=index + 1,
-                         autopilot=kind)  # fmt: skip
+    entry = VehicleEntry(
+        index=vehicle, link=_link(kind, index), system_id=index + 1, autopilot=kind
+    )
     member = SitlVehicle(entry, process, log)
     # Ready to probe once it holds its link's port (a probing connection would take
     # ArduCopter's one client slot on SERIAL0 too early).
@@ -215,7 +222,9 @@ def _start(
     while ports_free(*watch):
         if process.poll() is not None or time.monotonic() > deadline:
             member.stop()
-            raise FleetInputError(f"--sitl: the {kind} SITL of vehicle {vehicle} did not start "
-                                  f"within {_BIND_S:g} s (its output: {log})")  # fmt: skip
+            raise FleetInputError(
+                f"--sitl: the {kind} SITL of vehicle {vehicle} did not start "
+                f"within {_BIND_S:g} s (its output: {log})"
+            )
         time.sleep(0.2)
     return member

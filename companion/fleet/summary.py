@@ -68,8 +68,10 @@ def summary_lines(r: FleetResult, out: Path, wall: float) -> list[str]:
         f"  false confirmations: {r.false_confirmations}",
     ]
     for c in r.confirmations:
-        lines.append(f"    vehicle {c.vehicle} t={c.time:7.1f} s target T{c.target + 1} "
-                     f"({c.north:.0f}, {c.east:.0f}) {c.distance:.0f} m off")  # fmt: skip
+        lines.append(
+            f"    vehicle {c.vehicle} t={c.time:7.1f} s target T{c.target + 1} "
+            f"({c.north:.0f}, {c.east:.0f}) {c.distance:.0f} m off"
+        )
     if r.complete:
         reasons = sorted({e.how for e in r.ends if e.name != "emulator"})
         lines.append(f"  complete: every vehicle ended normally ({', '.join(reasons)})")
@@ -85,7 +87,8 @@ def summary_lines(r: FleetResult, out: Path, wall: float) -> list[str]:
     lines.extend(_check_lines(r))
     for e in r.ends:
         for stray in e.strays:
-            lines.append(f"  stray: {e.name} heard another sender with its system id, "
-                         f"{stray}; ignored")  # fmt: skip
+            lines.append(
+                f"  stray: {e.name} heard another sender with its system id, {stray}; ignored"
+            )
     lines.append(f"  results: {out / 'results.json'}")
     return lines

@@ -43,12 +43,15 @@ def team_size(o: FleetOptions, profile: MissionProfile) -> int | None:
     if o.vehicles_file is None:
         return None
     if o.sitl is not None:
-        raise FleetInputError("--vehicles-file and --sitl: choose one (a file lists vehicles "
-                              "that run already; --sitl starts its own)")  # fmt: skip
+        raise FleetInputError(
+            "--vehicles-file and --sitl: choose one (a file lists vehicles "
+            "that run already; --sitl starts its own)"
+        )
     entries = load_vehicles_file(o.vehicles_file, profile)
     if o.vehicles is not None and o.vehicles != len(entries):
-        raise FleetInputError(f"--vehicles {o.vehicles}: --vehicles-file {o.vehicles_file} "
-                              f"lists {len(entries)}")  # fmt: skip
+        raise FleetInputError(
+            f"--vehicles {o.vehicles}: --vehicles-file {o.vehicles_file} lists {len(entries)}"
+        )
     return len(entries)
 
 

@@ -40,8 +40,11 @@ def start_page(
         lines = log.read_text(encoding="utf-8", errors="replace").splitlines()
         address = next((line for line in lines if line.startswith("web: http")), None)
         if address is not None:
-            print(f"fleet: live page {address.removeprefix('web: ')} (log {log})",
-                  file=sys.stderr, flush=True)  # fmt: skip
+            print(
+                f"fleet: live page {address.removeprefix('web: ')} (log {log})",
+                file=sys.stderr,
+                flush=True,
+            )
             return page
         if page.poll() is not None:
             last = lines[-1] if lines else "(no output)"

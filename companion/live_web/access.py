@@ -47,8 +47,11 @@ class Access:
         if self.token is None:
             return
         if not given:
-            raise AccessError(401, "a token is required for commands on this bind address "
-                                   "(the one printed at start, --web-token-file or $MDM_WEB_TOKEN)")  # fmt: skip
+            raise AccessError(
+                401,
+                "a token is required for commands on this bind address "
+                "(the one printed at start, --web-token-file or $MDM_WEB_TOKEN)",
+            )
         if not hmac.compare_digest(given.encode(), self.token.encode()):
             raise AccessError(401, "wrong token")
 
@@ -65,8 +68,10 @@ def resolve_access(host: str, *, read_only: bool, token_file: Path | None) -> tu
             raise ValueError(f"--web-token-file {token_file}: {exc.strerror}") from None
         token = lines[0].strip() if lines else ""
         if len(token) < 16:
-            raise ValueError(f"--web-token-file {token_file}: the first line must hold a token "
-                             "of at least 16 characters")  # fmt: skip
+            raise ValueError(
+                f"--web-token-file {token_file}: the first line must hold a token "
+                "of at least 16 characters"
+            )
     elif os.environ.get(TOKEN_ENV):
         token = os.environ[TOKEN_ENV]
         if len(token) < 16:

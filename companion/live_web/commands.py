@@ -26,18 +26,25 @@ def watch_command(args: argparse.Namespace) -> int:
     profile = load_profile(args.profile)
     spec = mqtt_spec(args, profile.mqtt)
     if spec is None:
-        raise ValueError("companion watch reads the team's MQTT topics: give --mqtt HOST[:PORT] "
-                         "(or a profile with an mqtt: section)")  # fmt: skip
+        raise ValueError(
+            "companion watch reads the team's MQTT topics: give --mqtt HOST[:PORT] "
+            "(or a profile with an mqtt: section)"
+        )
     if not args.stale_after > 0:
         raise ValueError(f"--stale-after {args.stale_after}: must be > 0 wall s")
     host, port = parse_web(args.web)
-    access, generated = resolve_access(host, read_only=args.web_read_only,
-                                       token_file=args.web_token_file)  # fmt: skip
+    access, generated = resolve_access(
+        host, read_only=args.web_read_only, token_file=args.web_token_file
+    )
     state = FleetState(profile, show_targets=args.show_targets, stale_after=args.stale_after)
     feed = MqttFeed(settings_for(spec, 0), spec.topic_prefix or default_prefix(profile.name), state)
     vehicles = args.vehicles or profile.fleet.vehicles
-    shown = scene(profile, vehicles=vehicles, show_targets=args.show_targets,
-                  tiles=check_tiles(args.web_tiles))  # fmt: skip
+    shown = scene(
+        profile,
+        vehicles=vehicles,
+        show_targets=args.show_targets,
+        tiles=check_tiles(args.web_tiles),
+    )
     page = LivePage(shown, access, state=state, feed=feed, clock=time.time)
     asyncio.run(serve(page, host, port, token_printed=generated))
     return 0
@@ -48,8 +55,9 @@ def replay_command(run_dir: Path, profile: MissionProfile, web: str, tiles: str 
     host, port = parse_web(web)
     replay = Replay(run_dir, profile, show_targets=True)
     access, _ = resolve_access(host, read_only=True, token_file=None)
-    shown = scene(profile, vehicles=len(replay.vehicles), show_targets=True,
-                  tiles=check_tiles(tiles))  # fmt: skip
+    shown = scene(
+        profile, vehicles=len(replay.vehicles), show_targets=True, tiles=check_tiles(tiles)
+    )
     page = LivePage(shown, access, replay=replay)
     if not is_loopback(host):
         print(f"web: serving {run_dir} beyond loopback, read-only", flush=True)

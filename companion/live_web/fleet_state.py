@@ -151,8 +151,15 @@ class FleetState:
         v.t = max(v.t, t)
         kind = record.get("event")
         if kind == "tick":
-            self.on_state(i, {k: record[k] for k in ("north", "east", "alt", "phase", "level",
-                                                     "found") if k in record}, v.heard or 0.0)  # fmt: skip
+            self.on_state(
+                i,
+                {
+                    k: record[k]
+                    for k in ("north", "east", "alt", "phase", "level", "found")
+                    if k in record
+                },
+                v.heard or 0.0,
+            )
         elif kind == "phase" and isinstance(record.get("phase"), str):
             v.phase = record["phase"]
         elif kind == "mode" and isinstance(record.get("mode"), str):
@@ -210,15 +217,29 @@ class FleetState:
             start = sent_track.get(i, 0)
             sent_track[i] = len(v.track)
             age = None if v.heard is None else max(0.0, now - v.heard)
-            vehicles.append({
-                "vehicle": i, "t": round(v.t, 1), "north": v.north, "east": v.east,
-                "alt": v.alt, "mode": v.mode, "armed": v.armed, "phase": v.phase,
-                "level": v.level, "ci": v.ci, "found": v.found, "battery": v.battery,
-                "age": None if age is None else round(age, 1), "online": v.online,
-                "stale": math.isfinite(self.stale_after)
-                and (v.online is False or age is None or age > self.stale_after),
-                "end": v.end, "track_from": start, "track": v.track[start:],
-            })  # fmt: skip
+            vehicles.append(
+                {
+                    "vehicle": i,
+                    "t": round(v.t, 1),
+                    "north": v.north,
+                    "east": v.east,
+                    "alt": v.alt,
+                    "mode": v.mode,
+                    "armed": v.armed,
+                    "phase": v.phase,
+                    "level": v.level,
+                    "ci": v.ci,
+                    "found": v.found,
+                    "battery": v.battery,
+                    "age": None if age is None else round(age, 1),
+                    "online": v.online,
+                    "stale": math.isfinite(self.stale_after)
+                    and (v.online is False or age is None or age > self.stale_after),
+                    "end": v.end,
+                    "track_from": start,
+                    "track": v.track[start:],
+                }
+            )
         return {
             "type": "snapshot",
             "clock": round(max((v.t for v in self.vehicles.values()), default=0.0), 1),

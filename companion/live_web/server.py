@@ -101,8 +101,9 @@ async def _errors(
 def _file_handler(name: str) -> Callable[[web.Request], Awaitable[web.Response]]:
     async def serve(_: web.Request) -> web.Response:
         body = (_STATIC / name).read_bytes()
-        return web.Response(body=body, content_type=_STATIC_FILES[name],
-                            headers={"Cache-Control": "no-store"})  # fmt: skip
+        return web.Response(
+            body=body, content_type=_STATIC_FILES[name], headers={"Cache-Control": "no-store"}
+        )
 
     return serve
 
@@ -122,8 +123,11 @@ async def _command(page: LivePage, request: web.Request) -> web.Response:
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise AccessError(400, f"request body: not JSON ({exc})") from None
     if not isinstance(body, dict) or set(body) - {"vehicle", "command"}:
-        raise AccessError(400, 'request body: expected {"vehicle": I or "all", "command": '
-                               f"one of {', '.join(COMMANDS)}}}")  # fmt: skip
+        raise AccessError(
+            400,
+            'request body: expected {"vehicle": I or "all", "command": '
+            f"one of {', '.join(COMMANDS)}}}",
+        )
     command, vehicle = body.get("command"), body.get("vehicle")
     if command not in COMMANDS:
         raise AccessError(400, f"command {command!r}: expected one of {', '.join(COMMANDS)}")

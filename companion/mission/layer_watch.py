@@ -56,8 +56,13 @@ class LayerWatch:
         state = "outside" if off else "back"
         v = self.m.config.vehicle
         if off:
-            log.warning("vehicle %d outside its altitude layer: %.1f m above home, layer %g m "
-                        "(+-%g m)", v, altitude, layer, LAYER_TOLERANCE_M)  # fmt: skip
+            log.warning(
+                "vehicle %d outside its altitude layer: %.1f m above home, layer %g m (+-%g m)",
+                v,
+                altitude,
+                layer,
+                LAYER_TOLERANCE_M,
+            )
         else:
             log.warning("vehicle %d back in its altitude layer %g m (%.1f m)", v, layer, altitude)
         self.m.record(events.AltitudeLayer(state, round(altitude, 1), layer, LAYER_TOLERANCE_M))
