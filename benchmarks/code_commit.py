@@ -9,6 +9,10 @@ from pathlib import Path
 
 def commit_of(where: Path | str, form: str = "%h") -> str:
     """``git log -1 --format=form`` of the checkout at ``where``; 'unknown (where)' outside one."""
-    done = subprocess.run(["git", "-C", str(where), "log", "-1", f"--format={form}"],
-                          capture_output=True, text=True, check=False)  # fmt: skip
+    done = subprocess.run(
+        ["git", "-C", str(where), "log", "-1", f"--format={form}"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     return done.stdout.strip() or f"unknown ({where})"

@@ -121,12 +121,18 @@ def main() -> None:
     if prof is not None:
         prof.dump_stats(args.profile)
     n = args.answers - 1  # the first answer is not timed
-    print(json.dumps({
-        "answers": n, "cpu_us_per_answer": round(cpu / n * 1e6, 1),
-        "wall_us_per_answer": round(wall / n * 1e6, 1),
-        "cpu_s_per_sim_s_at_10_hz": round(cpu / n * 10, 5),
-        "profiled": prof is not None, "load_average_1min": round(os.getloadavg()[0], 2),
-    }))  # fmt: skip
+    print(
+        json.dumps(
+            {
+                "answers": n,
+                "cpu_us_per_answer": round(cpu / n * 1e6, 1),
+                "wall_us_per_answer": round(wall / n * 1e6, 1),
+                "cpu_s_per_sim_s_at_10_hz": round(cpu / n * 10, 5),
+                "profiled": prof is not None,
+                "load_average_1min": round(os.getloadavg()[0], 2),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

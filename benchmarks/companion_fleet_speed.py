@@ -104,8 +104,12 @@ class CpuSampler:
         """CPU seconds of vehicle ``vehicle``'s companion between the first sample at or after
         wall time w0 and the last at or before w1 (None without two such samples)."""
         pids = [pid for pid, v in self.vehicle.items() if v == vehicle]
-        inside = [(wall, seen[pid][1]) for wall, seen in self.samples
-                  for pid in pids if pid in seen and w0 <= wall <= w1]  # fmt: skip
+        inside = [
+            (wall, seen[pid][1])
+            for wall, seen in self.samples
+            for pid in pids
+            if pid in seen and w0 <= wall <= w1
+        ]
         return inside[-1][1] - inside[0][1] if len(inside) > 1 else None
 
 
@@ -129,11 +133,18 @@ def main() -> None:
     p.add_argument("--speedup", type=float, default=100.0)
     p.add_argument("--duration", type=float, default=600.0)
     p.add_argument("--backend", default="pymavlink")
-    p.add_argument("--lockstep", action="store_true",
-                   help="FleetOptions(lockstep=True): the emulator waits for every setpoint")  # fmt: skip
+    p.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="FleetOptions(lockstep=True): the emulator waits for every setpoint",
+    )
     p.add_argument("--base-port", type=int, default=37540)
-    p.add_argument("--out", type=Path, default=Path("runs/bench-fleet"),
-                   help="a new run directory is made under it for every run")  # fmt: skip
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=Path("runs/bench-fleet"),
+        help="a new run directory is made under it for every run",
+    )
     args = p.parse_args()
     # A fresh directory: companions finding an ended mission log would not fly again.
     args.out = args.out / time.strftime("%Y%m%d-%H%M%S")
@@ -178,24 +189,31 @@ def main() -> None:
         usage = {
             "cpu_s_per_sim_s_emulator": round(emu, 5),
             "cpu_s_per_sim_s_companion_mean": round(float(comps.mean()), 5) if len(comps) else None,
-            "cpu_s_per_sim_s_companion_own_search_mean": round(float(np.mean(own)), 5) if own else None,
+            "cpu_s_per_sim_s_companion_own_search_mean": round(float(np.mean(own)), 5)
+            if own
+            else None,
             "cpu_us_per_answer_own_search": round(float(np.mean(own)) * 1e5, 1) if own else None,
             "cpu_s_per_sim_s_total": round(total, 5),
             "bound_2_cores": round(2.0 / total, 1) if total > 0 else None,
             "bound_emulator_core": round(1.0 / emu, 1) if emu > 0 else None,
-        }  # fmt: skip
+        }
     out = {
-        "code": commit_of(Path(companion.__file__).resolve().parent.parent), "vehicles": args.vehicles, "backend": args.backend, "speedup_requested": args.speedup,
+        "code": commit_of(Path(companion.__file__).resolve().parent.parent),
+        "vehicles": args.vehicles,
+        "backend": args.backend,
+        "speedup_requested": args.speedup,
         "lockstep": args.lockstep or args.speedup <= 0,
-        "sim_wall_ratio_search": round(ratio, 1), "wall_total_s": round(wall_total, 1),
+        "sim_wall_ratio_search": round(ratio, 1),
+        "wall_total_s": round(wall_total, 1),
         **usage,
         "latency_p50_ms_median": round(float(np.median(p50)), 3) if p50 else None,
         "latency_p99_ms_worst": round(float(np.max(p99)), 3) if p99 else None,
         "setpoints_per_sim_s_min": round(min(r for r, _ in rates), 2) if rates else None,
         "setpoint_gap_max_sim_s": round(max(g for _, g in rates), 2) if rates else None,
         "load_average_1min": round(os.getloadavg()[0], 2),
-        "tnc": result.tnc, "false_confirmations": result.false_confirmations,
-    }  # fmt: skip
+        "tnc": result.tnc,
+        "false_confirmations": result.false_confirmations,
+    }
     print(json.dumps(out))
 
 

@@ -43,14 +43,19 @@ def main() -> None:
 
     profile = load_profile(args.profile)
     short = profile.model_copy(
-        update={"mission": profile.mission.model_copy(update={"duration": args.duration,
-                                                                "ts_cap": args.duration})}
-    )  # fmt: skip
+        update={
+            "mission": profile.mission.model_copy(
+                update={"duration": args.duration, "ts_cap": args.duration}
+            )
+        }
+    )
     started = time.perf_counter()
     res = run_block(short, seed=12345, block=0, n_runs=args.batch)
     batch = confirmed_within(team_times(res.per_vehicle), args.duration).astype(float)
-    print(f"batch: {args.batch} runs in {time.perf_counter() - started:.1f} s, "
-          f"mean T_nc {batch.mean():.3f}")  # fmt: skip
+    print(
+        f"batch: {args.batch} runs in {time.perf_counter() - started:.1f} s, "
+        f"mean T_nc {batch.mean():.3f}"
+    )
 
     live: list[float] = []
     for seed in range(args.first_seed, args.first_seed + args.live):
@@ -59,27 +64,43 @@ def main() -> None:
             r = json.loads(done.read_text())
             tnc, false, reasons = r["tnc"], r["false_confirmations"], r["end_reasons"].values()
         else:
-            fleet = run_fleet(FleetOptions(profile=args.profile, out=args.out / f"seed-{seed}",
-                                           speedup=args.speedup, duration=args.duration,
-                                           seed=seed, base_port=args.base_port,
-                                           lockstep=args.lockstep))  # fmt: skip
+            fleet = run_fleet(
+                FleetOptions(
+                    profile=args.profile,
+                    out=args.out / f"seed-{seed}",
+                    speedup=args.speedup,
+                    duration=args.duration,
+                    seed=seed,
+                    base_port=args.base_port,
+                    lockstep=args.lockstep,
+                )
+            )
             tnc, false = fleet.tnc, fleet.false_confirmations
             reasons = fleet.end_reasons.values()
         live.append(float(tnc))
-        print(f"live seed {seed}: T_nc {tnc}, false confirmations {false}, "
-              f"ends {sorted(set(reasons))}", flush=True)  # fmt: skip
+        print(
+            f"live seed {seed}: T_nc {tnc}, false confirmations {false}, "
+            f"ends {sorted(set(reasons))}",
+            flush=True,
+        )
     u = stats.mannwhitneyu(live, batch, alternative="two-sided")
     ks = stats.ks_2samp(live, batch)
     out = {
-        "profile": args.profile, "duration": args.duration,
-        "n_live": len(live), "n_batch": len(batch),
-        "mean_live": float(np.mean(live)), "mean_batch": float(batch.mean()),
-        "live": live, "mannwhitney_u": float(u.statistic), "mannwhitney_p": float(u.pvalue),
-        "ks_d": float(ks.statistic), "ks_p": float(ks.pvalue),
+        "profile": args.profile,
+        "duration": args.duration,
+        "n_live": len(live),
+        "n_batch": len(batch),
+        "mean_live": float(np.mean(live)),
+        "mean_batch": float(batch.mean()),
+        "live": live,
+        "mannwhitney_u": float(u.statistic),
+        "mannwhitney_p": float(u.pvalue),
+        "ks_d": float(ks.statistic),
+        "ks_p": float(ks.pvalue),
         "batch_distribution": np.bincount(batch.astype(int)).tolist(),
         "live_distribution": np.bincount(np.array(live, dtype=int)).tolist(),
         "agree_at_5pct": bool(u.pvalue > 0.05 and ks.pvalue > 0.05),
-    }  # fmt: skip
+    }
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "summary.json").write_text(json.dumps(out, indent=2))
     print(json.dumps(out))

@@ -75,9 +75,13 @@ def run(n: int, speedup: float | None, wall: float, base_port: int) -> RunResult
     assert sink.stdout.readline().strip() == "ready"
     profile = builtin_profile("paper-fixed")
     cfg = EmulatorConfig(
-        profile=profile, vehicles=n, base_port=base_port, bind_port_base=0, speedup=speedup,
+        profile=profile,
+        vehicles=n,
+        base_port=base_port,
+        bind_port_base=0,
+        speedup=speedup,
         personas=("px4", "ardupilot"),
-    )  # fmt: skip
+    )
 
     async def go() -> tuple[float, float, float, int]:
         emu = Emulator(cfg)

@@ -79,8 +79,10 @@ def main() -> None:
     args = parser.parse_args()
     for fenced, name in ((False, "clamped onto the inset fence"), (True, "redrawn inside it")):
         near, clamped = _share(args.profile, fenced, args.runs, args.seed)
-        print(f"{name}: {near:.1%} of search samples within {NEAR_FENCE_M:g} m of the fence; "
-              f"{clamped:.1%} of waypoints clamped")  # fmt: skip
+        print(
+            f"{name}: {near:.1%} of search samples within {NEAR_FENCE_M:g} m of the fence; "
+            f"{clamped:.1%} of waypoints clamped"
+        )
 
 
 if __name__ == "__main__":

@@ -119,8 +119,13 @@ if kind != "blocking":
 
 def run(kind: str, speedup: float | None, wall: float, base_port: int) -> dict[str, object]:
     if kind == "none":
-        procs = [subprocess.Popen([sys.executable, str(SINK), str(base_port), str(N)],
-                                  stdout=subprocess.PIPE, text=True)]  # fmt: skip
+        procs = [
+            subprocess.Popen(
+                [sys.executable, str(SINK), str(base_port), str(N)],
+                stdout=subprocess.PIPE,
+                text=True,
+            )
+        ]
     else:
         procs = [
             subprocess.Popen(
@@ -134,10 +139,14 @@ def run(kind: str, speedup: float | None, wall: float, base_port: int) -> dict[s
         assert p.stdout is not None
         assert p.stdout.readline().strip() == "ready"
     cfg = EmulatorConfig(
-        profile=builtin_profile("paper-fixed"), vehicles=N, base_port=base_port,
-        bind_port_base=0, speedup=speedup, personas=("px4", "ardupilot"),
+        profile=builtin_profile("paper-fixed"),
+        vehicles=N,
+        base_port=base_port,
+        bind_port_base=0,
+        speedup=speedup,
+        personas=("px4", "ardupilot"),
         lockstep=kind != "none",
-    )  # fmt: skip
+    )
 
     async def go() -> tuple[float, float, float, float, int, int]:
         emu = Emulator(cfg)
@@ -164,14 +173,18 @@ def run(kind: str, speedup: float | None, wall: float, base_port: int) -> dict[s
             p.communicate(timeout=10)
     total = (cpu + kids) / sim
     return {
-        "answerer": kind, "speedup_requested": speedup, "sim_wall": round(sim / dt, 1),
+        "answerer": kind,
+        "speedup_requested": speedup,
+        "sim_wall": round(sim / dt, 1),
         "cpu_s_per_sim_s_emulator": round(cpu / sim, 5),
         "cpu_s_per_sim_s_answerers": round(kids / sim, 5),
-        "cpu_s_per_sim_s_total": round(total, 5), "bound_2_cores": round(2 / total, 1),
+        "cpu_s_per_sim_s_total": round(total, 5),
+        "bound_2_cores": round(2 / total, 1),
         "us_per_answer_answerer": round(kids / sim / (10 * N) * 1e6, 1),
         "us_per_vehicle_tick_emulator": round(cpu / sim / (10 * N) * 1e6, 1),
-        "lockstep_waits_per_sim_s": round(waits / sim, 1), "setpoints_refused": nacks,
-    }  # fmt: skip
+        "lockstep_waits_per_sim_s": round(waits / sim, 1),
+        "setpoints_refused": nacks,
+    }
 
 
 def _proc_cpu(pid: int) -> float:

@@ -59,8 +59,13 @@ def _chromium(profile: Path) -> webdriver.Chrome:
     """Debian's headless Chromium and chromedriver (nothing downloaded), a fresh profile."""
     options = webdriver.ChromeOptions()
     options.binary_location = "/usr/bin/chromium"
-    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1600,1000",
-                 f"--user-data-dir={profile}"):  # fmt: skip
+    for flag in (
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--window-size=1600,1000",
+        f"--user-data-dir={profile}",
+    ):
         options.add_argument(flag)
     return webdriver.Chrome(options=options, service=Service("/usr/bin/chromedriver"))
 
@@ -157,19 +162,27 @@ def main() -> int:
         delays = [t - arrivals[(v, n, e)] for t, v, n, e in moves if (v, n, e) in arrivals]
     delays.sort()
     load = os.getloadavg()
-    print(f"{args.vehicles} vehicles, speed-up {args.speedup:g}, window {window:.0f} s wall; "
-          f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")  # fmt: skip
+    print(
+        f"{args.vehicles} vehicles, speed-up {args.speedup:g}, window {window:.0f} s wall; "
+        f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"
+    )
     print(f"page position updates {len(moves)}, matched to a state message {len(delays)}")
     if delays:
         p95 = delays[int(0.95 * (len(delays) - 1))]
-        print(f"MQTT state -> page DOM: median {statistics.median(delays) * 1000:.0f} ms, "
-              f"p95 {p95 * 1000:.0f} ms, max {delays[-1] * 1000:.0f} ms")  # fmt: skip
+        print(
+            f"MQTT state -> page DOM: median {statistics.median(delays) * 1000:.0f} ms, "
+            f"p95 {p95 * 1000:.0f} ms, max {delays[-1] * 1000:.0f} ms"
+        )
     if intervals:
-        print(f"state message interval per vehicle: median {statistics.median(intervals):.2f} s, "
-              f"max {max(intervals):.2f} s")  # fmt: skip
+        print(
+            f"state message interval per vehicle: median {statistics.median(intervals):.2f} s, "
+            f"max {max(intervals):.2f} s"
+        )
     total = sum(cpu.values())
-    print(f"page server (companion watch) CPU {cpu[watch]:.1f} s = {100 * cpu[watch] / window:.1f} % "
-          f"of one core; the whole fleet {total:.1f} s = {100 * total / window:.0f} %")  # fmt: skip
+    print(
+        f"page server (companion watch) CPU {cpu[watch]:.1f} s = {100 * cpu[watch] / window:.1f} % "
+        f"of one core; the whole fleet {total:.1f} s = {100 * total / window:.0f} %"
+    )
     return 0
 
 

@@ -84,8 +84,18 @@ def one_run(n: int, speedup: float, duration: float, folder: Path) -> dict[str, 
     except (IndexError, ValueError, KeyError):
         complete, sim = False, 0.0
     kept = complete and all(r >= 9.5 and worst <= 0.3 for r, worst, _ in rates)
-    return {"n": n, "speedup": speedup, "wall": wall, "cpu": cpu, "rates": rates, "sim": sim,
-            "complete": complete, "kept": kept, "exit": proc.returncode, "out": str(out)}  # fmt: skip
+    return {
+        "n": n,
+        "speedup": speedup,
+        "wall": wall,
+        "cpu": cpu,
+        "rates": rates,
+        "sim": sim,
+        "complete": complete,
+        "kept": kept,
+        "exit": proc.returncode,
+        "out": str(out),
+    }
 
 
 def main() -> None:

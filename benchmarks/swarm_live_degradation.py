@@ -122,8 +122,10 @@ def main() -> None:
     profile = apply_overrides(builtin_profile("swarm-small"), args.set)
     real = [t for t in profile.targets if not t.false_target]
     no_false = profile.model_copy(update={"targets": real})
-    print(f"PSO, 3 UAVs, 2.5 km square, 400 s; live {len(seeds)} seeds at {args.speedup:g}x, "
-          f"engine {args.runs} runs seed {args.seed}; overrides: {args.set or 'none'}")  # fmt: skip
+    print(
+        f"PSO, 3 UAVs, 2.5 km square, 400 s; live {len(seeds)} seeds at {args.speedup:g}x, "
+        f"engine {args.runs} runs seed {args.seed}; overrides: {args.set or 'none'}"
+    )
     head = f"{'T_nc':>6} {'conf/runs':<11} {'ts s ± sd':>12}"
     print(f"{'drop':>4} {'delay':>5} | live {head} {'followed':>9} | engine {head} "
           f"| engine, no false target {head}")  # fmt: skip
