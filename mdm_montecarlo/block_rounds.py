@@ -4,7 +4,8 @@ A round moves every active lane to its next event: ``legs``, the remembered targ
 (``remembered.eligible``), ``advance``, the policy step and its memory update
 (``compiled_step``), ``record``. Called from Python, each round cost two dozen numpy calls
 and six kernel dispatches around those loops, about a sixth of the MDM rows' CPU time over
-their 18 000 rounds (docs/model.md, "Session 11"). Here the same kernels run in the same
+their 18 000 rounds (benchmarks/README.md, "2026-11-23 to 2026-11-26: reproduce's speed, change
+by change"). Here the same kernels run in the same
 order on the same arrays, round after round, and the loop only returns when the block is done
 or a dynamic target's path must grow (its draws are numpy's; the caller grows it and calls
 again, which redoes the round from its start: nothing was changed yet).

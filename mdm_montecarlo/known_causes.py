@@ -28,7 +28,7 @@ _CLOSEST_SWARM = {
     ("dynamic", "ARPSO"): (_WAYPOINT_R1, 4.283),
 }
 """The swarm reading of `reproduce` whose T_nc is closest to the paper's, with its T_nc: 1000
-runs, seed 2024 (docs/model.md, "simtablepso1 at 1000 runs, every reading (issue 33)")."""
+runs, seed 2024 (docs/model.md, "simtablepso1 at 1000 runs, every reading")."""
 _REFLECT_DELTA1 = {10.0: 3.69, 20.0: 4.21, 30.0: 4.25, 40.0: 4.34, 50.0: 4.65}
 """simtable3 fixed MDM T_nc with out_of_area = reflect, 300 runs (docs/model.md)."""
 

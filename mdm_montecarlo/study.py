@@ -61,8 +61,9 @@ previous waypoint, P_{q+1} = P_q + delta_2 D (the default steps from the point o
 docs/model.md, "Level-2 waypoints: the default is not eq. (10)"). 'popup_from_0': the pop-up
 targets appear from t = 0 (docs/model.md, "Pop-up times"). The swarm readings of
 docs/model.md, "Social-cognitive baselines": 'swarm_forgets' drops the bests of confirmed
-targets and no longer reads them; 'swarm_waypoint_detection' also reads MDM's 2 km detection
-sensor; 'swarm_detection' is the reading before issue 33 (one iteration every 5 s, 100 m)."""
+targets and does not read them; 'swarm_waypoint_detection' also reads MDM's 2 km detection
+sensor; 'swarm_detection' is "swarm given MDM's detection sensor" (one iteration every 5 s,
+100 m)."""
 SWARM_VARIANTS = ("swarm_forgets", "swarm_waypoint_detection", "swarm_detection")
 
 

@@ -3,8 +3,8 @@
 Every field is a modelling choice the paper leaves open; docs/model.md ("Social-cognitive
 baselines") gives the sources, the defaults and their measured effect. The defaults are the
 reading of section IV's text: one iteration per waypoint, the confirmation sensor, standard PSO
-memory, confirmed targets still read. The reading used before issue 33 ("swarm given MDM's
-detection sensor") is iteration interval, signal_sensor detection, after_confirmation forget,
+memory, confirmed targets still read. The labelled variant "swarm given MDM's detection
+sensor" is iteration interval, signal_sensor detection, after_confirmation forget,
 read_confirmed false.
 """
 
