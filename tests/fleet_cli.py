@@ -25,15 +25,19 @@ def start_fleet(*args: str, output: Path) -> subprocess.Popen[bytes]:
     """`companion fleet ARGS` in a new session, stdout and stderr to ``output``."""
     with output.open("wb") as f:
         return subprocess.Popen(
-            fleet_command(*args), stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
+            fleet_command(*args),
+            stdout=f,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
             env=dict(os.environ, PYTHONUNBUFFERED="1"),
-        )  # fmt: skip
+        )
 
 
 def run_fleet_cli(*args: str, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
     """`companion fleet ARGS` to the end; output captured."""
-    return subprocess.run(fleet_command(*args), capture_output=True, text=True,
-                          timeout=timeout, check=False)  # fmt: skip
+    return subprocess.run(
+        fleet_command(*args), capture_output=True, text=True, timeout=timeout, check=False
+    )
 
 
 def processes_naming(text: str) -> dict[int, str]:

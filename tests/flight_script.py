@@ -126,8 +126,14 @@ class Flight:
         while True:
             for _ in range(3):
                 self.conn.mav.command_long_send(self.sysid, 1, cmd, 0, *params)
-                ack = self.pump(2.0, lambda m: m.get_type() == "COMMAND_ACK" and m.command == cmd
-                                and m.target_system in (0, 246))  # fmt: skip
+                ack = self.pump(
+                    2.0,
+                    lambda m: (
+                        m.get_type() == "COMMAND_ACK"
+                        and m.command == cmd
+                        and m.target_system in (0, 246)
+                    ),
+                )
                 if ack is not None:
                     result = int(ack.result)
                     break
@@ -239,8 +245,17 @@ def fly_px4(f: Flight, home_amsl: float) -> Record:
     f.set_param("RTL_RETURN_ALT", ALT)
     f.command("arm", ml.MAV_CMD_COMPONENT_ARM_DISARM, 1, retry_s=READY_S)
     f.home = (f.lpn.x, f.lpn.y)
-    f.command("takeoff", ml.MAV_CMD_NAV_TAKEOFF, math.nan, 0, 0, math.nan, math.nan, math.nan,
-              home_amsl + ALT)  # fmt: skip
+    f.command(
+        "takeoff",
+        ml.MAV_CMD_NAV_TAKEOFF,
+        math.nan,
+        0,
+        0,
+        math.nan,
+        math.nan,
+        math.nan,
+        home_amsl + ALT,
+    )
     _climb(f)
     f.pump(2.0)  # TAKEOFF ends in HOLD
     hold = (f.lpn.x, f.lpn.y)

@@ -57,9 +57,18 @@ class LyingRelay:
     positions (the estimator failed).
     """
 
-    def __init__(self, companion_port: int, *, sysid: int = 1, vehicle_tcp: tuple[str, int] | None = None,
-                 kinds: tuple[str, ...] = KINDS, rate_hz: float = 10.0, fault_chance: float = 0.0,
-                 max_speed: float = 20.0, seed: int = 0) -> None:  # fmt: skip
+    def __init__(
+        self,
+        companion_port: int,
+        *,
+        sysid: int = 1,
+        vehicle_tcp: tuple[str, int] | None = None,
+        kinds: tuple[str, ...] = KINDS,
+        rate_hz: float = 10.0,
+        fault_chance: float = 0.0,
+        max_speed: float = 20.0,
+        seed: int = 0,
+    ) -> None:
         self.companion = ("127.0.0.1", companion_port)
         self.sysid = sysid
         self.kinds = kinds
@@ -168,11 +177,27 @@ class LyingRelay:
         if msg.get_type() == "LOCAL_POSITION_NED" and msg.get_srcComponent() == 1:
             self._last = msg
             if self.all_bad:
-                buf = self._local(self._liar, msg.time_boot_ms, math.nan, math.nan, math.nan,
-                                  msg.vx, msg.vy, msg.vz)  # fmt: skip
+                buf = self._local(
+                    self._liar,
+                    msg.time_boot_ms,
+                    math.nan,
+                    math.nan,
+                    math.nan,
+                    msg.vx,
+                    msg.vy,
+                    msg.vz,
+                )
             elif self.alt_offset:
-                buf = self._local(self._liar, msg.time_boot_ms, msg.x, msg.y,
-                                  msg.z - self.alt_offset, msg.vx, msg.vy, msg.vz)  # fmt: skip
+                buf = self._local(
+                    self._liar,
+                    msg.time_boot_ms,
+                    msg.x,
+                    msg.y,
+                    msg.z - self.alt_offset,
+                    msg.vx,
+                    msg.vy,
+                    msg.vz,
+                )
         if self.silent:
             return
         self.stats.forwarded += 1
@@ -232,8 +257,9 @@ class LyingRelay:
 
     # -- the lies --------------------------------------------------------------------------
 
-    def _local(self, mav: Any, t_ms: int, x: float, y: float, z: float, vx: float, vy: float,
-               vz: float) -> bytes:  # fmt: skip
+    def _local(
+        self, mav: Any, t_ms: int, x: float, y: float, z: float, vx: float, vy: float, vz: float
+    ) -> bytes:
         return bytes(mav.local_position_ned_encode(t_ms, x, y, z, vx, vy, vz).pack(mav))
 
     def _lie(self, kind: str) -> bytes:

@@ -84,9 +84,15 @@ class Subscriber:
     messages while it is away, even across a broker restart)."""
 
     def __init__(
-        self, port: int, topic_filter: str, path: Path, *, user: str | None = None,
-        password: str | None = None, persistent: bool = False,
-    ) -> None:  # fmt: skip
+        self,
+        port: int,
+        topic_filter: str,
+        path: Path,
+        *,
+        user: str | None = None,
+        password: str | None = None,
+        persistent: bool = False,
+    ) -> None:
         self.path = path
         auth = [] if user is None else ["-u", user, "-P", password or ""]
         session = ["-c", "-i", f"test-sub-{port}"] if persistent else []

@@ -90,16 +90,27 @@ def fly(out: Path) -> dict[str, Any]:
     out.mkdir(parents=True)
     profile = out / "setpoint-record.yaml"
     profile.write_text(PROFILE)
-    run_fleet(FleetOptions(profile=str(profile), out=out / "run", vehicles=VEHICLES,
-                           speedup=100.0, duration=DURATION, seed=SEED, land_wait=0.0,
-                           lockstep=True))  # fmt: skip
+    run_fleet(
+        FleetOptions(
+            profile=str(profile),
+            out=out / "run",
+            vehicles=VEHICLES,
+            speedup=100.0,
+            duration=DURATION,
+            seed=SEED,
+            land_wait=0.0,
+            lockstep=True,
+        )
+    )
     return {str(v): vehicle_record(out / "run", v) for v in range(VEHICLES)}
 
 
 def vehicle_record(run: Path, vehicle: int) -> dict[str, Any]:
     """Waypoints, velocity samples and decisions of one vehicle of a finished run."""
     records = read_records(run / f"mission-{vehicle}.jsonl")
-    starts = [r["search_start"] for r in records if r.get("event") == "phase" and "search_start" in r]  # fmt: skip
+    starts = [
+        r["search_start"] for r in records if r.get("event") == "phase" and "search_start" in r
+    ]
     if not starts:
         raise RuntimeError(f"vehicle {vehicle} of {run} never started its search")
     start = float(starts[0])
@@ -134,8 +145,9 @@ def differences(before: dict[str, Any], after: dict[str, Any]) -> list[str]:
         b, a = before[vehicle], after[vehicle]
         first = [d["t"] for d in b["decisions"] if d["event"] == "level" and d["level"] != 0]
         end = (first[0] if first else math.inf) + TIME_TOLERANCE
-        out += [f"vehicle {vehicle}: {d}" for d in _vehicle_differences(_upto(b, end),
-                                                                        _upto(a, end))]  # fmt: skip
+        out += [
+            f"vehicle {vehicle}: {d}" for d in _vehicle_differences(_upto(b, end), _upto(a, end))
+        ]
     return out
 
 
@@ -187,8 +199,12 @@ def _close(before: list[float], after: list[float]) -> bool:
 def code_commit() -> str:
     """The commit of the checkout the ``companion`` package was imported from (+ if edited)."""
     where = Path(companion.__file__).resolve().parent.parent
-    head = subprocess.run(["git", "-C", str(where), "rev-parse", "--short", "HEAD"],
-                          capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
+    head = subprocess.run(
+        ["git", "-C", str(where), "rev-parse", "--short", "HEAD"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
     dirty = subprocess.run(["git", "-C", str(where), "status", "--porcelain", "--", "companion",
                             "mdm_core", "sim_vehicle_stub", "mdm_profiles"],
                            capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip

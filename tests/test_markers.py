@@ -32,8 +32,17 @@ def test_a_test_gets_the_markers_of_its_fixtures_and_only_those(
 
 
 def test_every_marker_given_is_registered_with_a_description() -> None:
-    every = ["arducopter", "px4", "sitl_x", "docker_x", "mqtt_broker", "mosquitto", "chromium",
-             "browser_x", "fleet_x"]  # fmt: skip
+    every = [
+        "arducopter",
+        "px4",
+        "sitl_x",
+        "docker_x",
+        "mqtt_broker",
+        "mosquitto",
+        "chromium",
+        "browser_x",
+        "fleet_x",
+    ]
     assert markers_for(every) == set(MARKERS)
     assert all(description.strip() for description in MARKERS.values())
 

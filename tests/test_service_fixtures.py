@@ -17,8 +17,10 @@ from tests.waiting import wait_until
 
 
 def test_chromium_renders_a_page_and_runs_its_script(chromium: webdriver.Chrome) -> None:
-    chromium.get("data:text/html,<title>mdm</title><p id=p></p>"
-                 "<script>document.getElementById('p').textContent = 6 * 7</script>")  # fmt: skip
+    chromium.get(
+        "data:text/html,<title>mdm</title><p id=p></p>"
+        "<script>document.getElementById('p').textContent = 6 * 7</script>"
+    )
     assert chromium.title == "mdm"
     assert chromium.find_element(By.ID, "p").text == "42"
 

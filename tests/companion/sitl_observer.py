@@ -69,8 +69,19 @@ class Observer:
 
     def _ask_streams(self) -> None:
         for msg_id in _STREAMS:
-            self._conn.mav.command_long_send(self.sysid, 1, mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL,
-                                             0, msg_id, 100_000, 0, 0, 0, 0, 0)  # fmt: skip
+            self._conn.mav.command_long_send(
+                self.sysid,
+                1,
+                mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL,
+                0,
+                msg_id,
+                100_000,
+                0,
+                0,
+                0,
+                0,
+                0,
+            )
 
     def _run(self) -> None:
         asked = beat = 0.0
@@ -78,8 +89,9 @@ class Observer:
             now = time.monotonic()
             with self._send_lock:
                 if now - beat > 1.0:  # a ground station, as the autopilot routes it
-                    self._conn.mav.heartbeat_send(mavlink2.MAV_TYPE_GCS,
-                                                  mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0)  # fmt: skip
+                    self._conn.mav.heartbeat_send(
+                        mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0
+                    )
                     beat = now
                 if now - asked > 5.0:  # again after a reboot or a lost request
                     self._ask_streams()
@@ -121,9 +133,19 @@ class Observer:
         """A pilot's mode change: DO_SET_MODE with the custom mode (ArduPilot) or PX4's main
         and sub mode."""
         with self._send_lock:
-            self._conn.mav.command_long_send(self.sysid, 1, mavlink2.MAV_CMD_DO_SET_MODE, 0,
-                                             mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-                                             main, sub, 0, 0, 0, 0)  # fmt: skip
+            self._conn.mav.command_long_send(
+                self.sysid,
+                1,
+                mavlink2.MAV_CMD_DO_SET_MODE,
+                0,
+                mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                main,
+                sub,
+                0,
+                0,
+                0,
+                0,
+            )
 
     def command(self, command: int, *params: float) -> None:
         """COMMAND_LONG to the autopilot, as a ground station sends it (no ack awaited)."""
@@ -168,9 +190,22 @@ class Observer:
     def snapshot(self) -> Trace:
         with self._lock:
             t = self.trace
-            return Trace(t.armed_ever, t.armed, t.mode, list(t.modes), t.max_alt, t.alt,
-                         t.distance, t.max_speed, t.landed_state, list(t.texts), t.last_position,
-                         list(t.track), list(t.stamps), t.boot_s)  # fmt: skip
+            return Trace(
+                t.armed_ever,
+                t.armed,
+                t.mode,
+                list(t.modes),
+                t.max_alt,
+                t.alt,
+                t.distance,
+                t.max_speed,
+                t.landed_state,
+                list(t.texts),
+                t.last_position,
+                list(t.track),
+                list(t.stamps),
+                t.boot_s,
+            )
 
     def hold(
         self,

@@ -35,13 +35,18 @@ def team_profile(folder: Path, *, vehicles: int, seed: int, duration: float) -> 
     p["name"] = f"field-team-{os.getpid()}"
     p["fleet"]["vehicles"] = vehicles
     p["sensor_source"] = {"kind": "virtual"}
-    p["sensors"] = [{"name": "rf-detection", "radius": 400.0},
-                    {"name": "camera-confirmation", "radius": 60.0}]  # fmt: skip
+    p["sensors"] = [
+        {"name": "rf-detection", "radius": 400.0},
+        {"name": "camera-confirmation", "radius": 60.0},
+    ]
     p["policy"]["levels"] = [
         {"distribution": "LS", "step": 200.0},
-        {"distribution": "BS", "step": 80.0,
-         "index": {"gamma": 0.1, "index_max": 0.95, "index_min": 0.2, "kappa": 600.0}},
-    ]  # fmt: skip
+        {
+            "distribution": "BS",
+            "step": 80.0,
+            "index": {"gamma": 0.1, "index_max": 0.95, "index_min": 0.2, "kappa": 600.0},
+        },
+    ]
     p["mission"] = {"duration": duration, "ts_cap": duration}
     probe = folder / "probe.yaml"
     probe.write_text(yaml.safe_dump(p, sort_keys=False))
@@ -51,8 +56,12 @@ def team_profile(folder: Path, *, vehicles: int, seed: int, duration: float) -> 
     for v in range(vehicles):
         n, e = start_point(profile, seed, v, fence)
         toward = math.atan2(600.0 - n, 1000.0 - e)
-        targets.append({"north": round(n + 30.0 * math.sin(toward), 1),
-                        "east": round(e + 30.0 * math.cos(toward), 1)})  # fmt: skip
+        targets.append(
+            {
+                "north": round(n + 30.0 * math.sin(toward), 1),
+                "east": round(e + 30.0 * math.cos(toward), 1),
+            }
+        )
     p["targets"] = [*targets, {"north": 200.0, "east": 1500.0, "false_target": True}]
     path = folder / "team.yaml"
     path.write_text(yaml.safe_dump(p, sort_keys=False))
@@ -72,8 +81,10 @@ def team_of(out: Path, timeout: float = 300.0) -> list[VehicleEntry]:
         except (OSError, ValueError):
             time.sleep(0.5)
             continue
-        return [VehicleEntry.model_validate({k: v for k, v in e.items() if k != "heard_autopilot"})
-                for e in run["team"]]  # fmt: skip
+        return [
+            VehicleEntry.model_validate({k: v for k, v in e.items() if k != "heard_autopilot"})
+            for e in run["team"]
+        ]
     raise AssertionError(f"no run.json in {out} after {timeout:g} s")
 
 
@@ -111,22 +122,32 @@ class Figures:
     end: str
 
     def line(self, i: int, kind: str) -> str:
-        return (f"vehicle {i} ({kind}): {self.flown:.0f} m flown, layer {self.layer:.1f} m, "
-                f"{self.samples} airborne GPS samples, {self.outside} outside the fence, "
-                f"end {self.end}")  # fmt: skip
+        return (
+            f"vehicle {i} ({kind}): {self.flown:.0f} m flown, layer {self.layer:.1f} m, "
+            f"{self.samples} airborne GPS samples, {self.outside} outside the fence, "
+            f"end {self.end}"
+        )
 
 
 def figures(t: Trace, kind: str, polygon: list[tuple[float, float]]) -> Figures:
     layer = sorted(alt for _, _, alt, mode in t.track if mode in SEARCH_MODES[kind] and alt > 30.0)
     outside = sum(not inside(polygon, lat, lon) for lat, lon, _, _ in t.track)
-    end = ("landed, disarmed" if t.landed_state == ON_GROUND and not t.armed
-           else f"landed_state {t.landed_state}, armed {t.armed}")  # fmt: skip
+    end = (
+        "landed, disarmed"
+        if t.landed_state == ON_GROUND and not t.armed
+        else f"landed_state {t.landed_state}, armed {t.armed}"
+    )
     median = layer[len(layer) // 2] if layer else float("nan")
     return Figures(t.distance, median, len(t.track), outside, t.armed_ever, end)
 
 
-def separation_breaches(traces: dict[int, Trace], *, horizontal: float = 50.0,
-                        vertical: float = 3.0, window: float = 0.5) -> list[Any]:  # fmt: skip
+def separation_breaches(
+    traces: dict[int, Trace],
+    *,
+    horizontal: float = 50.0,
+    vertical: float = 3.0,
+    window: float = 0.5,
+) -> list[Any]:
     """Pairs of samples of two vehicles within ``window`` wall s of each other, closer than
     ``horizontal`` m apart and ``vertical`` m in altitude."""
     found = []
@@ -138,7 +159,9 @@ def separation_breaches(traces: dict[int, Trace], *, horizontal: float = 50.0,
             for tb, (lat_b, lon_b, alt_b, _) in zip(b.stamps[k:], b.track[k:], strict=True):
                 if tb > ta + window:
                     break
-                if (abs(alt_a - alt_b) < vertical
-                        and metres((lat_a, lon_a), (lat_b, lon_b)) < horizontal):  # fmt: skip
+                if (
+                    abs(alt_a - alt_b) < vertical
+                    and metres((lat_a, lon_a), (lat_b, lon_b)) < horizontal
+                ):
                     found.append((i, j, alt_a, alt_b))
     return found

@@ -26,10 +26,17 @@ def test_signed_fleet_arms_flies_and_no_message_is_rejected(tmp_path: Path) -> N
     key_file = tmp_path / "fleet.key"
     key_file.write_text(PASSPHRASE + "\n")
     result = run_fleet(
-        FleetOptions(profile="paper-fixed", out=tmp_path, vehicles=2, speedup=50.0,
-                     duration=120.0, seed=3, wall_limit=200,
-                     signing_key_file=key_file)
-    )  # fmt: skip
+        FleetOptions(
+            profile="paper-fixed",
+            out=tmp_path,
+            vehicles=2,
+            speedup=50.0,
+            duration=120.0,
+            seed=3,
+            wall_limit=200,
+            signing_key_file=key_file,
+        )
+    )
     assert len(result.end_reasons) == 2, result.end_reasons
     assert "MAVLink signing on" in (tmp_path / "emulator.log").read_text()
     events = [json.loads(x) for x in (tmp_path / "emulator-events.jsonl").read_text().splitlines()]
@@ -53,8 +60,14 @@ async def _first_heartbeat(link: PymavlinkLink, seconds: float) -> bool:
 
 
 async def _fly_link(port: int, key: bytes) -> tuple[bool, bool, int]:
-    link = PymavlinkLink(url=f"udpin:127.0.0.1:{port}", target_system=1, tlog=None,
-                         signing_key=key, command_tries=2, command_timeout=0.5)  # fmt: skip
+    link = PymavlinkLink(
+        url=f"udpin:127.0.0.1:{port}",
+        target_system=1,
+        tlog=None,
+        signing_key=key,
+        command_tries=2,
+        command_timeout=0.5,
+    )
     async with link:
         heard = await _first_heartbeat(link, 3.0)
         armed = bool(await link.arm())
@@ -88,8 +101,11 @@ def test_mavsdk_backend_refuses_a_signing_key(tmp_path: Path) -> None:
     assert run.returncode == 2
     assert "mavsdk backend cannot sign" in run.stderr
     with pytest.raises(ValueError, match="mavsdk backend cannot sign"):
-        run_fleet(FleetOptions(profile="paper-fixed", out=tmp_path, backend="mavsdk",
-                               signing_key_file=key_file))  # fmt: skip
+        run_fleet(
+            FleetOptions(
+                profile="paper-fixed", out=tmp_path, backend="mavsdk", signing_key_file=key_file
+            )
+        )
     assert not (tmp_path / "emulator.log").exists()  # refused before starting anything
 
 

@@ -111,8 +111,9 @@ def test_link_restored_after_a_pause_stays_paused() -> None:
 @pytest.mark.parametrize(
     ("guided", "armed", "hold"), [(True, True, False), (False, False, False), (False, True, True)]
 )
-def test_link_restored_ours_disarmed_or_hold_prepares_again(guided: bool, armed: bool,
-                                                              hold: bool) -> None:  # fmt: skip
+def test_link_restored_ours_disarmed_or_hold_prepares_again(
+    guided: bool, armed: bool, hold: bool
+) -> None:
     event = LinkRestored(Phase.SEARCH, known=True, guided=guided, armed=armed, hold=hold)
     state, _ = _applied(Control(Phase.LINK_LOST, guided_seen=True), event)
     assert state.phase is Phase.PREPARE

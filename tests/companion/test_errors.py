@@ -46,7 +46,8 @@ def test_a_bad_address_is_an_input_error_naming_it(url: str) -> None:
 
 def test_make_link_refuses_signing_on_mavsdk_and_a_bad_url_with_input_errors() -> None:
     with pytest.raises(InputError, match="cannot sign"):
-        make_link("mavsdk", url="udpin:0.0.0.0:14540", target_system=1, tlog=None,
-                  signing_key=bytes(32))  # fmt: skip
+        make_link(
+            "mavsdk", url="udpin:0.0.0.0:14540", target_system=1, tlog=None, signing_key=bytes(32)
+        )
     with pytest.raises(InputError, match="port"):
         make_link("pymavlink", url="udpin:0.0.0.0:x", target_system=1, tlog=None)

@@ -40,14 +40,24 @@ class Procs:
     def _start(self, args: list[str], log: str) -> subprocess.Popen[bytes]:
         with (self.out / log).open("ab") as f:
             p = subprocess.Popen(
-                [sys.executable, *args], stdout=f, stderr=subprocess.STDOUT,
+                [sys.executable, *args],
+                stdout=f,
+                stderr=subprocess.STDOUT,
                 env=dict(os.environ, PYTHONUNBUFFERED="1"),
-            )  # fmt: skip
+            )
         self.procs.append(p)
         return p
 
-    def emulator(self, profile: str, base_port: int, *, vehicles: int = 1, persona: str = "px4",
-                 speedup: float = 20.0, extra: tuple[str, ...] = ()) -> subprocess.Popen[bytes]:  # fmt: skip
+    def emulator(
+        self,
+        profile: str,
+        base_port: int,
+        *,
+        vehicles: int = 1,
+        persona: str = "px4",
+        speedup: float = 20.0,
+        extra: tuple[str, ...] = (),
+    ) -> subprocess.Popen[bytes]:
         return self._start(
             ["-m", "sim_vehicle_stub.cli", "--profile", profile, "-n", str(vehicles),
              "--persona", persona, "--base-port", str(base_port),
@@ -56,8 +66,16 @@ class Procs:
             "emulator.log",
         )  # fmt: skip
 
-    def companion(self, profile: str, vehicle: int, base_port: int, *, backend: str = "pymavlink",
-                  duration: float = 600.0, extra: tuple[str, ...] = ()) -> subprocess.Popen[bytes]:  # fmt: skip
+    def companion(
+        self,
+        profile: str,
+        vehicle: int,
+        base_port: int,
+        *,
+        backend: str = "pymavlink",
+        duration: float = 600.0,
+        extra: tuple[str, ...] = (),
+    ) -> subprocess.Popen[bytes]:
         return self._start(
             ["-m", "companion.cli", "run", "--profile", profile, "--vehicle", str(vehicle),
              "--base-port", str(base_port), "--backend", backend, "--log-dir", str(self.out),
@@ -112,8 +130,9 @@ def base() -> int:
 
 def _pilot(base: int) -> mavutil.mavfile:
     """A pilot's ground station talking to vehicle 0's own port."""
-    return mavutil.mavlink_connection(f"udpout:127.0.0.1:{base + BIND_OFFSET}",
-                                      source_system=255, source_component=190)  # fmt: skip
+    return mavutil.mavlink_connection(
+        f"udpout:127.0.0.1:{base + BIND_OFFSET}", source_system=255, source_component=190
+    )
 
 
 @pytest.fixture
@@ -122,9 +141,14 @@ def small_profile(tmp_path: Path) -> str:
     real = [(1500.0, 1500.0), (700.0, 700.0), (2300.0, 2300.0)]
     targets = [{"north": n, "east": e} for n, e in real]
     targets.append({"north": 600.0, "east": 2400.0, "false_target": True})
-    path = write_profile_with(tmp_path / "small-test.yaml", "small-test", targets=targets,
-                              sensors=sensors(1000.0, 200.0), policy={"memory_radius": 300.0},
-                              mission={"duration": 600.0})  # fmt: skip
+    path = write_profile_with(
+        tmp_path / "small-test.yaml",
+        "small-test",
+        targets=targets,
+        sensors=sensors(1000.0, 200.0),
+        policy={"memory_radius": 300.0},
+        mission={"duration": 600.0},
+    )
     return str(path)
 
 
@@ -157,17 +181,23 @@ def test_killed_companion_restarts_with_its_memory(
     # COM_OF_LOSS_T, 1 s of wall time at any speed-up), as after a real crash. Restarted within
     # that second, the companion could see the failsafe's mode change as a pilot taking over,
     # depending on how fast the machine starts Python.
-    wait_until(lambda: any(r["event"] == "failsafe"
-                           for r in records(tmp_path / "emulator-events.jsonl")),
-               15, "the setpoint-loss failsafe")  # fmt: skip
+    wait_until(
+        lambda: any(r["event"] == "failsafe" for r in records(tmp_path / "emulator-events.jsonl")),
+        15,
+        "the setpoint-loss failsafe",
+    )
     procs.companion(small_profile, 0, base, duration=3000)
     wait_until(lambda: has(tmp_path, events.Start, resumed=len(confirmed)), 20, "restart")
     logged = read_log(_log(tmp_path)).events
     restarted_at = max(k for k, e in enumerate(logged) if isinstance(e.event, events.Start))
     wait_until(lambda: _searching_after(tmp_path, restarted_at), 30, "search resumed")
     resumed = read_log(_log(tmp_path)).last_time
-    wait_until(lambda: read_log(_log(tmp_path)).last_time, 30, "160 vehicle s more of searching "
-               "around the same target", until=lambda t: t >= resumed + 160.0)  # fmt: skip
+    wait_until(
+        lambda: read_log(_log(tmp_path)).last_time,
+        30,
+        "160 vehicle s more of searching around the same target",
+        until=lambda t: t >= resumed + 160.0,
+    )
     after = read_log(_log(tmp_path)).events[restarted_at:]
     later = [e.event for e in after if isinstance(e.event, events.Confirmation)]
     for r in later:
@@ -247,13 +277,19 @@ def test_five_seconds_of_silence_then_the_mission_resumes(
         wait_until(lambda: has(tmp_path, events.LinkState, state="restored"), 20, "link restored")
         # From the restored event on (the search may have resumed before this poll saw it).
         logged = read_log(_log(tmp_path)).events
-        n = max(k for k, e in enumerate(logged)
-                if isinstance(e.event, events.LinkState) and e.event.state == "restored")  # fmt: skip
+        n = max(
+            k
+            for k, e in enumerate(logged)
+            if isinstance(e.event, events.LinkState) and e.event.state == "restored"
+        )
         wait_until(lambda: _searching_after(tmp_path, n), 30, "search resumed")
     finally:
         relay.close()
-    causes = {e.get("cause") for e in records(tmp_path / "emulator-events.jsonl")
-              if e["event"] == "failsafe"}  # fmt: skip
+    causes = {
+        e.get("cause")
+        for e in records(tmp_path / "emulator-events.jsonl")
+        if e["event"] == "failsafe"
+    }
     assert causes, "the vehicle saw no failsafe while its companion was silent"
 
 
@@ -271,8 +307,9 @@ def test_pilot_takes_over_and_hands_back_mavsdk_ardupilot(
             lambda: has(tmp_path, events.PhaseChange, phase="paused"), 10, "companion pauses"
         )
         time.sleep(3.0)  # what is under test: 3 s in which the companion does not take it back
-        modes = [e["mode"] for e in records(tmp_path / "emulator-events.jsonl")
-                 if e["event"] == "mode"]  # fmt: skip
+        modes = [
+            e["mode"] for e in records(tmp_path / "emulator-events.jsonl") if e["event"] == "mode"
+        ]
         assert modes[-1] == "LOITER", f"companion fought the pilot: modes {modes}"
         pilot.mav.command_long_send(1, 1, 176, 0, 129, 4, 0, 0, 0, 0, 0)  # GUIDED
         n = len(read_log(_log(tmp_path)).events)
@@ -318,8 +355,11 @@ def test_fallback_hold_during_the_climb_is_retried_not_ended(
     wait_until(
         lambda: has(tmp_path, events.PhaseChange, phase="search"), 60, "search after the stall"
     )
-    causes = [e.get("cause") for e in records(tmp_path / "emulator-events.jsonl")
-              if e["event"] == "failsafe"]  # fmt: skip
+    causes = [
+        e.get("cause")
+        for e in records(tmp_path / "emulator-events.jsonl")
+        if e["event"] == "failsafe"
+    ]
     assert causes, "the vehicle saw no failsafe while its companion was stopped"
     phases = [e.phase for e in read_log(_log(tmp_path)).of(events.PhaseChange)]
     climb = phases.index("climb")

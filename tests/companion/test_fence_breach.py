@@ -26,10 +26,21 @@ def test_a_wrong_frame_is_caught_at_the_fence_and_flown_home(tmp_path: Path) -> 
 
     async def main() -> str:
         link = PymavlinkLink(url=f"udpin:127.0.0.1:{base}", target_system=1)
-        async with fly(FIELD, 0, link, log_dir=tmp_path, duration=900.0, land_wait=300.0,
-                       sensor_source="virtual") as flight:  # fmt: skip
-            await wait_until_async(lambda: flight.mission.phase, 120.0, "the search",
-                                   until=lambda phase: phase is Phase.SEARCH)  # fmt: skip
+        async with fly(
+            FIELD,
+            0,
+            link,
+            log_dir=tmp_path,
+            duration=900.0,
+            land_wait=300.0,
+            sensor_source="virtual",
+        ) as flight:
+            await wait_until_async(
+                lambda: flight.mission.phase,
+                120.0,
+                "the search",
+                until=lambda phase: phase is Phase.SEARCH,
+            )
             assert link.alignment is not None
             link.alignment.east -= 2500.0  # the vehicle now believes it is 2.5 km further west
             return await asyncio.wait_for(flight.ended(), 120.0)

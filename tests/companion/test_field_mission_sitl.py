@@ -46,13 +46,18 @@ def _field_copy(vehicles: int, *, south: float = 0.0) -> dict[str, Any]:
     p["fleet"]["vehicles"] = vehicles
     p["fleet"]["altitude_step"] = 0.0  # vehicle 12 would fly at 100 m: ArduCopter's FENCE_ALT_MAX
     p["sensor_source"] = {"kind": "virtual"}
-    p["sensors"] = [{"name": "rf-detection", "radius": 400.0},
-                    {"name": "camera-confirmation", "radius": 60.0}]  # fmt: skip
+    p["sensors"] = [
+        {"name": "rf-detection", "radius": 400.0},
+        {"name": "camera-confirmation", "radius": 60.0},
+    ]
     p["policy"]["levels"] = [
         {"distribution": "LS", "step": 200.0},
-        {"distribution": "BS", "step": 80.0,
-         "index": {"gamma": 0.1, "index_max": 0.95, "index_min": 0.2, "kappa": 600.0}},
-    ]  # fmt: skip
+        {
+            "distribution": "BS",
+            "step": 80.0,
+            "index": {"gamma": 0.1, "index_max": 0.95, "index_min": 0.2, "kappa": 600.0},
+        },
+    ]
     p["mission"] = {"duration": 900.0, "ts_cap": 900.0}
     p["origin"]["lat"] -= south
     for vertex in p["site"]["geofence"]:
@@ -138,8 +143,10 @@ def test_field_profile_flies_in_its_frame_inside_the_fence_on_stock_arducopter(
     flights: list[subprocess.Popen[bytes]] = []
 
     def context(out: Path) -> Callable[[], str]:
-        return lambda: (f"observer: {obs.snapshot().modes} armed {obs.snapshot().armed}\n"
-                        f"{(out / 'companion.out').read_text(errors='replace')[-4000:]}")  # fmt: skip
+        return lambda: (
+            f"observer: {obs.snapshot().modes} armed {obs.snapshot().armed}\n"
+            f"{(out / 'companion.out').read_text(errors='replace')[-4000:]}"
+        )
 
     try:
         # 1. The same vehicle against the profile moved 3.1 km south (the vehicle 3 km north of
@@ -170,15 +177,22 @@ def test_field_profile_flies_in_its_frame_inside_the_fence_on_stock_arducopter(
         fence = guidance_fence(profile)
         home_ne = profile_frame(profile).to_local(*HOME)[:2]
         seed, start = next(
-            (s, st) for s in range(500)
-            if 300.0 <= math.dist(st := start_point(profile, s, inst.index, fence), home_ne) <= 800.0
-        )  # fmt: skip
+            (s, st)
+            for s in range(500)
+            if 300.0
+            <= math.dist(st := start_point(profile, s, inst.index, fence), home_ne)
+            <= 800.0
+        )
         centre = (600.0, 1000.0)
         toward = math.atan2(centre[1] - start[1], centre[0] - start[0])
-        target = (round(start[0] + 90.0 * math.cos(toward), 1),
-                  round(start[1] + 90.0 * math.sin(toward), 1))  # fmt: skip
-        field["targets"] = [{"north": target[0], "east": target[1]},
-                            {"north": 200.0, "east": 1500.0, "false_target": True}]  # fmt: skip
+        target = (
+            round(start[0] + 90.0 * math.cos(toward), 1),
+            round(start[1] + 90.0 * math.sin(toward), 1),
+        )
+        field["targets"] = [
+            {"north": target[0], "east": target[1]},
+            {"north": 200.0, "east": 1500.0, "false_target": True},
+        ]
         path = _write(tmp_path / "field.yaml", field)
         out = tmp_path / "field"
         modes_before = len(obs.snapshot().modes)
@@ -195,8 +209,11 @@ def test_field_profile_flies_in_its_frame_inside_the_fence_on_stock_arducopter(
         records = read_records(out / f"mission-{inst.index}.jsonl")
 
         def first(event: str, **fields: object) -> dict[str, Any]:
-            return next(r for r in records
-                        if r["event"] == event and all(r.get(k) == v for k, v in fields.items()))  # fmt: skip
+            return next(
+                r
+                for r in records
+                if r["event"] == event and all(r.get(k) == v for k, v in fields.items())
+            )
 
         assert first("frame")["source"] == "GPS_GLOBAL_ORIGIN"
         begin, done = first("transit", state="begin"), first("transit", state="done")
@@ -215,11 +232,13 @@ def test_field_profile_flies_in_its_frame_inside_the_fence_on_stock_arducopter(
         outside = [p for p in airborne if not _inside(polygon, *p)]
         start_geo = profile_frame(profile).to_geodetic(*start, 0.0)[:2]
         closest = min(_metres(p, start_geo) for p in airborne)
-        print(f"field mission: seed {seed}, transit {begin['distance']} m in {done['seconds']} s, "
-              f"confirmed at t={confirmation['t']} s; observer: {len(airborne)} airborne GPS "
-              f"samples, {len(outside)} outside the fence, closest to the start point "
-              f"{closest:.1f} m, {trace.distance:.0f} m flown, max {trace.max_alt:.1f} m, "
-              f"modes {trace.modes}; map {out / f'map-{inst.index}.png'}")  # fmt: skip
+        print(
+            f"field mission: seed {seed}, transit {begin['distance']} m in {done['seconds']} s, "
+            f"confirmed at t={confirmation['t']} s; observer: {len(airborne)} airborne GPS "
+            f"samples, {len(outside)} outside the fence, closest to the start point "
+            f"{closest:.1f} m, {trace.distance:.0f} m flown, max {trace.max_alt:.1f} m, "
+            f"modes {trace.modes}; map {out / f'map-{inst.index}.png'}"
+        )
         assert len(airborne) >= 100
         assert outside == [], f"{len(outside)} of {len(airborne)} samples outside: {outside[:5]}"
         assert closest <= 15.0, "the vehicle never reached its start point: wrong frame?"

@@ -29,9 +29,17 @@ def test_twelve_companions_confirm_only_real_targets(
 ) -> None:
     profile = load_profile("paper-fixed-false")
     result = run_fleet(
-        FleetOptions(profile="paper-fixed-false", out=tmp_path, speedup=100.0, duration=600.0,
-                     backend=backend, persona=persona, seed=2, wall_limit=240)
-    )  # fmt: skip
+        FleetOptions(
+            profile="paper-fixed-false",
+            out=tmp_path,
+            speedup=100.0,
+            duration=600.0,
+            backend=backend,
+            persona=persona,
+            seed=2,
+            wall_limit=240,
+        )
+    )
     assert result.complete, result.ends
     assert result.end_reasons == dict.fromkeys(range(12), "mission time")
     assert result.confirmations, "no target confirmed in 600 sim s by 12 vehicles"

@@ -20,8 +20,9 @@ pytestmark = pytest.mark.usefixtures("fleet_processes")
 @pytest.mark.timeout(120)
 def test_vehicles_that_never_climb_fail_the_run(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    done = run_fleet_cli("--profile", small_profile(tmp_path, tau=1e9), "--duration", "300",
-                         "--out", str(out))  # fmt: skip
+    done = run_fleet_cli(
+        "--profile", small_profile(tmp_path, tau=1e9), "--duration", "300", "--out", str(out)
+    )
     assert done.returncode == 1, done.stdout + done.stderr
     assert "NOT COMPLETE (3 process(es) did not end normally)" in done.stdout
     for i in range(3):
@@ -42,8 +43,9 @@ def test_vehicles_that_never_climb_fail_the_run(tmp_path: Path) -> None:
 @pytest.mark.timeout(120)
 def test_an_emulator_that_exits_fails_the_run_with_its_error(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    result = run_fleet(FleetOptions(profile=small_profile(tmp_path), out=out, persona="nosuch",
-                                    duration=300.0))  # fmt: skip
+    result = run_fleet(
+        FleetOptions(profile=small_profile(tmp_path), out=out, persona="nosuch", duration=300.0)
+    )
     assert exit_status(result) == 1
     assert not result.complete
     assert result.stopped_by == "the emulator's exit"

@@ -37,10 +37,21 @@ def test_a_fleet_file_flies_the_listed_sitl_vehicles_under_their_own_system_ids(
     instances = {0: copter, 1: pixhawk}
     assert all(inst.sysid != i + 1 for i, inst in instances.items())
     fleet_file = tmp_path / "fleet.yaml"
-    fleet_file.write_text(yaml.safe_dump({"vehicles": [
-        {"index": i, "link": inst.companion_url, "system_id": inst.sysid, "autopilot": inst.kind}
-        for i, inst in instances.items()
-    ]}))  # fmt: skip
+    fleet_file.write_text(
+        yaml.safe_dump(
+            {
+                "vehicles": [
+                    {
+                        "index": i,
+                        "link": inst.companion_url,
+                        "system_id": inst.sysid,
+                        "autopilot": inst.kind,
+                    }
+                    for i, inst in instances.items()
+                ]
+            }
+        )
+    )
     out = tmp_path / "run"
     observers = {i: Observer(inst.observer_url, inst.sysid) for i, inst in instances.items()}
     fleet = start_fleet("--profile", str(profile), "--vehicles-file", str(fleet_file),

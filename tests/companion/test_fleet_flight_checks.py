@@ -29,10 +29,21 @@ def test_a_vehicle_off_its_layer_is_named_and_fence_time_counts_search_ticks_onl
 ) -> None:
     middle = (600.0, 1000.0)
     by_fence = (600.0, 70.0)  # the fence runs about 50 m east of the area's west edge
-    _log(tmp_path, 0, [("climb", *by_fence, 20.0), ("search", *middle, 40.0),
-                       ("search", *by_fence, 40.5), ("search", *middle, 39.0)])  # fmt: skip
-    _log(tmp_path, 1, [("search", *middle, 45.0), ("search", *middle, 48.0),
-                       ("return", *by_fence, 48.0)])  # fmt: skip
+    _log(
+        tmp_path,
+        0,
+        [
+            ("climb", *by_fence, 20.0),
+            ("search", *middle, 40.0),
+            ("search", *by_fence, 40.5),
+            ("search", *middle, 39.0),
+        ],
+    )
+    _log(
+        tmp_path,
+        1,
+        [("search", *middle, 45.0), ("search", *middle, 48.0), ("return", *by_fence, 48.0)],
+    )
     checks = flight_checks(PROFILE, tmp_path, 2)
     assert [c.samples for c in checks] == [3, 2]
     assert checks[0].near_fence == 1 / 3  # the climbing tick by the fence does not count
@@ -44,5 +55,7 @@ def test_a_vehicle_off_its_layer_is_named_and_fence_time_counts_search_ticks_onl
     result.flight_checks, result.complete = checks, True
     lines = summary_lines(result, tmp_path, 1.0)
     assert "  search time within 30 m of the fence, per vehicle: 0: 33%, 1: 0%" in lines
-    assert ("  LAYER: vehicle 1 left its altitude layer 45 m: 1 of 2 search samples more than "
-            "2 m off (worst 48.0 m)") in lines  # fmt: skip
+    assert (
+        "  LAYER: vehicle 1 left its altitude layer 45 m: 1 of 2 search samples more than "
+        "2 m off (worst 48.0 m)"
+    ) in lines

@@ -22,8 +22,16 @@ def test_lockstep_by_default_off_only_when_asked_and_always_flat_out() -> None:
 
 def test_the_command_lines_defaults_are_the_options_defaults() -> None:
     args = build_parser().parse_args(["fleet"])
-    for name in ("speedup", "duration", "backend", "persona", "setpoints", "seed", "land_wait",
-                 "lockstep"):  # fmt: skip
+    for name in (
+        "speedup",
+        "duration",
+        "backend",
+        "persona",
+        "setpoints",
+        "seed",
+        "land_wait",
+        "lockstep",
+    ):
         assert getattr(args, name) == default(name), name
 
 

@@ -89,8 +89,9 @@ def test_a_busy_base_port_is_refused_naming_the_port(
     base = free_port_block(2).base
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", base + 3))  # the emulator's vehicle 1
-        err = _refused(capsys, "--vehicles", "2", "--base-port", str(base),
-                       "--out", str(tmp_path / "run"))  # fmt: skip
+        err = _refused(
+            capsys, "--vehicles", "2", "--base-port", str(base), "--out", str(tmp_path / "run")
+        )
     assert f"--base-port {base}: UDP port {base + 3} (the emulator's vehicle 1):" in err
     assert "leave --base-port out for a free block" in err
 
@@ -110,8 +111,9 @@ def test_a_base_port_another_emulator_sends_to_is_refused(
             s.bind(("0.0.0.0", base))
             s.settimeout(30)
             s.recvfrom(2048)  # the stray is up and sending to our port
-        err = _refused(capsys, "--vehicles", "2", "--base-port", str(base),
-                       "--out", str(tmp_path / "run"))  # fmt: skip
+        err = _refused(
+            capsys, "--vehicles", "2", "--base-port", str(base), "--out", str(tmp_path / "run")
+        )
     finally:
         stray.terminate()
         stray.wait(10)
@@ -128,6 +130,7 @@ def test_resuming_a_run_whose_log_another_version_wrote_is_refused_naming_the_li
     (run / RUN_FILE).write_text(json.dumps(asked))
     log = run / "mission-0.jsonl"
     log.write_text('{"t":900.0,"event":"end","why":"mission time","found":0}\n')
-    err = _refused(capsys, "--out", str(run), "--resume", "--vehicles", "1", "--seed", "1",
-                   "--duration", "300")  # fmt: skip
+    err = _refused(
+        capsys, "--out", str(run), "--resume", "--vehicles", "1", "--seed", "1", "--duration", "300"
+    )
     assert f"--resume: {log}:1: 'end' record has field 'why', which End does not know" in err

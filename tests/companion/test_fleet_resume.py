@@ -39,17 +39,20 @@ def test_resume_continues_a_killed_companion_and_counts_its_whole_search(tmp_pat
     assert "killed by signal 9" in before["ends"][1]["how"]
     started = _search_start(log1)
 
-    again = run_fleet_cli("--profile", profile, "--vehicles", "2", "--duration", "200",
-                          "--out", str(out))  # fmt: skip
+    again = run_fleet_cli(
+        "--profile", profile, "--vehicles", "2", "--duration", "200", "--out", str(out)
+    )
     assert again.returncode == 2, again.stderr
     assert "add --resume" in again.stderr
-    other = run_fleet_cli("--profile", profile, "--vehicles", "2", "--duration", "300",
-                          "--out", str(out), "--resume")  # fmt: skip
+    other = run_fleet_cli(
+        "--profile", profile, "--vehicles", "2", "--duration", "300", "--out", str(out), "--resume"
+    )
     assert other.returncode == 2
     assert f"--resume: {out} was a run with duration 200.0, not 300.0" in other.stderr
 
-    result = run_fleet(FleetOptions(profile=profile, out=out, vehicles=2, duration=200.0,
-                                    resume=True))  # fmt: skip
+    result = run_fleet(
+        FleetOptions(profile=profile, out=out, vehicles=2, duration=200.0, resume=True)
+    )
     assert result.complete, result.ends
     assert result.ends[0].how == "mission time (earlier run)"
     assert result.ends[0].exit_code is None

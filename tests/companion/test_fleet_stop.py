@@ -59,8 +59,11 @@ def test_one_sigint_lands_every_vehicle_then_writes_the_summary(tmp_path: Path) 
         assert "second signal" not in (out / f"companion-{i}.log").read_text()
     emulator = read_records(out / "emulator-events.jsonl")
     for i in range(3):
-        mine = [r["event"] if r["event"] != "mode" else r["mode"] for r in emulator
-                if r.get("vehicle") == i and r["event"] in ("mode", "armed", "disarmed")]  # fmt: skip
+        mine = [
+            r["event"] if r["event"] != "mode" else r["mode"]
+            for r in emulator
+            if r.get("vehicle") == i and r["event"] in ("mode", "armed", "disarmed")
+        ]
         # RTL flown to the ground; the PX4 persona, as PX4, then holds once landed and disarmed
         assert mine[-3:] == ["RTL", "disarmed", "HOLD"], f"vehicle {i}: {mine}"
     assert not processes_naming(str(out))
@@ -90,8 +93,12 @@ def test_a_killed_fleet_leaves_no_process_behind(tmp_path: Path) -> None:
     fleet.kill()  # SIGKILL: the fleet cannot stop its children itself
     fleet.wait(10)
     try:
-        wait_until(lambda: processes_naming(str(out)), 30, "the fleet's children gone",
-                   until=lambda left: not left)  # fmt: skip
+        wait_until(
+            lambda: processes_naming(str(out)),
+            30,
+            "the fleet's children gone",
+            until=lambda left: not left,
+        )
     finally:
         for pid in processes_naming(str(out)):
             os.kill(pid, signal.SIGKILL)

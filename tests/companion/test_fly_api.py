@@ -35,8 +35,12 @@ def test_a_script_flies_a_mission_to_its_end(tmp_path: Path) -> None:
         reason = asyncio.run(main())
     assert reason == "mission time"
     assert _phases(tmp_path / "mission-0.jsonl") == [
-        "prepare", "climb", "search", "return", "done",
-    ]  # fmt: skip
+        "prepare",
+        "climb",
+        "search",
+        "return",
+        "done",
+    ]
 
 
 def test_leaving_the_block_early_ends_with_the_end_action_and_waits(tmp_path: Path) -> None:
@@ -47,8 +51,12 @@ def test_leaving_the_block_early_ends_with_the_end_action_and_waits(tmp_path: Pa
         async with fly(
             PROFILE, 0, link, log_dir=tmp_path, duration=600.0, land_wait=120.0
         ) as flight:
-            await wait_until_async(lambda: flight.mission.phase, 120.0, "the search",
-                                   until=lambda phase: phase is Phase.SEARCH)  # fmt: skip
+            await wait_until_async(
+                lambda: flight.mission.phase,
+                120.0,
+                "the search",
+                until=lambda phase: phase is Phase.SEARCH,
+            )
         return await flight.ended()
 
     with running_emulator(make_config(1, base, speedup=20.0)):

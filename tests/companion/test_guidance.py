@@ -41,9 +41,12 @@ def test_waypoint_outside_fence_is_clamped_onto_it() -> None:
 
 @settings(max_examples=200, deadline=None)
 @given(
-    st.floats(0, 1000), st.floats(0, 1000), st.floats(-3000, 3000), st.floats(-3000, 3000),
+    st.floats(0, 1000),
+    st.floats(0, 1000),
+    st.floats(-3000, 3000),
+    st.floats(-3000, 3000),
     st.floats(0.01, 2.0),
-)  # fmt: skip
+)
 def test_look_ahead_point_stays_inside_fence(
     n: float, e: float, wn: float, we: float, period: float
 ) -> None:

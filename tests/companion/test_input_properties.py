@@ -37,8 +37,13 @@ ANY_FLOAT = st.one_of(
 SAMPLE = st.tuples(
     st.integers(0, 2**32 - 1),  # time_boot_ms
     st.sampled_from([1, 1, 1, 2, 190]),  # component
-    ANY_FLOAT, ANY_FLOAT, ANY_FLOAT, ANY_FLOAT, ANY_FLOAT, ANY_FLOAT,
-)  # fmt: skip
+    ANY_FLOAT,
+    ANY_FLOAT,
+    ANY_FLOAT,
+    ANY_FLOAT,
+    ANY_FLOAT,
+    ANY_FLOAT,
+)
 LIMITS = TelemetryLimits(max_speed=40.0, max_rate=15.0)
 GUIDE = GuidanceConfig(speed=20.0, altitude=30.0, acceptance_radius=5.0)
 FENCE = Geofence.rectangle(3000.0, 3000.0)
@@ -83,8 +88,13 @@ def test_only_sane_positions_on_one_clock_leave_the_link(
 
 
 @settings(max_examples=200, deadline=None)
-@given(st.lists(st.tuples(st.booleans(), st.integers(0, 2**32 - 1), ANY_FLOAT, ANY_FLOAT,
-                          ANY_FLOAT), min_size=1, max_size=20))  # fmt: skip
+@given(
+    st.lists(
+        st.tuples(st.booleans(), st.integers(0, 2**32 - 1), ANY_FLOAT, ANY_FLOAT, ANY_FLOAT),
+        min_size=1,
+        max_size=20,
+    )
+)
 def test_only_finite_sensor_readings_leave_the_link(
     readings: list[tuple[bool, int, float, float, float]],
 ) -> None:
@@ -93,8 +103,11 @@ def test_only_finite_sensor_readings_leave_the_link(
     link.listener = got.extend
     mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
     for contact, t, x, y, z in readings:
-        msg = (mav.debug_vect_encode(b"DET", t, x, y, z) if contact
-               else mav.named_value_float_encode(t, b"SENS_SIG", x))  # fmt: skip
+        msg = (
+            mav.debug_vect_encode(b"DET", t, x, y, z)
+            if contact
+            else mav.named_value_float_encode(t, b"SENS_SIG", x)
+        )
         link._receive(bytes(msg.pack(mav)), ("127.0.0.1", 5))
         link._publish_pending()
     assert len(got) + sum(link.guard.dropped.values()) == len(readings)
@@ -112,8 +125,7 @@ ORIGIN = LocalFrame(47.397742, 8.545594, 488.0)
 
 
 @settings(max_examples=200, deadline=None)
-@given(st.lists(st.tuples(st.integers(0, 2**32 - 1), INT32, INT32, INT32), min_size=1,
-                max_size=30))  # fmt: skip
+@given(st.lists(st.tuples(st.integers(0, 2**32 - 1), INT32, INT32, INT32), min_size=1, max_size=30))
 def test_only_gps_positions_on_earth_leave_the_link(
     samples: list[tuple[int, int, int, int]],
 ) -> None:
@@ -129,8 +141,10 @@ def test_only_gps_positions_on_earth_leave_the_link(
         msg = mav.global_position_int_encode(t, lat, lon, alt, alt, 0, 0, 0, 0)
         link._receive(bytes(msg.pack(mav)), ("127.0.0.1", 5))
         link._publish_pending()
-    outside = sum((lat, lon) != (0, 0) and (abs(lat) > 900_000_000 or abs(lon) > 1_800_000_000)
-                  for _, lat, lon, _ in samples)  # fmt: skip
+    outside = sum(
+        (lat, lon) != (0, 0) and (abs(lat) > 900_000_000 or abs(lon) > 1_800_000_000)
+        for _, lat, lon, _ in samples
+    )
     assert link.guard.dropped["lat/lon out of range"] == outside
     for event in got:
         assert isinstance(event, GlobalPosition)
@@ -151,8 +165,9 @@ def test_no_setpoint_outside_the_envelope_is_sent(
         assert kind == "position"  # no safe point known yet: nothing sent
         assert why is not None
         return
-    assert all(math.isfinite(v) for v in (safe.north, safe.east, safe.down, safe.vn, safe.ve,
-                                          safe.vd))  # fmt: skip
+    assert all(
+        math.isfinite(v) for v in (safe.north, safe.east, safe.down, safe.vn, safe.ve, safe.vd)
+    )
     assert guard.cause(safe) is None
     assert (why is None) == (safe == NedSetpoint(*values))
 

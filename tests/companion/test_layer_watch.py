@@ -58,8 +58,10 @@ def test_a_vehicle_off_its_layer_is_reported_live_and_again_when_back(
     assert logged[0][0] == pytest.approx(5.0 + LAYER_HOLD_S)
     assert logged[1][0] == pytest.approx(12.0 + LAYER_HOLD_S)
     lines = [r.getMessage() for r in caplog.records]
-    assert lines[0] == (f"vehicle 2 outside its altitude layer: {low:.1f} m above home, "
-                        f"layer {layer:g} m (+-{LAYER_TOLERANCE_M:g} m)")  # fmt: skip
+    assert lines[0] == (
+        f"vehicle 2 outside its altitude layer: {low:.1f} m above home, "
+        f"layer {layer:g} m (+-{LAYER_TOLERANCE_M:g} m)"
+    )
     assert lines[1].startswith(f"vehicle 2 back in its altitude layer {layer:g} m")
 
 

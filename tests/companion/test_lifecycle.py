@@ -42,9 +42,19 @@ from companion.mission.phase import Phase
 from companion.telemetry import MissionLog, events, read_log
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "companion.md"
-WAITS: list[Event] = [Connected(), ControlBack(), Located(True), Prepared(True, True), TakeoffSent(True),
-         ClimbStopped(), Climbed(True), Retried(), SetpointsBegun(False, True),
-         TransitEnded(True, 60.0), SearchLeft()]  # fmt: skip
+WAITS: list[Event] = [
+    Connected(),
+    ControlBack(),
+    Located(True),
+    Prepared(True, True),
+    TakeoffSent(True),
+    ClimbStopped(),
+    Climbed(True),
+    Retried(),
+    SetpointsBegun(False, True),
+    TransitEnded(True, 60.0),
+    SearchLeft(),
+]
 
 
 def at(phase: Phase, **facts: Any) -> Mission:
@@ -173,10 +183,20 @@ def test_who_is_in_control_goes_to_the_control_machine() -> None:
 
 
 ANY_EVENT: list[Event] = [
-    Began(False), *WAITS, SearchBegun(), Ending(True), EndRecorded(), Landed(),
-    EndRequested("x"), OperatorEnd(FlightMode.RTL, "x"), Signal(), Battery(5, 20),
-    Gps(None), Gps("east"), LinkLost(),
-]  # fmt: skip
+    Began(False),
+    *WAITS,
+    SearchBegun(),
+    Ending(True),
+    EndRecorded(),
+    Landed(),
+    EndRequested("x"),
+    OperatorEnd(FlightMode.RTL, "x"),
+    Signal(),
+    Battery(5, 20),
+    Gps(None),
+    Gps("east"),
+    LinkLost(),
+]
 
 
 @pytest.mark.parametrize("phase", list(Phase))
@@ -199,15 +219,20 @@ class _Vehicle:
     def outcome(self, do: Do | Action, state: Mission) -> Event | None:
         assert isinstance(do, Do), do
         answers: dict[Do, Event | None] = {
-            Do.CONNECT: Connected(), Do.LOCATE: Located(self.armed),
+            Do.CONNECT: Connected(),
+            Do.LOCATE: Located(self.armed),
             Do.PREPARE: Prepared(True, True),
-            Do.TAKEOFF: TakeoffSent(True), Do.AWAIT_CLIMB_STOP: ClimbStopped(),
+            Do.TAKEOFF: TakeoffSent(True),
+            Do.AWAIT_CLIMB_STOP: ClimbStopped(),
             Do.CLIMB: Climbed(True),
             Do.FLY: SetpointsBegun(self.search_start is not None, start_point=True),
-            Do.TRANSIT: TransitEnded(True, 60.0), Do.START_SEARCH: SearchBegun(),
-            Do.AWAIT_SEARCH_END: SearchLeft(), Do.FINISH: Ending(self.armed),
-            Do.RECORD_END: EndRecorded(), Do.FLY_END_ACTION: Landed(),
-        }  # fmt: skip
+            Do.TRANSIT: TransitEnded(True, 60.0),
+            Do.START_SEARCH: SearchBegun(),
+            Do.AWAIT_SEARCH_END: SearchLeft(),
+            Do.FINISH: Ending(self.armed),
+            Do.RECORD_END: EndRecorded(),
+            Do.FLY_END_ACTION: Landed(),
+        }
         if do is Do.PREPARE:
             self.armed = True
         return answers.get(do)
@@ -240,12 +265,34 @@ def _fly(
 
 def test_a_whole_mission_from_connect_to_done() -> None:
     phases, steps, state = _fly(Began(False), None)
-    assert [p.value for p in phases] == ["connect", "prepare", "climb", "transit", "search",
-                                         "return", "done"]  # fmt: skip
-    assert steps == [Do.CONNECT, Do.INSTALL_FENCE, Do.LOCATE, Do.PREPARE, Do.TAKEOFF,
-                     Do.AWAIT_CLIMB_STOP, Do.BEGIN_SETPOINTS, Do.CLIMB, Do.FLY, Do.TRANSIT,
-                     Do.SAY_TRANSIT_DONE, Do.START_SEARCH, Do.ANNOUNCE_LEVEL,
-                     Do.AWAIT_SEARCH_END, Do.FINISH, Do.RECORD_END, Do.FLY_END_ACTION]  # fmt: skip
+    assert [p.value for p in phases] == [
+        "connect",
+        "prepare",
+        "climb",
+        "transit",
+        "search",
+        "return",
+        "done",
+    ]
+    assert steps == [
+        Do.CONNECT,
+        Do.INSTALL_FENCE,
+        Do.LOCATE,
+        Do.PREPARE,
+        Do.TAKEOFF,
+        Do.AWAIT_CLIMB_STOP,
+        Do.BEGIN_SETPOINTS,
+        Do.CLIMB,
+        Do.FLY,
+        Do.TRANSIT,
+        Do.SAY_TRANSIT_DONE,
+        Do.START_SEARCH,
+        Do.ANNOUNCE_LEVEL,
+        Do.AWAIT_SEARCH_END,
+        Do.FINISH,
+        Do.RECORD_END,
+        Do.FLY_END_ACTION,
+    ]
     assert state.end_reason == "mission time"
 
 
@@ -259,9 +306,13 @@ def _log(tmp_path: Path, *records: events.DurableEvent) -> Path:
 
 
 def test_restart_after_the_end_does_nothing(tmp_path: Path) -> None:
-    path = _log(tmp_path, events.Start(0, "paper-fixed", 1, 0, 30.0),
-                events.PhaseChange("search", search_start=40.0), events.End("mission time", 2),
-                events.PhaseChange("return"))  # fmt: skip
+    path = _log(
+        tmp_path,
+        events.Start(0, "paper-fixed", 1, 0, 30.0),
+        events.PhaseChange("search", search_start=40.0),
+        events.End("mission time", 2),
+        events.PhaseChange("return"),
+    )
     recovered = read_log(path)
     phases, steps, state = _fly(Began(recovered.ended), recovered.search_start)
     assert phases == [Phase.CONNECT, Phase.DONE]
@@ -270,9 +321,13 @@ def test_restart_after_the_end_does_nothing(tmp_path: Path) -> None:
 
 
 def test_restart_during_the_search_does_not_fly_the_transit_again(tmp_path: Path) -> None:
-    path = _log(tmp_path, events.Start(0, "paper-fixed", 1, 0, 30.0),
-                events.PhaseChange("transit"), events.PhaseChange("search", search_start=40.0),
-                events.Confirmation(10.0, 20.0, 2, 1))  # fmt: skip
+    path = _log(
+        tmp_path,
+        events.Start(0, "paper-fixed", 1, 0, 30.0),
+        events.PhaseChange("transit"),
+        events.PhaseChange("search", search_start=40.0),
+        events.Confirmation(10.0, 20.0, 2, 1),
+    )
     recovered = read_log(path)
     assert recovered.search_start == 40.0
     assert not recovered.ended

@@ -48,10 +48,15 @@ class _StockCopter(asyncio.DatagramProtocol):
         self.transport.sendto(msg.pack(self.mav), self.peer)
 
     def heartbeat(self) -> None:
-        self.send(self.mav.heartbeat_encode(mavlink2.MAV_TYPE_QUADROTOR,
-                                            mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA,
-                                            mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-                                            self.custom_mode, mavlink2.MAV_STATE_STANDBY))  # fmt: skip
+        self.send(
+            self.mav.heartbeat_encode(
+                mavlink2.MAV_TYPE_QUADROTOR,
+                mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA,
+                mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                self.custom_mode,
+                mavlink2.MAV_STATE_STANDBY,
+            )
+        )
 
     def tick(self) -> None:
         """10 ms of vehicle time: the position if it was asked for."""
@@ -70,8 +75,11 @@ class _StockCopter(asyncio.DatagramProtocol):
                 self.intervals[round(msg.param1)] = msg.param2
                 result = mavlink2.MAV_RESULT_ACCEPTED
             elif msg.command == mavlink2.MAV_CMD_COMPONENT_ARM_DISARM:
-                self.send(self.mav.statustext_encode(mavlink2.MAV_SEVERITY_CRITICAL,
-                                                     _ARM_REFUSAL.encode()))  # fmt: skip
+                self.send(
+                    self.mav.statustext_encode(
+                        mavlink2.MAV_SEVERITY_CRITICAL, _ARM_REFUSAL.encode()
+                    )
+                )
                 result = mavlink2.MAV_RESULT_FAILED
             else:
                 result = mavlink2.MAV_RESULT_UNSUPPORTED
@@ -166,8 +174,9 @@ def test_refusal_carries_the_vehicle_reason_and_no_parameter_loop() -> None:
     port = _free_udp_port()
 
     async def main() -> tuple[Any, Any, Any, _StockCopter]:
-        link = PymavlinkLink(url=f"udpin:127.0.0.1:{port}", target_system=1, command_timeout=0.2,
-                             command_tries=3)  # fmt: skip
+        link = PymavlinkLink(
+            url=f"udpin:127.0.0.1:{port}", target_system=1, command_timeout=0.2, command_tries=3
+        )
         await link.open()
         vehicle = await _vehicle(port)
         vehicle.heartbeat()
@@ -202,8 +211,9 @@ def test_waiting_for_the_vehicle_names_url_awaited_id_and_ids_heard(
 ) -> None:
     port = _free_udp_port()
     url = f"udpin:127.0.0.1:{port}"
-    config = MissionConfig(vehicle=1, profile=load_profile("paper-fixed"), log_dir=tmp_path,
-                           waiting_line_period=0.3)  # fmt: skip
+    config = MissionConfig(
+        vehicle=1, profile=load_profile("paper-fixed"), log_dir=tmp_path, waiting_line_period=0.3
+    )
 
     async def main() -> None:
         link = PymavlinkLink(url=url, target_system=2)

@@ -23,15 +23,18 @@ def _log(path: Path, logged: list[tuple[float, events.DurableEvent]]) -> None:
 
 def test_progress_end_and_track_of_one_searched_log(tmp_path: Path) -> None:
     path = tmp_path / "mission-0.jsonl"
-    _log(path, [
-        (0.0, events.Start(0, "paper-fixed", 1, 0, 30.0)),
-        (12.0, events.PhaseChange("search", search_start=12.0)),
-        (30.0, events.Detection(100.0, 200.0, 1)),
-        (30.0, events.Level(1, 1)),
-        (41.0, events.Confirmation(101.0, 199.0, 1, 1)),
-        (41.0, events.Level(0, 0)),
-        (50.0, events.PhaseChange("return")),
-    ])  # fmt: skip
+    _log(
+        path,
+        [
+            (0.0, events.Start(0, "paper-fixed", 1, 0, 30.0)),
+            (12.0, events.PhaseChange("search", search_start=12.0)),
+            (30.0, events.Detection(100.0, 200.0, 1)),
+            (30.0, events.Level(1, 1)),
+            (41.0, events.Confirmation(101.0, 199.0, 1, 1)),
+            (41.0, events.Level(0, 0)),
+            (50.0, events.PhaseChange("return")),
+        ],
+    )
     log = MissionLog(path)
     log.emit(55.5, "tick", phase="return", level=0, north=5.0, east=6.0, alt=30.0, found=1)
     log.emit(56.0, "stray", address="127.0.0.1:5", locked="127.0.0.1:4")

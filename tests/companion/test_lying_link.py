@@ -76,8 +76,12 @@ class Flight:
 
 def _start(args: list[str], log: Path) -> subprocess.Popen[bytes]:
     with log.open("ab") as f:
-        return subprocess.Popen([sys.executable, *args], stdout=f, stderr=subprocess.STDOUT,
-                                env=dict(os.environ, PYTHONUNBUFFERED="1"))  # fmt: skip
+        return subprocess.Popen(
+            [sys.executable, *args],
+            stdout=f,
+            stderr=subprocess.STDOUT,
+            env=dict(os.environ, PYTHONUNBUFFERED="1"),
+        )
 
 
 def _stop(p: subprocess.Popen[bytes]) -> None:
@@ -97,11 +101,18 @@ def fly(fleet_processes: Path) -> Iterator[Callable[..., Flight]]:
     tmp_path = fleet_processes
     procs: list[subprocess.Popen[bytes]] = []
     relays: list[LyingRelay] = []
-    profile = write_profile_with(tmp_path / "lying.yaml", "lying", failsafe=FAILSAFE,
-                                 mission={"duration": 600.0})  # fmt: skip
+    profile = write_profile_with(
+        tmp_path / "lying.yaml", "lying", failsafe=FAILSAFE, mission={"duration": 600.0}
+    )
 
-    def start(persona: str, backend: str, *, duration: float = 60.0, land_wait: float = 600.0,
-              **relay: Any) -> Flight:  # fmt: skip
+    def start(
+        persona: str,
+        backend: str,
+        *,
+        duration: float = 60.0,
+        land_wait: float = 600.0,
+        **relay: Any,
+    ) -> Flight:
         port = free_udp_base(1)
         r = LyingRelay(port, max_speed=SPEED, **relay).start()
         relays.append(r)
@@ -127,8 +138,12 @@ def fly(fleet_processes: Path) -> Iterator[Callable[..., Flight]]:
             r.stop()
 
 
-PAIRS = [("px4", "pymavlink"), ("ardupilot", "pymavlink"), ("px4", "mavsdk"),
-         ("ardupilot", "mavsdk")]  # fmt: skip
+PAIRS = [
+    ("px4", "pymavlink"),
+    ("ardupilot", "pymavlink"),
+    ("px4", "mavsdk"),
+    ("ardupilot", "mavsdk"),
+]
 
 
 @pytest.mark.timeout(400)
@@ -161,9 +176,11 @@ def test_search_flies_through_lies_and_no_bad_setpoint_leaves(
 def _say_counts(f: Flight, persona: str, backend: str) -> None:
     """The counts for the issue's closing note (printed with -s)."""
     dropped = {r["cause"]: r["total"] for r in f.records() if r["event"] == "telemetry_dropped"}
-    print(f"\n{persona}/{backend}: injected {dict(f.relay.stats.injected)}, faults "
-          f"{dict(f.relay.stats.faults)}, setpoints checked {f.relay.stats.setpoints}, bad "
-          f"{len(f.relay.stats.bad_setpoints)}, dropped {dropped}, exit {f.exit_record()}")  # fmt: skip
+    print(
+        f"\n{persona}/{backend}: injected {dict(f.relay.stats.injected)}, faults "
+        f"{dict(f.relay.stats.faults)}, setpoints checked {f.relay.stats.setpoints}, bad "
+        f"{len(f.relay.stats.bad_setpoints)}, dropped {dropped}, exit {f.exit_record()}"
+    )
 
 
 @pytest.mark.timeout(400)

@@ -32,16 +32,27 @@ def test_arducopter_through_a_lying_link(
 ) -> None:
     index = sitl.free_index("arducopter")
     profile = write_profile_with(
-        tmp_path / "lying-sitl.yaml", "lying-sitl",
-        targets=[{"north": 1500.0, "east": 1500.0}], fleet={"vehicles": index + 1, "speed": SPEED},
-        sensors=sensors(300.0, 100.0), policy={"levels": levels(600.0, 300.0, 150.0)},
-        mission={"duration": 600.0}, failsafe={"link_wait": 30.0},
-    )  # fmt: skip
+        tmp_path / "lying-sitl.yaml",
+        "lying-sitl",
+        targets=[{"north": 1500.0, "east": 1500.0}],
+        fleet={"vehicles": index + 1, "speed": SPEED},
+        sensors=sensors(300.0, 100.0),
+        policy={"levels": levels(600.0, 300.0, 150.0)},
+        mission={"duration": 600.0},
+        failsafe={"link_wait": 30.0},
+    )
     inst = arducopter(speedup=SPEEDUP, index=index)
     tcp = int(inst.companion_url.rsplit(":", 1)[1])
     port = free_udp_base(1)
-    relay = LyingRelay(port, sysid=inst.sysid, vehicle_tcp=("127.0.0.1", tcp), kinds=KINDS,
-                       rate_hz=5.0, fault_chance=0.05, max_speed=SPEED)  # fmt: skip
+    relay = LyingRelay(
+        port,
+        sysid=inst.sysid,
+        vehicle_tcp=("127.0.0.1", tcp),
+        kinds=KINDS,
+        rate_hz=5.0,
+        fault_chance=0.05,
+        max_speed=SPEED,
+    )
     wait_until(lambda: _connects(relay), 60, "the relay connected to ArduCopter's TCP port")
     log = tmp_path / "companion.log"
     with log.open("ab") as out:
@@ -74,9 +85,11 @@ def test_arducopter_through_a_lying_link(
     dropped = {r["cause"]: r["total"] for r in recs if r["event"] == "telemetry_dropped"}
     for cause in ("non-finite", "position out of range", "moved too fast", "other component"):
         assert cause in dropped, dropped
-    print(f"\narducopter SITL: injected {dict(stats.injected)}, faults {dict(stats.faults)}, "
-          f"setpoints checked {stats.setpoints}, bad {len(stats.bad_setpoints)}, dropped "
-          f"{dropped}, exit {exits}")  # fmt: skip
+    print(
+        f"\narducopter SITL: injected {dict(stats.injected)}, faults {dict(stats.faults)}, "
+        f"setpoints checked {stats.setpoints}, bad {len(stats.bad_setpoints)}, dropped "
+        f"{dropped}, exit {exits}"
+    )
 
 
 def _connects(relay: LyingRelay) -> bool:

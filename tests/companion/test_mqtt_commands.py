@@ -59,15 +59,23 @@ def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> No
         time.sleep(1.5)  # about 75 sim s at 50x: 1.5 km of flight if it were still searching
         held = [s for s in states(0)[held_from:] if s["phase"] == "paused"]
         assert len(held) >= 5
-        drift = max(math.dist((a["north"], a["east"]), (b["north"], b["east"]))
-                    for a in held for b in held)  # fmt: skip
+        drift = max(
+            math.dist((a["north"], a["east"]), (b["north"], b["east"])) for a in held for b in held
+        )
         assert drift < 5.0, f"vehicle 0 moved {drift:.1f} m while paused"
         command("uav0", {"command": "resume", "id": "r1"})
         wait_until(lambda: phase(0) == "search", 20, "vehicle 0 searching again")
         here = held[-1]
-        wait_until(lambda: math.dist((here["north"], here["east"]),
-                                (states(0)[-1]["north"], states(0)[-1]["east"])) > 50.0,
-              20, "vehicle 0 moving again")  # fmt: skip
+        wait_until(
+            lambda: (
+                math.dist(
+                    (here["north"], here["east"]), (states(0)[-1]["north"], states(0)[-1]["east"])
+                )
+                > 50.0
+            ),
+            20,
+            "vehicle 0 moving again",
+        )
         command("all", {"command": "land", "id": "l1"})
         fleet.join(60)
         assert not fleet.is_alive(), "the fleet did not end after abort and land"
@@ -81,7 +89,10 @@ def test_pause_holds_resume_flies_abort_returns_land_lands(tmp_path: Path) -> No
     v0 = read_records(out / "mission-0.jsonl")
     v1 = read_records(out / "mission-1.jsonl")
     assert [(r["command"], r["id"]) for r in v0 if r["event"] == "command"] == [
-        ("pause", "p1"), ("resume", "r1"), ("land", "l1")]  # fmt: skip
+        ("pause", "p1"),
+        ("resume", "r1"),
+        ("land", "l1"),
+    ]
     logged = read_log(out / "mission-0.jsonl")
     assert events.PhaseChange("paused", by="operator") in logged.of(events.PhaseChange)
     assert [e.reason for e in logged.of(events.End)] == ["operator land"]

@@ -40,18 +40,31 @@ def log_events(path: Path) -> list[dict[str, Any]]:
 def test_fleet_publishes_every_event_in_order_state_and_status(tmp_path: Path) -> None:
     prefix = f"mdm/test-{os.getpid()}-fleet"
     profile = write_profile_with(
-        tmp_path / "profile.yaml", "mqtt-fleet-test",
-        targets=[{"north": 1500.0, "east": 1500.0}, {"north": 700.0, "east": 700.0},
-                 {"north": 600.0, "east": 2400.0, "false_target": True}],
-        sensors=sensors(1000.0, 200.0), policy={"memory_radius": 300.0},
+        tmp_path / "profile.yaml",
+        "mqtt-fleet-test",
+        targets=[
+            {"north": 1500.0, "east": 1500.0},
+            {"north": 700.0, "east": 700.0},
+            {"north": 600.0, "east": 2400.0, "false_target": True},
+        ],
+        sensors=sensors(1000.0, 200.0),
+        policy={"memory_radius": 300.0},
         mission={"duration": 600.0},
         mqtt={"host": "127.0.0.1", "port": 1883, "topic_prefix": prefix, "state_rate": 5.0},
-    )  # fmt: skip
+    )
     sub = Subscriber(1883, f"{prefix}/#", tmp_path / "sub.txt")
     try:
         sub.ready(1883, f"{prefix}/probe")
-        run_fleet(FleetOptions(profile=str(profile), out=tmp_path / "run", speedup=50.0,
-                               duration=200.0, seed=3, wall_limit=90))  # fmt: skip
+        run_fleet(
+            FleetOptions(
+                profile=str(profile),
+                out=tmp_path / "run",
+                speedup=50.0,
+                duration=200.0,
+                seed=3,
+                wall_limit=90,
+            )
+        )
 
         def offline(i: int) -> bool:
             status = [m.json() for m in sub.messages("status") if f"/uav{i}/" in m.topic]

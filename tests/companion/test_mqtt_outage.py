@@ -37,9 +37,12 @@ def test_events_survive_a_30_s_broker_outage_complete_and_in_order(
         {"north": n, "east": e, "false_target": True}
         for n, e in ((800.0, 800.0), (800.0, 2200.0), (2200.0, 800.0), (1500.0, 1500.0))
     ]
-    profile = write_profile_with(tmp_path / "profile.yaml", "mqtt-outage-test",
-                                 targets=real + false,
-                                 policy={"levels": levels(600.0, 300.0, 30.0)})  # fmt: skip
+    profile = write_profile_with(
+        tmp_path / "profile.yaml",
+        "mqtt-outage-test",
+        targets=real + false,
+        policy={"levels": levels(600.0, 300.0, 30.0)},
+    )
     out = tmp_path / "run"
     broker = mosquitto()
     broker.start()
@@ -59,22 +62,33 @@ def test_events_survive_a_30_s_broker_outage_complete_and_in_order(
     try:
         sub.ready(broker.port, f"{PREFIX}/probe")
         fleet.start()
-        wait_until(lambda: all(any(r.get("phase") == "search" for r in logged(i)) for i in (0, 1))
-              and all(len(arrived(i)) == len(logged(i)) for i in (0, 1)), 60,
-              "both vehicles searching, their events delivered")  # fmt: skip
+        wait_until(
+            lambda: (
+                all(any(r.get("phase") == "search" for r in logged(i)) for i in (0, 1))
+                and all(len(arrived(i)) == len(logged(i)) for i in (0, 1))
+            ),
+            60,
+            "both vehicles searching, their events delivered",
+        )
         broker.stop()
         at_stop = [len(logged(i)) for i in (0, 1)]
         time.sleep(OUTAGE)  # the outage under test
         at_restart = [len(logged(i)) for i in (0, 1)]
         received_during = [len(set(arrived(i))) for i in (0, 1)]
         broker.start()
-        wait_until(lambda: all(len(set(arrived(i))) >= at_restart[i] for i in (0, 1)), 30,
-              "the events of the outage delivered")  # fmt: skip
+        wait_until(
+            lambda: all(len(set(arrived(i))) >= at_restart[i] for i in (0, 1)),
+            30,
+            "the events of the outage delivered",
+        )
         assert publish(broker.port, f"{PREFIX}/all/cmd", '{"command": "abort"}').returncode == 0
         fleet.join(60)
         assert not fleet.is_alive(), "the fleet did not end after abort"
-        wait_until(lambda: all(len(set(arrived(i))) == len(logged(i)) for i in (0, 1)), 15,
-              "the last events delivered")  # fmt: skip
+        wait_until(
+            lambda: all(len(set(arrived(i))) == len(logged(i)) for i in (0, 1)),
+            15,
+            "the last events delivered",
+        )
     finally:
         sub.stop()
         broker.stop()
@@ -90,7 +104,9 @@ def test_events_survive_a_30_s_broker_outage_complete_and_in_order(
             if f"/uav{i}/" in m.topic:
                 events.setdefault(e["seq"], {k: v for k, v in e.items() if k != "seq"})
         assert [events[s] for s in first] == [r | {"vehicle": i} for r in logged(i)]
-        print(f"vehicle {i}: {at_stop[i]} events before the outage, "
-              f"{at_restart[i] - at_stop[i]} during it, {len(first) - at_restart[i]} after; "
-              f"{len(seqs) - len(first)} duplicate(s)")  # fmt: skip
+        print(
+            f"vehicle {i}: {at_stop[i]} events before the outage, "
+            f"{at_restart[i] - at_stop[i]} during it, {len(first) - at_restart[i]} after; "
+            f"{len(seqs) - len(first)} duplicate(s)"
+        )
         assert next(r for r in logged(i) if r["event"] == "end")["reason"] == "operator abort"

@@ -39,17 +39,20 @@ def test_only_the_operator_commands_and_vehicles_publish_only_their_own(
     _password_file(passwd)
     (tmp_path / "uav0.pw").write_text(PASSWORDS["uav0"] + "\n")
     profile = write_profile_with(
-        tmp_path / "profile.yaml", "mqtt-security-test",
-        targets=[{"north": 2950.0, "east": 2950.0}], fleet={"vehicles": 1},
-        sensors=sensors(500.0, 50.0), policy={"levels": levels(600.0, 300.0, 30.0)},
-    )  # fmt: skip
+        tmp_path / "profile.yaml",
+        "mqtt-security-test",
+        targets=[{"north": 2950.0, "east": 2950.0}],
+        fleet={"vehicles": 1},
+        sensors=sensors(500.0, 50.0),
+        policy={"levels": levels(600.0, 300.0, 30.0)},
+    )
     out = tmp_path / "run"
-    broker = mosquitto(security=f"allow_anonymous false\n"
-                       f"password_file {passwd}\nacl_file {ACL}\n")  # fmt: skip
+    broker = mosquitto(security=f"allow_anonymous false\npassword_file {passwd}\nacl_file {ACL}\n")
     broker.start()
     op = {"user": "operator", "password": PASSWORDS["operator"]}
-    sub = Subscriber(broker.port, "mdm/#", tmp_path / "sub.txt", user="operator",
-                     password=PASSWORDS["operator"])  # fmt: skip
+    sub = Subscriber(
+        broker.port, "mdm/#", tmp_path / "sub.txt", user="operator", password=PASSWORDS["operator"]
+    )
 
     def pause(**auth: str) -> subprocess.CompletedProcess[str]:
         msg = json.dumps({"command": "pause", "id": auth.get("user", "anonymous")})
@@ -67,8 +70,9 @@ def test_only_the_operator_commands_and_vehicles_publish_only_their_own(
             "--mqtt-password-file", str(tmp_path / "uav{vehicle}.pw"))),
     ))  # fmt: skip
     try:
-        sub.ready(broker.port, f"{PREFIX}/probe/cmd", user="operator",
-                  password=PASSWORDS["operator"])  # fmt: skip
+        sub.ready(
+            broker.port, f"{PREFIX}/probe/cmd", user="operator", password=PASSWORDS["operator"]
+        )
         fleet.start()
         wait_until(lambda: phase() == "search", 60, "vehicle 0 searching (its account publishes)")
 
@@ -98,7 +102,9 @@ def test_only_the_operator_commands_and_vehicles_publish_only_their_own(
 
     log = read_records(out / "mission-0.jsonl")
     assert [(r["command"], r["id"]) for r in log if r["event"] == "command"] == [
-        ("pause", "operator"), ("abort", None)]  # fmt: skip
+        ("pause", "operator"),
+        ("abort", None),
+    ]
     assert [e.reason for e in read_log(out / "mission-0.jsonl").of(events.End)] == [
         "operator abort"
     ]

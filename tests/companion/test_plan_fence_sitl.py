@@ -55,13 +55,16 @@ def test_a_profile_imported_from_a_qgc_plan_flies_inside_the_plans_fence_on_ardu
     fence = guidance_fence(profile)
     home_ne = profile_frame(profile).to_local(*HOME)[:2]
     seed, start = next(
-        (s, st) for s in range(500)
+        (s, st)
+        for s in range(500)
         if 300.0 <= math.dist(st := start_point(profile, s, inst.index, fence), home_ne) <= 800.0
-    )  # fmt: skip
+    )
     centre = (profile.area.north / 2, profile.area.east / 2)
     toward = math.atan2(centre[1] - start[1], centre[0] - start[0])
-    target = (round(start[0] + 90.0 * math.cos(toward), 1),
-              round(start[1] + 90.0 * math.sin(toward), 1))  # fmt: skip
+    target = (
+        round(start[0] + 90.0 * math.cos(toward), 1),
+        round(start[1] + 90.0 * math.sin(toward), 1),
+    )
     data = profile.model_dump(mode="json")
     data["targets"] = [{"north": target[0], "east": target[1]}]
     flown = _write(tmp_path / "flown.yaml", data)
@@ -71,8 +74,10 @@ def test_a_profile_imported_from_a_qgc_plan_flies_inside_the_plans_fence_on_ardu
     flight = _run(out, flown, inst, seed=seed)
 
     def context() -> str:
-        return (f"observer: {obs.snapshot().modes} armed {obs.snapshot().armed}\n"
-                f"{(out / 'companion.out').read_text(errors='replace')[-4000:]}")  # fmt: skip
+        return (
+            f"observer: {obs.snapshot().modes} armed {obs.snapshot().armed}\n"
+            f"{(out / 'companion.out').read_text(errors='replace')[-4000:]}"
+        )
 
     def landed_after_rtl() -> bool:
         t = obs.snapshot()
@@ -84,8 +89,11 @@ def test_a_profile_imported_from_a_qgc_plan_flies_inside_the_plans_fence_on_ardu
         records = read_records(out / f"mission-{inst.index}.jsonl")
 
         def first(event: str, **fields: object) -> dict[str, Any]:
-            return next(r for r in records
-                        if r["event"] == event and all(r.get(k) == v for k, v in fields.items()))  # fmt: skip
+            return next(
+                r
+                for r in records
+                if r["event"] == event and all(r.get(k) == v for k, v in fields.items())
+            )
 
         begin = first("transit", state="begin")
         assert (begin["to_north"], begin["to_east"]) == (round(start[0], 1), round(start[1], 1))
@@ -96,10 +104,12 @@ def test_a_profile_imported_from_a_qgc_plan_flies_inside_the_plans_fence_on_ardu
         trace = obs.snapshot()
         airborne = [(lat, lon) for lat, lon, _alt, _mode in trace.track]  # alt > 1 m only
         outside = [p for p in airborne if not _inside(polygon, *p)]
-        print(f"\nplan fence flight: seed {seed}, transit {begin['distance']} m, confirmed at "
-              f"t={confirmation['t']} s; observer: {len(airborne)} airborne GPS samples, "
-              f"{len(outside)} outside the plan's fence, {trace.distance:.0f} m flown, "
-              f"modes {trace.modes}")  # fmt: skip
+        print(
+            f"\nplan fence flight: seed {seed}, transit {begin['distance']} m, confirmed at "
+            f"t={confirmation['t']} s; observer: {len(airborne)} airborne GPS samples, "
+            f"{len(outside)} outside the plan's fence, {trace.distance:.0f} m flown, "
+            f"modes {trace.modes}"
+        )
         assert len(airborne) >= 100
         assert outside == [], f"{len(outside)} of {len(airborne)} samples outside: {outside[:5]}"
     finally:
@@ -109,5 +119,7 @@ def test_a_profile_imported_from_a_qgc_plan_flies_inside_the_plans_fence_on_ardu
     vertices, enabled = _vehicle_fence(inst.observer_url, inst.sysid)
     assert vertices == [(round(lat * 1e7), round(lon * 1e7)) for lat, lon in polygon]
     assert enabled == 1.0
-    print(f"vehicle fence read back: {len(vertices)} vertices equal to the plan's, "
-          f"FENCE_ENABLE {enabled:g}")  # fmt: skip
+    print(
+        f"vehicle fence read back: {len(vertices)} vertices equal to the plan's, "
+        f"FENCE_ENABLE {enabled:g}"
+    )

@@ -33,15 +33,17 @@ def _changes(north: float, east: float) -> dict[str, Any]:
     return {
         "area": {"north": 1000.0, "east": 1500.0},
         "origin": {"lat": 47.3960, "lon": 8.6380, "alt": 440.0},
-        "targets": [{"north": north, "east": east},
-                    {"north": 300.0, "east": 300.0, "false_target": True}],
+        "targets": [
+            {"north": north, "east": east},
+            {"north": 300.0, "east": 300.0, "false_target": True},
+        ],
         "fleet": {"start": "periphery_even"},
         "sensors": sensors(400.0, 100.0),
         "sensor_source": {"kind": "virtual"},
         "policy": {"levels": levels(400.0, 200.0, 400.0)},
         "mission": {"duration": 150.0, "ts_cap": 150.0},
         "site": {"geofence": [{"lat": lat, "lon": lon} for lat, lon in corners]},
-    }  # fmt: skip
+    }
 
 
 def _profile(path: Path) -> Path:
@@ -123,10 +125,18 @@ def test_fleet_writes_a_geojson_that_matches_the_mission_logs_and_a_png(tmp_path
         assert len(line) == len(ticks) >= 2
         for (lon, lat), r in zip(line, ticks, strict=True):
             assert (lon, lat) == pytest.approx(_lon_lat(r["north"], r["east"]), abs=2e-7)
-        logged_confirmations += [(i, r["t"], r["north"], r["east"]) for r in records
-                                 if r["event"] == "confirmation"]  # fmt: skip
-    mapped = [(f["properties"]["vehicle"], f["properties"]["t"], f["properties"]["north"],
-               f["properties"]["east"]) for f in confirmations]  # fmt: skip
+        logged_confirmations += [
+            (i, r["t"], r["north"], r["east"]) for r in records if r["event"] == "confirmation"
+        ]
+    mapped = [
+        (
+            f["properties"]["vehicle"],
+            f["properties"]["t"],
+            f["properties"]["north"],
+            f["properties"]["east"],
+        )
+        for f in confirmations
+    ]
     assert len(mapped) == len(logged_confirmations)
     for got, logged in zip(sorted(mapped), sorted(logged_confirmations), strict=True):
         assert got == pytest.approx(logged, abs=0.05)

@@ -30,19 +30,36 @@ def _metres(a: tuple[float, float], b: tuple[float, float]) -> float:
 def _paths(doc: dict[str, object]) -> list[list[float]]:
     features = doc["features"]
     assert isinstance(features, list)
-    return [c for f in features if f["properties"]["kind"] == "path"
-            for c in f["geometry"]["coordinates"]]  # fmt: skip
+    return [
+        c
+        for f in features
+        if f["properties"]["kind"] == "path"
+        for c in f["geometry"]["coordinates"]
+    ]
 
 
 def test_a_path_in_the_vehicles_own_frame_is_drawn_at_its_reported_origin(tmp_path: Path) -> None:
     own = (-35.0, 149.0)
     log = tmp_path / "mission-0.jsonl"
-    log.write_text("\n".join(json.dumps(r) for r in [
-        {"t": 1.0, "event": "frame", "source": "own", "lat": own[0], "lon": own[1],
-         "north": 0.0, "east": 0.0},
-        {"t": 10.0, "event": "tick", "north": 0.0, "east": 0.0, "alt": 30.0},
-        {"t": 20.0, "event": "tick", "north": 100.0, "east": 0.0, "alt": 30.0},
-    ]) + "\n")  # fmt: skip
+    log.write_text(
+        "\n".join(
+            json.dumps(r)
+            for r in [
+                {
+                    "t": 1.0,
+                    "event": "frame",
+                    "source": "own",
+                    "lat": own[0],
+                    "lon": own[1],
+                    "north": 0.0,
+                    "east": 0.0,
+                },
+                {"t": 10.0, "event": "tick", "north": 0.0, "east": 0.0, "alt": 30.0},
+                {"t": 20.0, "event": "tick", "north": 100.0, "east": 0.0, "alt": 30.0},
+            ]
+        )
+        + "\n"
+    )
     doc = run_geojson(load_profile("paper-fixed"), read_tracks(tmp_path, [0]))
     first, second = _paths(doc)
     assert first == [own[1], own[0]]

@@ -60,12 +60,26 @@ def test_moving_targets_are_matched_where_the_emulator_saw_them(tmp_path: Path) 
     _write(
         tmp_path / EMULATOR_EVENTS,
         [
-            {"t": 250.0, "event": "entered_range", "vehicle": 0, "target": 0, "sensor": sensor,
-             "north": moved[0], "east": moved[1]},
-            {"t": 250.0, "event": "entered_range", "vehicle": 1, "target": 0,
-             "sensor": profile.sensors[0].name, "north": moved[0], "east": moved[1]},
+            {
+                "t": 250.0,
+                "event": "entered_range",
+                "vehicle": 0,
+                "target": 0,
+                "sensor": sensor,
+                "north": moved[0],
+                "east": moved[1],
+            },
+            {
+                "t": 250.0,
+                "event": "entered_range",
+                "vehicle": 1,
+                "target": 0,
+                "sensor": profile.sensors[0].name,
+                "north": moved[0],
+                "east": moved[1],
+            },
         ],
-    )  # fmt: skip
+    )
     _mission(tmp_path / "mission-0.jsonl", [(250.5, moved[0] + 2.0, moved[1] + 1.0)])
     # Vehicle 1 only had the target in its detection sensor: its "confirmation" is not real.
     _mission(tmp_path / "mission-1.jsonl", [(251.0, moved[0], moved[1])])

@@ -101,8 +101,19 @@ async def _fly(out: Path) -> tuple[list[tuple[Any, ...]], VehicleMission]:
                 msg = mav.parse_char(data)
                 if msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED":
                     break
-            answers.append((msg.time_boot_ms, msg.x, msg.y, msg.z, msg.vx, msg.vy, msg.vz,
-                            msg.type_mask, msg.target_system))  # fmt: skip
+            answers.append(
+                (
+                    msg.time_boot_ms,
+                    msg.x,
+                    msg.y,
+                    msg.z,
+                    msg.vx,
+                    msg.vy,
+                    msg.vz,
+                    msg.type_mask,
+                    msg.target_system,
+                )
+            )
             vn, ve = msg.vx, msg.vy
             north, east = north + 0.1 * vn, east + 0.1 * ve
     finally:
@@ -140,18 +151,32 @@ def _state(m: VehicleMission) -> dict[str, Any]:
     seen = m.seen
     pos = seen.position
     where = None if pos is None else replace(pos, received=0.0)  # (wall time of arrival)
-    return {"clock": seen.clock.now, "period": seen.period, "position": where,
-            "speed": seen.max_search_speed, "level": m.core.level,
-            "waypoint": m.core.waypoint.tolist(), "found": m.core.confirmed_count,
-            "signal": m.sensors.signal, "end": m.end_reason, "phase": m.phase,
-            "received": seen.received_time, "setpoint": seen.setpoint_time,
-            "heartbeat": seen.heartbeat, "status": seen.status, "home": seen.home,
-            "tick": seen.last_tick}  # fmt: skip
+    return {
+        "clock": seen.clock.now,
+        "period": seen.period,
+        "position": where,
+        "speed": seen.max_search_speed,
+        "level": m.core.level,
+        "waypoint": m.core.waypoint.tolist(),
+        "found": m.core.confirmed_count,
+        "signal": m.sensors.signal,
+        "end": m.end_reason,
+        "phase": m.phase,
+        "received": seen.received_time,
+        "setpoint": seen.setpoint_time,
+        "heartbeat": seen.heartbeat,
+        "status": seen.status,
+        "home": seen.home,
+        "tick": seen.last_tick,
+    }
 
 
 def _records(path: Path) -> list[dict[str, Any]]:
-    return [{k: v for k, v in r.items() if k != "wall"} for r in read_records(path)
-            if r["event"] != "latency"]  # fmt: skip
+    return [
+        {k: v for k, v in r.items() if k != "wall"}
+        for r in read_records(path)
+        if r["event"] != "latency"
+    ]
 
 
 def test_the_answer_flies_as_the_decision_loop(

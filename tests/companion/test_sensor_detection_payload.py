@@ -20,8 +20,12 @@ def parse(data: object) -> object:
 def test_lat_lon_is_converted_to_the_profiles_frame() -> None:
     lat, lon, _ = FRAME.to_geodetic(300.0, 500.0, 0.0)
     d = parse_detection(
-        json.dumps({"time": 1.5, "sensor": "confirmation", "lat": lat, "lon": lon,
-                    "confidence": 0.8}).encode(), NAMES, FRAME)  # fmt: skip
+        json.dumps(
+            {"time": 1.5, "sensor": "confirmation", "lat": lat, "lon": lon, "confidence": 0.8}
+        ).encode(),
+        NAMES,
+        FRAME,
+    )
     assert d.sensor == 1
     assert d.position == pytest.approx((300.0, 500.0), abs=1e-3)
     assert d.confidence == 0.8

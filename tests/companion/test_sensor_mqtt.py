@@ -29,11 +29,13 @@ pytestmark = pytest.mark.usefixtures("fleet_processes", "mqtt_broker")
 def test_mqtt_detections_switch_the_level_and_confirm(tmp_path: Path) -> None:
     prefix = f"mdm/test-{os.getpid()}-detections"
     path = write_profile_with(
-        tmp_path / "profile.yaml", "mqtt-sensor-test",
-        targets=[{"north": 1500.0, "east": 1500.0}], fleet={"vehicles": 1},
+        tmp_path / "profile.yaml",
+        "mqtt-sensor-test",
+        targets=[{"north": 1500.0, "east": 1500.0}],
+        fleet={"vehicles": 1},
         sensor_source={"kind": "mavlink", "silence_timeout": 1.0},
         policy={"levels": levels(600.0, 300.0, 5000.0)},
-    )  # fmt: skip
+    )
     profile = load_profile(path)
     out = tmp_path / "run"
     sub = Subscriber(1883, f"{prefix}/#", tmp_path / "sub.txt")
@@ -59,15 +61,25 @@ def test_mqtt_detections_switch_the_level_and_confirm(tmp_path: Path) -> None:
         fleet.start()
         wait_until(lambda: state().get("phase") == "search", 60, "vehicle 0 searching")
         mission_log = out / "mission-0.jsonl"
-        wait_until(lambda: any(r.get("state") == "silent" for r in read_records(mission_log)), 10,
-                   "the silent detector reported")  # fmt: skip
+        wait_until(
+            lambda: any(r.get("state") == "silent" for r in read_records(mission_log)),
+            10,
+            "the silent detector reported",
+        )
         assert state()["level"] == 0
         detect("not json")
         detect({"time": time.time(), "sensor": "detection"})  # nothing seen: alive again
         # A confirmation-sensor report while the detection sensor is on is not a contact.
         detect({"time": time.time(), "sensor": "confirmation", "north": 1500.0, "east": 1500.0})
-        detect({"time": time.time(), "sensor": "detection", "north": 1500.0, "east": 1500.0,
-                "confidence": 0.9})  # fmt: skip
+        detect(
+            {
+                "time": time.time(),
+                "sensor": "detection",
+                "north": 1500.0,
+                "east": 1500.0,
+                "confidence": 0.9,
+            }
+        )
         wait_until(lambda: state().get("level") == 1, 10, "level 1 after the detection")
         assert state()["found"] == 0
         frame = LocalFrame(profile.origin.lat, profile.origin.lon, profile.origin.alt)

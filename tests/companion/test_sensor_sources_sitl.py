@@ -34,17 +34,26 @@ ON_GROUND = 1  # MAV_LANDED_STATE_ON_GROUND
 def _profile(path: Path, vehicles: int) -> Path:
     lat, lon, alt = HOME
     return write_profile_with(
-        path, f"sitl-sensors-{os.getpid()}",
-        area={"north": 600.0, "east": 600.0}, origin={"lat": lat, "lon": lon, "alt": alt},
-        targets=[{"north": 220.0, "east": 160.0},
-                 {"north": 60.0, "east": 300.0, "false_target": True}],
-        fleet={"vehicles": vehicles, "speed": 10.0, "tau": 0.5, "altitude": 20.0,
-               "altitude_step": 0.0},
+        path,
+        f"sitl-sensors-{os.getpid()}",
+        area={"north": 600.0, "east": 600.0},
+        origin={"lat": lat, "lon": lon, "alt": alt},
+        targets=[
+            {"north": 220.0, "east": 160.0},
+            {"north": 60.0, "east": 300.0, "false_target": True},
+        ],
+        fleet={
+            "vehicles": vehicles,
+            "speed": 10.0,
+            "tau": 0.5,
+            "altitude": 20.0,
+            "altitude_step": 0.0,
+        },
         sensors=sensors(400.0, 60.0),
         sensor_source={"kind": "virtual", "silence_timeout": 30.0},
         policy={"levels": levels(200.0, 80.0, 600.0)},
         mission={"duration": 900.0, "ts_cap": 900.0},
-    )  # fmt: skip
+    )
 
 
 def _run(out: Path, profile: Path, inst: sitl.SitlInstance, *extra: str) -> subprocess.Popen[bytes]:
@@ -76,8 +85,10 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
     flights: list[subprocess.Popen[bytes]] = []
 
     def context(out: Path) -> Callable[[], str]:
-        return lambda: (f"trace {obs.snapshot()}\ncompanion:\n"
-                        f"{(out / 'companion.out').read_text(errors='replace')[-3000:]}")  # fmt: skip
+        return lambda: (
+            f"trace {obs.snapshot()}\ncompanion:\n"
+            f"{(out / 'companion.out').read_text(errors='replace')[-3000:]}"
+        )
 
     def events(out: Path) -> list[dict[str, Any]]:
         return read_records(out / f"mission-{inst.index}.jsonl")
@@ -107,9 +118,11 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
         assert first.max_alt >= 15.0
         assert first.distance >= 100.0, context(virtual)()
         assert (virtual / f"map-{inst.index}.png").stat().st_size > 10_000
-        print(f"\nvirtual on ArduCopter: confirmed at t={confirmation['t']} s; observer: "
-              f"{first.distance:.0f} m flown, max {first.max_alt:.1f} m, modes {first.modes}; "
-              f"map {virtual / f'map-{inst.index}.png'}")  # fmt: skip
+        print(
+            f"\nvirtual on ArduCopter: confirmed at t={confirmation['t']} s; observer: "
+            f"{first.distance:.0f} m flown, max {first.max_alt:.1f} m, modes {first.modes}; "
+            f"map {virtual / f'map-{inst.index}.png'}"
+        )
 
         # 2. MQTT: the test is the detector.
         mqtt = tmp_path / "mqtt"
@@ -134,8 +147,13 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
             "mqtt: level 1",
             context=context(mqtt),
         )
-        confirm = {"time": time.time(), "sensor": "confirmation", "north": 400.0, "east": 450.0,
-                   "confidence": 0.9}  # fmt: skip
+        confirm = {
+            "time": time.time(),
+            "sensor": "confirmation",
+            "north": 400.0,
+            "east": 450.0,
+            "confidence": 0.9,
+        }
         assert publish(mqtt_broker, topic, json.dumps(confirm)).returncode == 0
         wait_until(
             landed_after_rtl, 300.0, "mqtt: confirmed, RTL, landed, disarmed", context=context(mqtt)
@@ -145,8 +163,10 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
         (confirmation,) = [r for r in records if r["event"] == "confirmation"]
         assert (confirmation["north"], confirmation["east"]) == (400.0, 450.0)
         assert next(r for r in records if r["event"] == "end")["reason"] == "all targets"
-        print(f"mqtt on ArduCopter: level 1 and confirmation from published detections at "
-              f"t={confirmation['t']} s; modes {obs.snapshot().modes}")  # fmt: skip
+        print(
+            f"mqtt on ArduCopter: level 1 and confirmation from published detections at "
+            f"t={confirmation['t']} s; modes {obs.snapshot().modes}"
+        )
     finally:
         for p in flights:
             _stop(p)

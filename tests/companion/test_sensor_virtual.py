@@ -49,17 +49,31 @@ def test_virtual_sensors_confirm_the_real_target_with_the_emulators_sensors_off(
     tmp_path: Path,
 ) -> None:
     path = write_profile_with(
-        tmp_path / "profile.yaml", "virtual-sensor-test",
+        tmp_path / "profile.yaml",
+        "virtual-sensor-test",
         area={"north": 2000.0, "east": 2000.0},
-        targets=[{"north": 1000.0, "east": 1000.0},
-                 {"north": 600.0, "east": 1400.0, "false_target": True}],
-        fleet={"vehicles": 1, "start": "periphery_even"}, sensors=sensors(1500.0, 60.0),
-        sensor_source={"kind": "virtual"}, policy={"levels": levels(500.0, 300.0, 400.0)},
+        targets=[
+            {"north": 1000.0, "east": 1000.0},
+            {"north": 600.0, "east": 1400.0, "false_target": True},
+        ],
+        fleet={"vehicles": 1, "start": "periphery_even"},
+        sensors=sensors(1500.0, 60.0),
+        sensor_source={"kind": "virtual"},
+        policy={"levels": levels(500.0, 300.0, 400.0)},
         mission={"duration": 3000.0, "ts_cap": 3000.0},
-    )  # fmt: skip
+    )
     out = tmp_path / "run"
-    result = run_fleet(FleetOptions(profile=str(path), out=out, speedup=50.0, duration=3000.0,
-                                    base_port=free_udp_base(1), seed=3, wall_limit=120))  # fmt: skip
+    result = run_fleet(
+        FleetOptions(
+            profile=str(path),
+            out=out,
+            speedup=50.0,
+            duration=3000.0,
+            base_port=free_udp_base(1),
+            seed=3,
+            wall_limit=120,
+        )
+    )
     logged = read_log(out / "mission-0.jsonl")
     confirmations = logged.of(events.Confirmation)
     assert confirmations, f"no confirmation; ended {result.end_reasons}"

@@ -36,8 +36,11 @@ def test_a_changed_waypoint_velocity_or_decision_is_a_difference() -> None:
     later = copy.deepcopy(before)
     later["2"]["decisions"][0]["t"] += 1.0
     assert setpoint_record.differences(before, before) == []
-    for after, where in ((moved, "vehicle 1: waypoints"), (slower, "vehicle 0: velocity at 100"),
-                         (later, "vehicle 2: ")):  # fmt: skip
+    for after, where in (
+        (moved, "vehicle 1: waypoints"),
+        (slower, "vehicle 0: velocity at 100"),
+        (later, "vehicle 2: "),
+    ):
         found = setpoint_record.differences(before, after)
         assert len(found) == 1, found
         assert found[0].startswith(where), found

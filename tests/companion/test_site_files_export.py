@@ -50,8 +50,10 @@ def test_export_then_import_gives_the_same_fence(tmp_path: Path, kind: str) -> N
     assert _fence_metres(before, after) <= 0.1
     assert after.site == before.site  # the same vertices, clockwise from the same one
     assert after.area == before.area
-    assert math.dist((after.origin.lat, after.origin.lon),
-                     (before.origin.lat, before.origin.lon)) < 1e-8  # fmt: skip
+    assert (
+        math.dist((after.origin.lat, after.origin.lon), (before.origin.lat, before.origin.lon))
+        < 1e-8
+    )
 
 
 def test_the_plan_keeps_a_clockwise_fence_vertex_for_vertex(tmp_path: Path) -> None:

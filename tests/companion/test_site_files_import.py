@@ -37,11 +37,17 @@ def _import(tmp_path: Path, source: Path, *extra: str, base: str = "field-dueben
     return out
 
 
-def _plan(polygons: list[dict[str, Any]], circles: list[dict[str, Any]] | None = None,
-          version: int = 2) -> dict[str, Any]:  # fmt: skip
-    return {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl", "mission": {},
-            "rallyPoints": {"points": [], "version": 2},
-            "geoFence": {"circles": circles or [], "polygons": polygons, "version": version}}  # fmt: skip
+def _plan(
+    polygons: list[dict[str, Any]], circles: list[dict[str, Any]] | None = None, version: int = 2
+) -> dict[str, Any]:
+    return {
+        "fileType": "Plan",
+        "version": 1,
+        "groundStation": "QGroundControl",
+        "mission": {},
+        "rallyPoints": {"points": [], "version": 2},
+        "geoFence": {"circles": circles or [], "polygons": polygons, "version": version},
+    }
 
 
 def _polygon(ring: Sequence[tuple[object, object]], inclusion: bool = True) -> dict[str, Any]:
@@ -50,8 +56,11 @@ def _polygon(ring: Sequence[tuple[object, object]], inclusion: bool = True) -> d
 
 def _geojson_polygon(ring: list[tuple[float, float]], **properties: Any) -> dict[str, Any]:
     coords = [[lon, lat] for lat, lon in [*ring, ring[0]]]
-    return {"type": "Feature", "properties": properties,
-            "geometry": {"type": "Polygon", "coordinates": [coords]}}  # fmt: skip
+    return {
+        "type": "Feature",
+        "properties": properties,
+        "geometry": {"type": "Polygon", "coordinates": [coords]},
+    }
 
 
 def _kml(*rings: list[tuple[float, float]]) -> str:
@@ -61,8 +70,10 @@ def _kml(*rings: list[tuple[float, float]]) -> str:
         + "</coordinates></LinearRing></outerBoundaryIs></Polygon></Placemark>"
         for k, ring in enumerate(rings)
     )
-    return ('<?xml version="1.0" encoding="UTF-8"?>\n<kml xmlns="http://www.opengis.net/kml/2.2">'
-            f"<Document><name>drawn</name>{placemarks}</Document></kml>\n")  # fmt: skip
+    return (
+        '<?xml version="1.0" encoding="UTF-8"?>\n<kml xmlns="http://www.opengis.net/kml/2.2">'
+        f"<Document><name>drawn</name>{placemarks}</Document></kml>\n"
+    )
 
 
 def test_a_qgc_plan_becomes_the_fence_and_its_bounding_rectangle_the_area(tmp_path: Path) -> None:
@@ -122,8 +133,7 @@ def test_targets_keep_their_ground_position_by_default(tmp_path: Path) -> None:
     for before, after in zip(base.targets, profile.targets, strict=True):
         lat, lon, _ = old.to_geodetic(before.north, before.east, 0.0)
         ground = new.to_geodetic(after.north, after.east, 0.0)
-        metres = math.dist(new.to_local(lat, lon, base.origin.alt)[:2],
-                           new.to_local(*ground)[:2])  # fmt: skip
+        metres = math.dist(new.to_local(lat, lon, base.origin.alt)[:2], new.to_local(*ground)[:2])
         assert metres <= 0.08, (before, after)  # rounded to 0.1 m in each axis
 
 
@@ -131,10 +141,12 @@ def test_targets_fit_scales_them_into_the_new_area(tmp_path: Path) -> None:
     base = load_profile("field-duebendorf")
     profile = load_profile(_import(tmp_path, QGC_PLAN, "--targets", "fit"))
     for before, after in zip(base.targets, profile.targets, strict=True):
-        assert after.north == pytest.approx(before.north / base.area.north * profile.area.north,
-                                            abs=0.051)  # fmt: skip
-        assert after.east == pytest.approx(before.east / base.area.east * profile.area.east,
-                                           abs=0.051)  # fmt: skip
+        assert after.north == pytest.approx(
+            before.north / base.area.north * profile.area.north, abs=0.051
+        )
+        assert after.east == pytest.approx(
+            before.east / base.area.east * profile.area.east, abs=0.051
+        )
 
 
 def test_targets_left_outside_the_new_area_are_refused_naming_the_file(
@@ -167,8 +179,11 @@ def test_a_kml_polygon_from_google_earth_is_read_in_either_namespace(tmp_path: P
 
 def test_a_geojson_feature_a_bare_polygon_and_a_collection_are_read(tmp_path: Path) -> None:
     feature = _geojson_polygon(SQUARE)
-    for name, data in [("feature", feature), ("bare", feature["geometry"]),
-                       ("collection", {"type": "FeatureCollection", "features": [feature]})]:  # fmt: skip
+    for name, data in [
+        ("feature", feature),
+        ("bare", feature["geometry"]),
+        ("collection", {"type": "FeatureCollection", "features": [feature]}),
+    ]:
         drawn = tmp_path / f"{name}.geojson"
         drawn.write_text(json.dumps(data))
         assert read_fence_file(drawn).vertices == tuple(SQUARE)
@@ -177,15 +192,25 @@ def test_a_geojson_feature_a_bare_polygon_and_a_collection_are_read(tmp_path: Pa
 def test_of_several_polygons_the_one_marked_fence_is_taken(tmp_path: Path) -> None:
     bigger = [(47.39, 8.63), (47.42, 8.63), (47.42, 8.66), (47.39, 8.66)]
     drawn = tmp_path / "marked.geojson"
-    drawn.write_text(json.dumps({"type": "FeatureCollection", "features": [
-        _geojson_polygon(bigger, kind="search_area"), _geojson_polygon(SQUARE, kind="fence")]}))  # fmt: skip
+    drawn.write_text(
+        json.dumps(
+            {
+                "type": "FeatureCollection",
+                "features": [
+                    _geojson_polygon(bigger, kind="search_area"),
+                    _geojson_polygon(SQUARE, kind="fence"),
+                ],
+            }
+        )
+    )
     assert read_fence_file(drawn).vertices == tuple(SQUARE)
 
 
 def test_a_vertex_repeated_at_once_is_merged(tmp_path: Path) -> None:
     drawn = tmp_path / "double-click.plan"
-    drawn.write_text(json.dumps(_plan([_polygon([SQUARE[0], SQUARE[1], SQUARE[1], *SQUARE[2:],
-                                                  SQUARE[0]])])))  # fmt: skip
+    drawn.write_text(
+        json.dumps(_plan([_polygon([SQUARE[0], SQUARE[1], SQUARE[1], *SQUARE[2:], SQUARE[0]])]))
+    )
     assert read_fence_file(drawn).vertices == tuple(SQUARE)
 
 

@@ -61,19 +61,29 @@ AUTOPILOTS = [pytest.param(ARDUCOPTER, id="arducopter"), pytest.param(PX4, id="p
 def _profile(path: Path, vehicles: int) -> Path:
     """A 3 km square; as many vehicles as the instance index needs (system id = index + 1)."""
     return write_profile_with(
-        path, "sitl-small",
+        path,
+        "sitl-small",
         targets=[{"north": 1500.0, "east": 1500.0}, {"north": 2300.0, "east": 2300.0}],
-        fleet={"vehicles": vehicles}, sensors=sensors(300.0, 100.0),
+        fleet={"vehicles": vehicles},
+        sensors=sensors(300.0, 100.0),
         policy={"levels": levels(600.0, 300.0, 150.0)},
         mission={"duration": 600.0},
-    )  # fmt: skip
+    )
 
 
 class Companion:
     """One `companion run` process in its own process group; output in ``log``."""
 
-    def __init__(self, out: Path, profile: Path | str, vehicle: int, url: str, backend: str,
-                 duration: float, extra: tuple[str, ...] = ()) -> None:  # fmt: skip
+    def __init__(
+        self,
+        out: Path,
+        profile: Path | str,
+        vehicle: int,
+        url: str,
+        backend: str,
+        duration: float,
+        extra: tuple[str, ...] = (),
+    ) -> None:
         self.out, self.vehicle = out, vehicle
         self.log = out / f"companion-{vehicle}.out"
         with self.log.open("ab") as f:
@@ -118,10 +128,12 @@ def _searched(events: list[dict[str, Any]]) -> float:
 
 
 def _figures(name: str, trace: Trace, started: float) -> None:
-    print(f"\n{name}: observer trace: distance {trace.distance:.0f} m, max altitude "
-          f"{trace.max_alt:.1f} m, max ground speed {trace.max_speed:.1f} m/s, modes {trace.modes}, "
-          f"end: armed={trace.armed} landed_state={trace.landed_state}; "
-          f"{time.monotonic() - started:.0f} s wall")  # fmt: skip
+    print(
+        f"\n{name}: observer trace: distance {trace.distance:.0f} m, max altitude "
+        f"{trace.max_alt:.1f} m, max ground speed {trace.max_speed:.1f} m/s, modes {trace.modes}, "
+        f"end: armed={trace.armed} landed_state={trace.landed_state}; "
+        f"{time.monotonic() - started:.0f} s wall"
+    )
 
 
 @pytest.mark.parametrize("backend", ["pymavlink", "mavsdk"])
@@ -192,8 +204,12 @@ def test_flies_through_takeover_kill_and_restart(
             "the observer sees the pilot's mode",
             context=context,
         )
-        ob.hold(10.0, "nobody takes the pilot's mode back", lambda t: t.mode == ap.pilot_custom,
-                context=context)  # fmt: skip
+        ob.hold(
+            10.0,
+            "nobody takes the pilot's mode back",
+            lambda t: t.mode == ap.pilot_custom,
+            context=context,
+        )
         before = ob.snapshot().distance
         ob.set_mode(*ap.guided)
         wait_until(
@@ -291,8 +307,15 @@ def test_field_profile_on_px4_keeps_its_own_fence_and_stays_inside(
     origin = profile.origin
     inst = px4(speedup=SPEEDUP, home=FENCED_HOME)
     assert inst.index < profile.fleet.vehicles, "instance index beyond the profile's 4 vehicles"
-    comp = Companion(tmp_path, "field-duebendorf", inst.index, inst.companion_url, "pymavlink",
-                     duration=90.0, extra=("--sensor-source", "virtual"))  # fmt: skip
+    comp = Companion(
+        tmp_path,
+        "field-duebendorf",
+        inst.index,
+        inst.companion_url,
+        "pymavlink",
+        duration=90.0,
+        extra=("--sensor-source", "virtual"),
+    )
     obs = Observer(inst.observer_url, inst.sysid)
     context = _trace_context(obs, comp)
     try:
@@ -324,8 +347,9 @@ def test_field_profile_on_px4_keeps_its_own_fence_and_stays_inside(
         out = comp.output()
         assert "sensor source virtual" in out
         assert "MDM_SENSOR" not in out  # virtual sensors never touch the vehicle's parameters
-        own = [(e["state"], e.get("read_back")) for e in comp.events()
-               if e["event"] == "vehicle_fence"]  # fmt: skip
+        own = [
+            (e["state"], e.get("read_back")) for e in comp.events() if e["event"] == "vehicle_fence"
+        ]
         assert own == [("uploaded", "equal"), ("enabled", None)], own
         stored = obs.read_fence()
 
@@ -349,11 +373,17 @@ def test_field_profile_on_px4_keeps_its_own_fence_and_stays_inside(
         obs.hold(10.0, "10 vehicle s more: it stays put")
         after = obs.snapshot()
         north = [frame.to_local(la, lo, alt)[0] for la, lo, _, _ in after.track[flown:]]
-        beyond = [float(np.hypot(*(fence.clamp(p) - p))) for p in (
-            np.array(frame.to_local(la, lo, alt)[:2]) for la, lo, _, _ in after.track[flown:])]  # fmt: skip
+        beyond = [
+            float(np.hypot(*(fence.clamp(p) - p)))
+            for p in (
+                np.array(frame.to_local(la, lo, alt)[:2]) for la, lo, _, _ in after.track[flown:]
+            )
+        ]
         texts = [t for t in after.texts if "geofence" in t.lower()]
-        print(f"\npx4 geofence: {texts}, modes {after.modes[-4:]}, {max(north):.0f} m north of "
-              f"the origin, at most {max(beyond):.1f} m outside the fence")  # fmt: skip
+        print(
+            f"\npx4 geofence: {texts}, modes {after.modes[-4:]}, {max(north):.0f} m north of "
+            f"the origin, at most {max(beyond):.1f} m outside the fence"
+        )
         assert max(beyond) < 15.0, context()
     finally:
         comp.kill()
@@ -362,7 +392,9 @@ def test_field_profile_on_px4_keeps_its_own_fence_and_stays_inside(
     polygon = [(round(v.lat * 1e7), round(v.lon * 1e7)) for v in profile.site.geofence]
     vertex = 5001  # MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
     assert stored == [(vertex, lat, lon) for lat, lon in polygon], stored
-    print(f"\npx4 field profile: {len(offboard)} OFFBOARD positions, {len(outside)} outside "
-          f"the fence (worst {worst:.1f} m); fence read back on the GCS link: {len(stored)} "
-          f"vertices equal")  # fmt: skip
+    print(
+        f"\npx4 field profile: {len(offboard)} OFFBOARD positions, {len(outside)} outside "
+        f"the fence (worst {worst:.1f} m); fence read back on the GCS link: {len(stored)} "
+        f"vertices equal"
+    )
     _figures("px4 field-duebendorf", trace, started)

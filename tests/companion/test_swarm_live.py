@@ -28,9 +28,17 @@ def _fly(tmp_path: Path, drop: float) -> tuple[FleetResult, list[list[dict[str, 
     write_profile(apply_overrides(builtin_profile("swarm-small"), knob), profile)
     mqtt = ("--mqtt", "127.0.0.1:1883", "--mqtt-prefix", f"mdm/test-{os.getpid()}-swarm-{drop}")
     out = tmp_path / f"run-{drop}"
-    result = run_fleet(FleetOptions(profile=str(profile), out=out, speedup=50.0, duration=400.0,
-                                    seed=11, wall_limit=60,
-                                    mqtt_args=mqtt))  # fmt: skip
+    result = run_fleet(
+        FleetOptions(
+            profile=str(profile),
+            out=out,
+            speedup=50.0,
+            duration=400.0,
+            seed=11,
+            wall_limit=60,
+            mqtt_args=mqtt,
+        )
+    )
     logs = [list(read_records(out / f"mission-{i}.jsonl")) for i in range(VEHICLES)]
     return result, logs
 

@@ -44,18 +44,25 @@ def _fly(tmp_path: Path, drop: float) -> list[Log]:
         "message_drop": drop,
     }
     profile = write_profile_with(
-        tmp_path / f"profile-{drop}.yaml", "swarm-live-follow-test",
+        tmp_path / f"profile-{drop}.yaml",
+        "swarm-live-follow-test",
         area={"north": 2500.0, "east": 2500.0},
-        targets=[{"north": TARGET[0], "east": TARGET[1]},
-                 {"north": 2200.0, "east": 300.0, "false_target": True}],
-        fleet={"vehicles": VEHICLES}, sensors=sensors(1000.0, 100.0),
+        targets=[
+            {"north": TARGET[0], "east": TARGET[1]},
+            {"north": 2200.0, "east": 300.0, "false_target": True},
+        ],
+        fleet={"vehicles": VEHICLES},
+        sensors=sensors(1000.0, 100.0),
         policy={"kind": "pso", "levels": [{"distribution": "US", "step": 2500.0}], "swarm": swarm},
         mission={"duration": 200.0, "ts_cap": 200.0},
         mqtt={"host": "127.0.0.1", "port": 1883, "topic_prefix": prefix},
-    )  # fmt: skip
+    )
     out = tmp_path / f"run-{drop}"
-    run_fleet(FleetOptions(profile=str(profile), out=out, speedup=50.0, duration=200.0,
-                           seed=11, wall_limit=60))  # fmt: skip
+    run_fleet(
+        FleetOptions(
+            profile=str(profile), out=out, speedup=50.0, duration=200.0, seed=11, wall_limit=60
+        )
+    )
     return [list(read_records(out / f"mission-{i}.jsonl")) for i in range(VEHICLES)]
 
 

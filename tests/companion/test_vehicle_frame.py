@@ -45,8 +45,11 @@ class _Vehicle(asyncio.DatagramProtocol):
     def position(self, time_ms: int) -> None:
         self.send(self.mav.local_position_ned_encode(time_ms, 10.0, 20.0, -30.0, 1.0, 2.0, 0.0))
         lat, lon, _ = PROFILE.to_geodetic(ORIGIN_NE[0] + 10.0, ORIGIN_NE[1] + 20.0, 0.0)
-        self.send(self.mav.global_position_int_encode(time_ms, round(lat * 1e7), round(lon * 1e7),
-                                                      470_000, 30_000, 100, 200, 0, 0))  # fmt: skip
+        self.send(
+            self.mav.global_position_int_encode(
+                time_ms, round(lat * 1e7), round(lon * 1e7), 470_000, 30_000, 100, 200, 0, 0
+            )
+        )
 
     def datagram_received(self, data: bytes, addr: tuple[str | Any, int]) -> None:
         lat, lon, alt = self.origin
@@ -59,15 +62,29 @@ class _Vehicle(asyncio.DatagramProtocol):
             asked = round(msg.param1)
             if msg.command == mavlink2.MAV_CMD_REQUEST_MESSAGE:
                 if asked == mavlink2.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN and self.global_origin:
-                    self.send(self.mav.gps_global_origin_encode(round(lat * 1e7), round(lon * 1e7),
-                                                                round(alt * 1e3)))  # fmt: skip
+                    self.send(
+                        self.mav.gps_global_origin_encode(
+                            round(lat * 1e7), round(lon * 1e7), round(alt * 1e3)
+                        )
+                    )
                     result = mavlink2.MAV_RESULT_ACCEPTED
                 elif asked == mavlink2.MAVLINK_MSG_ID_HOME_POSITION:
                     # home 3 m north, 4 m east of the local origin
                     hlat, hlon, _ = PROFILE.to_geodetic(ORIGIN_NE[0] + 3.0, ORIGIN_NE[1] + 4.0, 0)
-                    self.send(self.mav.home_position_encode(
-                        round(hlat * 1e7), round(hlon * 1e7), round(alt * 1e3), 3.0, 4.0, 0.0,
-                        [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0))  # fmt: skip
+                    self.send(
+                        self.mav.home_position_encode(
+                            round(hlat * 1e7),
+                            round(hlon * 1e7),
+                            round(alt * 1e3),
+                            3.0,
+                            4.0,
+                            0.0,
+                            [1.0, 0.0, 0.0, 0.0],
+                            0.0,
+                            0.0,
+                            0.0,
+                        )
+                    )
                     result = mavlink2.MAV_RESULT_ACCEPTED
             self.send(self.mav.command_ack_encode(msg.command, result))
 
@@ -100,8 +117,9 @@ async def _fly(global_origin: bool) -> tuple[list[Any], list[Any], _Vehicle, Fra
         after = []
         while not link.events.empty():
             after.append(link.events.get_nowait())
-        link.send_setpoint(NedSetpoint(ORIGIN_NE[0] + 100.0, ORIGIN_NE[1] - 50.0, -30.0, 0, 0, 0),
-                           "position")  # fmt: skip
+        link.send_setpoint(
+            NedSetpoint(ORIGIN_NE[0] + 100.0, ORIGIN_NE[1] - 50.0, -30.0, 0, 0, 0), "position"
+        )
         await asyncio.sleep(0.2)
         assert link.alignment is not None
         return before, after, vehicle, link.alignment

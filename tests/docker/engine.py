@@ -26,14 +26,18 @@ IMAGE_PYTHON = (3, 11)
 DEFAULT_MIRROR = "http://deb.debian.org/debian"
 
 
-def docker(*args: str, timeout: float = 600.0, env: dict[str, str] | None = None,
-           check: bool = True) -> subprocess.CompletedProcess[str]:  # fmt: skip
+def docker(
+    *args: str, timeout: float = 600.0, env: dict[str, str] | None = None, check: bool = True
+) -> subprocess.CompletedProcess[str]:
     """``docker ARGS``; a failure raises with the command's own output."""
-    proc = subprocess.run(["docker", *args], capture_output=True, text=True, timeout=timeout,
-                          env=env, check=False)  # fmt: skip
+    proc = subprocess.run(
+        ["docker", *args], capture_output=True, text=True, timeout=timeout, env=env, check=False
+    )
     if check and proc.returncode != 0:
-        raise AssertionError(f"docker {' '.join(args)} failed ({proc.returncode}):\n"
-                             f"{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")  # fmt: skip
+        raise AssertionError(
+            f"docker {' '.join(args)} failed ({proc.returncode}):\n"
+            f"{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+        )
     return proc
 
 
@@ -75,20 +79,32 @@ def ensure_base_image() -> str:
     if image_exists(BASE_IMAGE):
         return BASE_IMAGE
     if shutil.which("debootstrap") is None:
-        raise AssertionError(f"{BASE_IMAGE} is missing and debootstrap is not installed "
-                             "(apt-get install debootstrap; .ci/run does)")  # fmt: skip
+        raise AssertionError(
+            f"{BASE_IMAGE} is missing and debootstrap is not installed "
+            "(apt-get install debootstrap; .ci/run does)"
+        )
     with tempfile.TemporaryDirectory(prefix="mdm-rootfs-") as tmp:
         rootfs = Path(tmp) / "rootfs"
-        subprocess.run(["debootstrap", "--variant=minbase", RELEASE, str(rootfs),
-                        debian_mirror()], check=True, capture_output=True, timeout=600)  # fmt: skip
+        subprocess.run(
+            ["debootstrap", "--variant=minbase", RELEASE, str(rootfs), debian_mirror()],
+            check=True,
+            capture_output=True,
+            timeout=600,
+        )
         # apt's package lists and caches are stale in an image: every build runs apt-get update
         for stale in ("var/lib/apt/lists", "var/cache/apt"):
             for entry in (rootfs / stale).glob("*"):
                 if entry.is_file():
                     entry.unlink()
         tar = subprocess.Popen(["tar", "-C", str(rootfs), "-c", "."], stdout=subprocess.PIPE)
-        docker_import = subprocess.run(["docker", "import", "-", BASE_IMAGE], stdin=tar.stdout,
-                                       capture_output=True, text=True, timeout=300, check=False)  # fmt: skip
+        docker_import = subprocess.run(
+            ["docker", "import", "-", BASE_IMAGE],
+            stdin=tar.stdout,
+            capture_output=True,
+            text=True,
+            timeout=300,
+            check=False,
+        )
         tar.wait(timeout=60)
         if docker_import.returncode != 0 or tar.returncode != 0:
             raise AssertionError(f"docker import of {rootfs} failed: {docker_import.stderr}")
@@ -111,8 +127,12 @@ def wheelhouse() -> Path:
     folder = Path.home() / ".cache" / "mdm-search" / "docker-wheels" / key
     if not (folder / "complete").exists():
         folder.mkdir(parents=True, exist_ok=True)
-        subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--wheel-dir", str(folder),
-                        *requirements], check=True, capture_output=True, timeout=600)  # fmt: skip
+        subprocess.run(
+            [sys.executable, "-m", "pip", "wheel", "-q", "--wheel-dir", str(folder), *requirements],
+            check=True,
+            capture_output=True,
+            timeout=600,
+        )
         (folder / "complete").write_text("\n".join(requirements) + "\n")
     return folder
 

@@ -39,16 +39,31 @@ class Stack:
 
     def broker_ready(self) -> None:
         """The broker accepts the operator (its port is published before it listens)."""
-        wait_until(lambda: publish(self.port, "mdm/probe/ready/cmd", "probe", user="operator",
-                                   password=self.passwords["operator"]).returncode == 0,
-                   30.0, f"the broker on 127.0.0.1:{self.port} accepting the operator")  # fmt: skip
+        wait_until(
+            lambda: (
+                publish(
+                    self.port,
+                    "mdm/probe/ready/cmd",
+                    "probe",
+                    user="operator",
+                    password=self.passwords["operator"],
+                ).returncode
+                == 0
+            ),
+            30.0,
+            f"the broker on 127.0.0.1:{self.port} accepting the operator",
+        )
 
     def subscriber(self, topic_filter: str, path: Path, user: str) -> Subscriber:
         """``mosquitto_sub`` as ``user`` on the host, subscribed once this returns."""
         sub = Subscriber(self.port, topic_filter, path, user=user, password=self.passwords[user])
         self.subscribers.append(sub)
-        sub.ready(self.port, f"mdm/probe/{path.stem}/cmd", user="operator",
-                  password=self.passwords["operator"])  # fmt: skip
+        sub.ready(
+            self.port,
+            f"mdm/probe/{path.stem}/cmd",
+            user="operator",
+            password=self.passwords["operator"],
+        )
         return sub
 
     def wait_exit(self, services: list[str], timeout: float) -> list[str]:
@@ -68,8 +83,9 @@ def make_secrets(folder: Path, vehicles: list[int]) -> dict[str, str]:
     passwd = folder / "mosquitto.passwd"
     for n, (user, password) in enumerate(passwords.items()):
         create = ["-c"] if n == 0 else []
-        subprocess.run(["mosquitto_passwd", *create, "-b", str(passwd), user, password],
-                       check=True, timeout=30)  # fmt: skip
+        subprocess.run(
+            ["mosquitto_passwd", *create, "-b", str(passwd), user, password], check=True, timeout=30
+        )
         if user.startswith("uav"):
             (folder / f"{user}.pw").write_text(password + "\n")
     for path in folder.iterdir():
@@ -83,15 +99,22 @@ def make_secrets(folder: Path, vehicles: list[int]) -> dict[str, str]:
 
 
 @contextmanager
-def project(file: str, tmp_path: Path, vehicles: list[int], port: int,
-            settings: dict[str, str]) -> Iterator[Stack]:  # fmt: skip
+def project(
+    file: str, tmp_path: Path, vehicles: list[int], port: int, settings: dict[str, str]
+) -> Iterator[Stack]:
     """A compose project of its own for ``docker/FILE``; at the end `down -v`, then nothing of
     the project may be left: no container, network or volume."""
-    env = {**os.environ, "MDM_SECRETS": str(tmp_path / "secrets"), "MDM_MQTT_PORT": str(port),
-           "MDM_MOSQUITTO_IMAGE": BROKER_IMAGE, **settings}  # fmt: skip
+    env = {
+        **os.environ,
+        "MDM_SECRETS": str(tmp_path / "secrets"),
+        "MDM_MQTT_PORT": str(port),
+        "MDM_MOSQUITTO_IMAGE": BROKER_IMAGE,
+        **settings,
+    }
     name = f"mdm-test-{Path(file).stem.replace('.', '-')}-{os.getpid()}"
-    stack = Stack(ROOT / "docker" / file, name, env,
-                  make_secrets(tmp_path / "secrets", vehicles), port)  # fmt: skip
+    stack = Stack(
+        ROOT / "docker" / file, name, env, make_secrets(tmp_path / "secrets", vehicles), port
+    )
     try:
         yield stack
     finally:
@@ -122,6 +145,5 @@ def mqtt_events(sub: Subscriber, topic: str) -> list[dict[str, object]]:
 def all_events(sub: Subscriber, topic: str, count: int) -> list[dict[str, object]]:
     """The events on ``topic`` once ``count`` of them reached the subscriber (QoS 1: they may
     still be on their way when the companion has exited)."""
-    wait_until(lambda: len(mqtt_events(sub, topic)) >= count, 20.0,
-               f"{count} events on {topic}")  # fmt: skip
+    wait_until(lambda: len(mqtt_events(sub, topic)) >= count, 20.0, f"{count} events on {topic}")
     return mqtt_events(sub, topic)

@@ -27,8 +27,9 @@ MISSION_WALL_S = 240.0
 
 @pytest.fixture
 def stack(docker_images: None, tmp_path: Path) -> Iterator[Stack]:
-    with project("compose.yaml", tmp_path, list(range(VEHICLES)), free_port(),
-                 {"MDM_SPEEDUP": SPEEDUP}) as stack:  # fmt: skip
+    with project(
+        "compose.yaml", tmp_path, list(range(VEHICLES)), free_port(), {"MDM_SPEEDUP": SPEEDUP}
+    ) as stack:
         yield stack
 
 
@@ -45,8 +46,13 @@ def test_compose_flies_a_signed_mission_with_events_on_the_broker(
     assert wrong.returncode != 0, "the broker took a wrong password"
     sub = stack.subscriber("mdm/#", tmp_path / "mqtt.txt", "monitor")
     spy = stack.subscriber("mdm/+/+/cmd", tmp_path / "cmd.txt", "operator")
-    publish(port, "mdm/paper-fixed/uav1/cmd", '{"command": "abort"}', user="uav0",
-            password=passwords["uav0"])  # fmt: skip
+    publish(
+        port,
+        "mdm/paper-fixed/uav1/cmd",
+        '{"command": "abort"}',
+        user="uav0",
+        password=passwords["uav0"],
+    )
     start = time.monotonic()
     stack.compose("up", "-d")
     codes = stack.wait_exit(COMPANIONS, MISSION_WALL_S)
@@ -61,9 +67,11 @@ def test_compose_flies_a_signed_mission_with_events_on_the_broker(
     stack.compose("cp", "companion-0:/home/mdm/runs", str(runs))
     profile = load_profile("paper-fixed")
     result = score(profile, runs, VEHICLES, profile.mission.duration)
-    print(f"T_nc {result.tnc} of {len(profile.targets)} in {profile.mission.duration:.0f} s "
-          f"by {VEHICLES} vehicles; confirmations {len(result.confirmations)}, false "
-          f"{result.false_confirmations}; end {result.end_reasons}")  # fmt: skip
+    print(
+        f"T_nc {result.tnc} of {len(profile.targets)} in {profile.mission.duration:.0f} s "
+        f"by {VEHICLES} vehicles; confirmations {len(result.confirmations)}, false "
+        f"{result.false_confirmations}; end {result.end_reasons}"
+    )
     assert result.end_reasons == dict.fromkeys(range(VEHICLES), "mission time")
     assert result.false_confirmations == 0
     assert "MAVLink signing on" in stack.compose("logs", "emulator").stdout

@@ -71,8 +71,10 @@ def stack(
 ) -> Iterator[Stack]:
     profiles = tmp_path / "profiles"
     _profile(profiles, vehicles=max(i.index for i in instances) + 1)
-    settings = {"MDM_PROFILES": str(profiles),
-                "MDM_PROFILE": f"/opt/mdm/mission_profiles/{PROFILE}.yaml"}  # fmt: skip
+    settings = {
+        "MDM_PROFILES": str(profiles),
+        "MDM_PROFILE": f"/opt/mdm/mission_profiles/{PROFILE}.yaml",
+    }
     for n, inst in enumerate(instances):
         settings |= {f"MDM_VEHICLE_{n}": str(inst.index), f"MDM_CONNECT_{n}": inst.companion_url}
     vehicles = [i.index for i in instances]
@@ -100,8 +102,10 @@ def test_compose_sitl_flies_stock_autopilots_to_the_landing(
         stack.compose("cp", "companion-0:/home/mdm/runs", str(runs))
         for inst, obs in zip(instances, observers, strict=True):
             trace = obs.snapshot()
-            print(f"instance {inst.index}: {trace.distance:.0f} m flown, max {trace.max_alt:.1f} m,"
-                  f" modes {trace.modes}, landed_state {trace.landed_state}, armed {trace.armed}")  # fmt: skip
+            print(
+                f"instance {inst.index}: {trace.distance:.0f} m flown, max {trace.max_alt:.1f} m,"
+                f" modes {trace.modes}, landed_state {trace.landed_state}, armed {trace.armed}"
+            )
             assert trace.armed_ever, f"instance {inst.index} never armed\n{logs[-4000:]}"
             assert trace.max_alt >= 15.0
             assert trace.distance >= 200.0

@@ -82,11 +82,15 @@ def test_a_command_without_the_token_on_a_non_loopback_bind_is_refused(
         assert len(token) >= 16, f"no token printed for a bind to 0.0.0.0: {url}"
         local = url.partition("#")[0].replace("0.0.0.0", "127.0.0.1")
         open_page(chromium, local)  # without the token
-        wait_until(lambda: chromium.find_element("id", "token-box").is_displayed(), 20,
-                   "the token box of a page that needs one")  # fmt: skip
+        wait_until(
+            lambda: chromium.find_element("id", "token-box").is_displayed(),
+            20,
+            "the token box of a page that needs one",
+        )
         command(chromium, "all", "pause")
-        message = wait_until(lambda: chromium.find_element("id", "message").text, 20,
-                             "the refusal on the page")  # fmt: skip
+        message = wait_until(
+            lambda: chromium.find_element("id", "message").text, 20, "the refusal on the page"
+        )
         assert message.startswith("refused (401): a token is required"), message
         screenshot(chromium, tmp_path, "live-token-refused")
 
@@ -131,9 +135,12 @@ def test_read_only_and_bad_requests_are_refused_with_a_clear_error(
             status, answer = _post(open_url, body)
             assert status == 400, (body, answer)
             assert answer["error"].startswith(error), (body, answer)
-        req = urllib.request.Request(open_url + "api/command", method="POST",
-                                     data=b'{"vehicle": 0, "command": "land"}',
-                                     headers={"Origin": "http://evil.example"})  # fmt: skip
+        req = urllib.request.Request(
+            open_url + "api/command",
+            method="POST",
+            data=b'{"vehicle": 0, "command": "land"}',
+            headers={"Origin": "http://evil.example"},
+        )
         with pytest.raises(urllib.error.HTTPError) as refused:
             urllib.request.urlopen(req, timeout=10)
         assert refused.value.code == 403

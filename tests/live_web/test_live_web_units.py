@@ -37,8 +37,9 @@ def test_bad_web_addresses_are_refused_naming_the_flag(value: str) -> None:
         parse_web(value)
 
 
-@pytest.mark.parametrize("value", ["udp:1.2.3.4:5", "udpout:host.local:5", "udpout:1.2.3.4:0",
-                                   "udpout:1.2.3.4"])  # fmt: skip
+@pytest.mark.parametrize(
+    "value", ["udp:1.2.3.4:5", "udpout:host.local:5", "udpout:1.2.3.4:0", "udpout:1.2.3.4"]
+)
 def test_bad_gcs_addresses_are_refused_naming_the_flag(value: str) -> None:
     with pytest.raises(ValueError, match="--gcs"):
         parse_gcs(value)
@@ -70,11 +71,35 @@ def test_loopback_is_open_and_any_other_bind_gets_a_token(
 
 def test_state_messages_move_the_vehicle_and_bad_fields_change_nothing() -> None:
     s = _state()
-    s.on_state(0, {"t": 10.0, "north": 100.0, "east": 200.0, "alt": 30.0, "mode": "OFFBOARD",
-                   "armed": True, "phase": "search", "level": 1, "ci": 0.5, "found": 0,
-                   "battery": 87.0}, wall=1000.0)  # fmt: skip
-    s.on_state(0, {"t": math.nan, "north": math.inf, "east": 1.0, "alt": "high",
-                   "armed": "yes", "level": True}, wall=1001.0)  # fmt: skip
+    s.on_state(
+        0,
+        {
+            "t": 10.0,
+            "north": 100.0,
+            "east": 200.0,
+            "alt": 30.0,
+            "mode": "OFFBOARD",
+            "armed": True,
+            "phase": "search",
+            "level": 1,
+            "ci": 0.5,
+            "found": 0,
+            "battery": 87.0,
+        },
+        wall=1000.0,
+    )
+    s.on_state(
+        0,
+        {
+            "t": math.nan,
+            "north": math.inf,
+            "east": 1.0,
+            "alt": "high",
+            "armed": "yes",
+            "level": True,
+        },
+        wall=1001.0,
+    )
     (v,) = s.snapshot(1002.0, {})["vehicles"]
     assert (v["north"], v["east"], v["alt"], v["armed"], v["level"]) == (
         100.0,
@@ -106,8 +131,17 @@ def test_command_answers_and_refusals_reach_their_command() -> None:
     s.sent(CommandOutcome("a1", "pause", "all", 0.0))
     s.on_event(0, {"t": 5.0, "event": "command", "command": "pause", "id": "a1"}, wall=0.0)
     s.on_event(1, {"t": 5.0, "event": "command", "command": "pause", "id": "a1"}, wall=0.0)
-    s.on_event(1, {"t": 5.0, "event": "error", "source": "command", "error": "not searching",
-                   "payload": '{"command": "pause", "id": "a1"}'}, wall=0.0)  # fmt: skip
+    s.on_event(
+        1,
+        {
+            "t": 5.0,
+            "event": "error",
+            "source": "command",
+            "error": "not searching",
+            "payload": '{"command": "pause", "id": "a1"}',
+        },
+        wall=0.0,
+    )
     s.on_event(1, {"t": 6.0, "event": "command", "command": "pause", "id": "other"}, wall=0.0)
     (c,) = s.snapshot(0.0, {})["commands"]
     assert c["answers"] == {"0": "accepted", "1": "refused: not searching"}
@@ -115,10 +149,23 @@ def test_command_answers_and_refusals_reach_their_command() -> None:
 
 def test_tnc_counts_real_targets_within_the_confirmation_radius() -> None:
     s = _state()  # real target at 1500,1500; false one at 600,2400; confirmation radius 50 m
-    s.on_event(0, {"t": 1.0, "event": "confirmation", "north": 1530.0, "east": 1500.0,
-                   "level": 1, "found": 1}, wall=0.0)  # fmt: skip
-    s.on_event(1, {"t": 2.0, "event": "confirmation", "north": 600.0, "east": 2400.0,
-                   "level": 1, "found": 1}, wall=0.0)  # fmt: skip
+    s.on_event(
+        0,
+        {
+            "t": 1.0,
+            "event": "confirmation",
+            "north": 1530.0,
+            "east": 1500.0,
+            "level": 1,
+            "found": 1,
+        },
+        wall=0.0,
+    )
+    s.on_event(
+        1,
+        {"t": 2.0, "event": "confirmation", "north": 600.0, "east": 2400.0, "level": 1, "found": 1},
+        wall=0.0,
+    )
     assert s.tnc() == 1
     assert len(s.snapshot(0.0, {})["confirmations"]) == 2
 

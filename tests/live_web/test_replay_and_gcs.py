@@ -49,8 +49,9 @@ def test_a_finished_run_replays_to_its_end(chromium: WebDriver, fleet_processes:
             stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
         )  # fmt: skip
     try:
-        m = wait_until(lambda: _URL.search(out.read_text()), 60, "the replay's address",
-                       context=out.read_text)  # fmt: skip
+        m = wait_until(
+            lambda: _URL.search(out.read_text()), 60, "the replay's address", context=out.read_text
+        )
         assert m is not None
         open_page(chromium, m.group(1))
         wait_until(lambda: chromium.find_element("id", "replay").is_displayed(), 20, "the slider")
@@ -58,10 +59,18 @@ def test_a_finished_run_replays_to_its_end(chromium: WebDriver, fleet_processes:
         assert chromium.find_elements("css selector", "button[data-command]") == []  # read-only
         chromium.find_element("id", "speed").send_keys("x200")
         chromium.find_element("id", "play").click()
-        wait_until(lambda: chromium.find_element("id", "at").text, 60, "the replay's end",
-                   until=lambda at: at and float(at) >= end)  # fmt: skip
-        wait_until(lambda: chromium.find_element("id", "play").text, 10, "play to stop",
-                   until=lambda label: label == "play")  # fmt: skip
+        wait_until(
+            lambda: chromium.find_element("id", "at").text,
+            60,
+            "the replay's end",
+            until=lambda at: at and float(at) >= end,
+        )
+        wait_until(
+            lambda: chromium.find_element("id", "play").text,
+            10,
+            "play to stop",
+            until=lambda label: label == "play",
+        )
         shown = markers(chromium)
         assert sorted(shown) == [0, 1, 2]
         for i, (north, east) in shown.items():
@@ -87,8 +96,11 @@ def _tile_server() -> tuple[ThreadingHTTPServer, list[str]]:
     paths asked for."""
     asked: list[str] = []
     row = b"\x00" + b"\xc8\xc8\xc8" * 256
-    chunks = [(b"IHDR", struct.pack(">IIBBBBB", 256, 256, 8, 2, 0, 0, 0)),
-              (b"IDAT", zlib.compress(row * 256)), (b"IEND", b"")]  # fmt: skip
+    chunks = [
+        (b"IHDR", struct.pack(">IIBBBBB", 256, 256, 8, 2, 0, 0, 0)),
+        (b"IDAT", zlib.compress(row * 256)),
+        (b"IEND", b""),
+    ]
     png = b"\x89PNG\r\n\x1a\n" + b"".join(
         struct.pack(">I", len(d)) + k + d + struct.pack(">I", zlib.crc32(k + d)) for k, d in chunks
     )

@@ -23,11 +23,26 @@ from sim_vehicle_stub.mavlink import dialect
 from tests.emulator_harness import free_udp_base
 
 EXPECTED = {
-    "heartbeat", "mavlink2", "ids", "mode_encoding", "streams", "timestamps_monotonic",
-    "cmd_arm_disarm", "cmd_takeoff", "cmd_unknown", "mode_switch",
-    "home_position", "autopilot_version", "params_list", "params_read", "params_set",
-    "mission_count", "fence", "ftp_nak", "timesync",
-}  # fmt: skip
+    "heartbeat",
+    "mavlink2",
+    "ids",
+    "mode_encoding",
+    "streams",
+    "timestamps_monotonic",
+    "cmd_arm_disarm",
+    "cmd_takeoff",
+    "cmd_unknown",
+    "mode_switch",
+    "home_position",
+    "autopilot_version",
+    "params_list",
+    "params_read",
+    "params_set",
+    "mission_count",
+    "fence",
+    "ftp_nak",
+    "timesync",
+}
 
 
 @contextmanager

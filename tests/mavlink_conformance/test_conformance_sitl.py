@@ -20,8 +20,13 @@ SPEEDUP = {"arducopter": 5.0, "px4": None}
 """ArduCopter runs stably at 5x here (it only has to boot and answer); PX4 SIH at real time."""
 READY_S = 90.0
 """Wall seconds for a position estimate: ArduCopter needs 30-40 sim s for GPS and EKF origin."""
-_WATCH = ("HEARTBEAT", "SYS_STATUS", "GLOBAL_POSITION_INT", "LOCAL_POSITION_NED",
-          "EXTENDED_SYS_STATE")  # fmt: skip
+_WATCH = (
+    "HEARTBEAT",
+    "SYS_STATUS",
+    "GLOBAL_POSITION_INT",
+    "LOCAL_POSITION_NED",
+    "EXTENDED_SYS_STATE",
+)
 
 
 def _streams(url: str, sysid: int, seconds: float, *, ready: bool = False) -> set[str]:

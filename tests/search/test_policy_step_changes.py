@@ -29,8 +29,10 @@ def _case(policy: SearchPolicy, rng: np.random.Generator) -> tuple[PolicyState, 
     lifetime = policy.deadline(state)[0] - state.entered[0]
     if state.level[0] == 0 and rng.random() < 0.5:
         state.blind_until[0] = rng.uniform(40.0, 80.0)
-    time = float(state.entered[0] + (lifetime if np.isfinite(lifetime) else 60.0)
-                 * rng.choice([0.5, 1.0, 1.5]))  # fmt: skip
+    time = float(
+        state.entered[0]
+        + (lifetime if np.isfinite(lifetime) else 60.0) * rng.choice([0.5, 1.0, 1.5])
+    )
     if rng.random() < 0.2:
         time = float(state.blind_until[0]) if np.isfinite(state.blind_until[0]) else time
     m = rng.integers(3)
@@ -58,9 +60,14 @@ def test_step_changes_agrees_with_step(memory: DetectionMemory, blind: float) ->
     outcomes = {True: 0, False: 0}
     for _ in range(600):
         state, o = _case(policy, rng)
-        said = policy.step_changes(state, 0, float(o.time[0]),
-                                   (float(o.position[0, 0]), float(o.position[0, 1])),
-                                   bool(o.reached[0]), o.contact_positions[0])  # fmt: skip
+        said = policy.step_changes(
+            state,
+            0,
+            float(o.time[0]),
+            (float(o.position[0, 0]), float(o.position[0, 1])),
+            bool(o.reached[0]),
+            o.contact_positions[0],
+        )
         before = copy.deepcopy(state)
         out = policy.step(state, lane, o, np.random.default_rng(0))
         changed = any(

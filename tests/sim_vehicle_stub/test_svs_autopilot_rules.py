@@ -122,8 +122,11 @@ def test_mission_count_and_clear_all_are_acknowledged_at_once() -> None:
     with running_emulator(make_config(1, base)), Client(base, 1) as c:
         assert c.pump(5.0, lambda m: m.get_type() == "HEARTBEAT") is not None  # learn its port
         acks = []
-        for name, args in (("mission_count", (0, 0)), ("mission_count", (3, 0)),
-                           ("mission_clear_all", (0,))):  # fmt: skip
+        for name, args in (
+            ("mission_count", (0, 0)),
+            ("mission_count", (3, 0)),
+            ("mission_clear_all", (0,)),
+        ):
             getattr(c.conn.mav, f"{name}_send")(1, 1, *args)
             ack = c.pump(2.0, lambda m: m.get_type() == "MISSION_ACK")
             assert ack is not None
@@ -147,9 +150,20 @@ def test_do_reposition_flies_to_the_point_as_mavproxy_guided_asks(persona: str, 
             *(np.array([x]) for x in (1100.0, 1000.0, 0.0))
         )  # 100 m north
         c.conn.mav.command_int_send(
-            1, 1, 6, REPOSITION, 0, 0, -1, 1, 0, math.nan,
-            int(float(lat[0]) * 1e7), int(float(lon[0]) * 1e7), 15.0,
-        )  # fmt: skip
+            1,
+            1,
+            6,
+            REPOSITION,
+            0,
+            0,
+            -1,
+            1,
+            0,
+            math.nan,
+            int(float(lat[0]) * 1e7),
+            int(float(lon[0]) * 1e7),
+            15.0,
+        )
         ack = c.pump(3.0, lambda m: m.get_type() == "COMMAND_ACK" and m.command == REPOSITION)
         assert ack is not None
         assert ack.result == ACCEPTED

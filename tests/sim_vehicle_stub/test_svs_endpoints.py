@@ -50,9 +50,11 @@ def test_gcs_output_carries_all_vehicles_and_routes_replies_by_target_system() -
             assert seen == {1, 2, 3}
             conn.mav.command_long_send(3, 1, 400, 0, 1, 0, 0, 0, 0, 0, 0)
             ack = conn.recv_match(
-                type="COMMAND_ACK", blocking=True, timeout=5,
+                type="COMMAND_ACK",
+                blocking=True,
+                timeout=5,
                 condition="COMMAND_ACK.command==400",
-            )  # fmt: skip
+            )
             assert ack.get_srcSystem() == 3
             assert [v.armed for v in emu.vehicles] == [False, False, True]
         finally:

@@ -29,8 +29,9 @@ def _upload(c: Client, items: list[tuple[int, int, int]]) -> Any:
             return msg
         assert msg.mission_type == FENCE
         command, lat, lon = items[msg.seq]
-        c.conn.mav.mission_item_int_send(c.sysid, 1, msg.seq, 0, command, 0, 1,
-                                         len(items), 0, 0, 0, lat, lon, 0, FENCE)  # fmt: skip
+        c.conn.mav.mission_item_int_send(
+            c.sysid, 1, msg.seq, 0, command, 0, 1, len(items), 0, 0, 0, lat, lon, 0, FENCE
+        )
 
 
 def _download(c: Client, kind: int = FENCE) -> list[tuple[int, int, int]]:

@@ -53,8 +53,20 @@ def _speed_limit(emu: Emulator, i: int) -> float:
 
 def _state_finite(emu: Emulator) -> bool:
     f = emu.fleet
-    arrays = (f.pos, f.vel, f.alt, f.vz, f.yaw, f.h_target, f.h_vel, f.v_target, f.v_vel,
-              f.speed, f.climb, f.descent)  # fmt: skip
+    arrays = (
+        f.pos,
+        f.vel,
+        f.alt,
+        f.vz,
+        f.yaw,
+        f.h_target,
+        f.h_vel,
+        f.v_target,
+        f.v_vel,
+        f.speed,
+        f.climb,
+        f.descent,
+    )
     return all(bool(np.all(np.isfinite(a))) for a in arrays)
 
 
@@ -87,11 +99,14 @@ def _settle(emu: Emulator, sent_to: dict[int, int], timeout: float = 20.0) -> No
     the batch's own answers (a REQUEST_MESSAGE of HEARTBEAT, say) are not observed as the
     vehicle's rates."""
     wait_until(
-        lambda: {i: emu.nodes[i].stats.datagrams + emu.nodes[i].stats.flood_dropped
-                 for i in sent_to},
-        timeout, f"every datagram read or dropped of {sent_to} sent",
-        until=lambda handled: all(handled[i] >= n for i, n in sent_to.items()), every=0.02,
-    )  # fmt: skip
+        lambda: {
+            i: emu.nodes[i].stats.datagrams + emu.nodes[i].stats.flood_dropped for i in sent_to
+        },
+        timeout,
+        f"every datagram read or dropped of {sent_to} sent",
+        until=lambda handled: all(handled[i] >= n for i, n in sent_to.items()),
+        every=0.02,
+    )
 
 
 def _max_speed(local: list[Any]) -> float:
@@ -147,8 +162,9 @@ def test_ten_thousand_hostile_inputs_with_invariants_after_every_batch() -> None
     base = free_udp_base(3)
     cfg = make_config(3, base, personas=("px4", "ardupilot", "px4"), flood_rate=4000.0)
     n = BATCHES * HOSTILE_PER_BATCH
-    hostile = {i: hostile_frames(n, seed=10 + i, target=i + 1, every=HOSTILE_PER_BATCH)
-               for i in FUZZED}  # fmt: skip
+    hostile = {
+        i: hostile_frames(n, seed=10 + i, target=i + 1, every=HOSTILE_PER_BATCH) for i in FUZZED
+    }
     malformed = malformed_corpus(BATCHES * MALFORMED_PER_BATCH, seed=3, target=1)
     senders = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(9)]
     rss_before = _rss_mb()
@@ -224,12 +240,21 @@ def test_ten_thousand_hostile_inputs_with_invariants_after_every_batch() -> None
             s.close()
     rss_after = _rss_mb()
     totals = stats["totals"]
-    log.info("hostile inputs sent %d, invariant checks %d, RSS %.1f -> %.1f MB, "
-             "fastest observed (m/s) %s, counters %s", sent, checks, rss_before, rss_after,
-             {i: round(w, 2) for i, w in worst.items()}, totals)  # fmt: skip
-    print(f"hostile inputs {sent}, invariant checks {checks}, RSS {rss_before:.1f} -> "
-          f"{rss_after:.1f} MB, fastest {worst}, flood_dropped {totals['flood_dropped']}, "
-          f"rejected {totals['rejected_datagrams']}, nacks {totals['nacks']}")  # fmt: skip
+    log.info(
+        "hostile inputs sent %d, invariant checks %d, RSS %.1f -> %.1f MB, "
+        "fastest observed (m/s) %s, counters %s",
+        sent,
+        checks,
+        rss_before,
+        rss_after,
+        {i: round(w, 2) for i, w in worst.items()},
+        totals,
+    )
+    print(
+        f"hostile inputs {sent}, invariant checks {checks}, RSS {rss_before:.1f} -> "
+        f"{rss_after:.1f} MB, fastest {worst}, flood_dropped {totals['flood_dropped']}, "
+        f"rejected {totals['rejected_datagrams']}, nacks {totals['nacks']}"
+    )
     assert sent >= 10_000
     assert totals["flood_dropped"] < sent // 10  # the inputs were read, not dropped unread
     assert rss_after - rss_before < RSS_GROWTH_MB

@@ -52,8 +52,12 @@ def test_later_senders_do_not_evict_an_active_client() -> None:
         others = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(8)]
         try:
             client.sendto(beat, ("127.0.0.1", port))
-            wait_until(lambda: emu.udp[0].peers.targets, 5.0, "the client a peer of vehicle 1",
-                       until=lambda peers: client.getsockname() in peers)  # fmt: skip
+            wait_until(
+                lambda: emu.udp[0].peers.targets,
+                5.0,
+                "the client a peer of vehicle 1",
+                until=lambda peers: client.getsockname() in peers,
+            )
             for s in others:
                 s.bind(("127.0.0.1", 0))
                 s.sendto(beat, ("127.0.0.1", port))

@@ -104,8 +104,7 @@ def test_a_late_emulator_still_waits_for_the_clients_that_answered(tmp_path: Pat
     the late time-out client 1's answer looked stale too, sim time ran on for the 20 ms
     client 1 took to answer, and vehicle 1 fell back on the setpoint-loss failsafe.)"""
     events = tmp_path / "events.jsonl"
-    cfg = make_config(2, 25360, personas=("px4", "px4"), speedup=None, lockstep=True,
-                      events=events)  # fmt: skip
+    cfg = make_config(2, 25360, personas=("px4", "px4"), speedup=None, lockstep=True, events=events)
     with emulator_and_loop(cfg) as (emu, loop):
         a, b = _Answerer(25360, 1, delay=0.02), _Answerer(25361, 2)
         a.start()
@@ -129,8 +128,11 @@ def test_a_late_emulator_still_waits_for_the_clients_that_answered(tmp_path: Pat
         assert b.client.mode() != PX4_OFFBOARD  # vehicle 2 was not waited for: failsafe
         a.client.close()
         b.client.close()
-    silent = [e for e in map(json.loads, events.read_text().splitlines())
-              if e["event"] == "lockstep_silent"]  # fmt: skip
+    silent = [
+        e
+        for e in map(json.loads, events.read_text().splitlines())
+        if e["event"] == "lockstep_silent"
+    ]
     assert [e["vehicle"] for e in silent if e["t"] < a_quiet] == [1]
 
 
@@ -139,8 +141,9 @@ def test_a_vehicle_switched_out_of_offboard_is_not_waited_for() -> None:
     """Client 2 answers a tick by switching its vehicle to POSCTL instead of sending a setpoint
     (a companion ending its search): the held tick goes on as soon as the others answered, not
     after ``lockstep_wall`` (here 30 wall s)."""
-    cfg = make_config(2, 25370, personas=("px4", "px4"), speedup=None, lockstep=True,
-                      lockstep_wall=30.0)  # fmt: skip
+    cfg = make_config(
+        2, 25370, personas=("px4", "px4"), speedup=None, lockstep=True, lockstep_wall=30.0
+    )
     with running_emulator(cfg) as emu:
         a, b = _Answerer(25370, 1), _Answerer(25371, 2)
         a.start()

@@ -21,9 +21,14 @@ def test_mavproxy_routes_a_vehicle_to_mavsdk_which_arms_and_takes_off(tmp_path: 
     vehicle_port = free_udp_base(2)  # the emulator sends to it; MAVProxy forwards to the next
     client_port = vehicle_port + 1
     cmd = [
-        sys.executable, str(mavproxy), f"--master=udpin:127.0.0.1:{vehicle_port}", "--daemon",
-        f"--out=udp:127.0.0.1:{client_port}", f"--state-basedir={tmp_path}", "--nowait",
-    ]  # fmt: skip
+        sys.executable,
+        str(mavproxy),
+        f"--master=udpin:127.0.0.1:{vehicle_port}",
+        "--daemon",
+        f"--out=udp:127.0.0.1:{client_port}",
+        f"--state-basedir={tmp_path}",
+        "--nowait",
+    ]
 
     async def client() -> float:
         async with Mavsdk(Configuration.create_manual(245, 190, True)) as mavsdk:
@@ -45,9 +50,12 @@ def test_mavproxy_routes_a_vehicle_to_mavsdk_which_arms_and_takes_off(tmp_path: 
 
     with running_emulator(make_config(1, vehicle_port, speedup=5.0)) as emu:
         proc = subprocess.Popen(
-            cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            cmd,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
             cwd=tmp_path,
-        )  # fmt: skip
+        )
         try:
             altitude = asyncio.run(asyncio.wait_for(client(), 60))
         finally:

@@ -16,10 +16,22 @@ from tests.emulator_harness import Client, free_udp_base, make_config, running_e
 PROFILE = builtin_profile("paper-fixed-false")  # T3 (index 2) is false
 R_DET, R_CNF = 2000.0, 400.0
 ALLOWED = {
-    "HEARTBEAT", "SYS_STATUS", "SYSTEM_TIME", "BATTERY_STATUS", "EXTENDED_SYS_STATE",
-    "GPS_RAW_INT", "HOME_POSITION", "GLOBAL_POSITION_INT", "LOCAL_POSITION_NED", "ATTITUDE",
-    "PARAM_VALUE", "NAMED_VALUE_FLOAT", "DEBUG_VECT", "COMMAND_ACK", "STATUSTEXT",
-}  # fmt: skip
+    "HEARTBEAT",
+    "SYS_STATUS",
+    "SYSTEM_TIME",
+    "BATTERY_STATUS",
+    "EXTENDED_SYS_STATE",
+    "GPS_RAW_INT",
+    "HOME_POSITION",
+    "GLOBAL_POSITION_INT",
+    "LOCAL_POSITION_NED",
+    "ATTITUDE",
+    "PARAM_VALUE",
+    "NAMED_VALUE_FLOAT",
+    "DEBUG_VECT",
+    "COMMAND_ACK",
+    "STATUSTEXT",
+}
 
 
 def _readings(c: Client, seconds: float) -> tuple[list[float], list[Any]]:
@@ -42,9 +54,12 @@ def test_only_the_selected_sensor_reports_and_false_targets_never_confirm(tmp_pa
     events = tmp_path / "events.jsonl"
     base = free_udp_base(2)
     cfg = make_config(
-        2, base, profile=PROFILE, events=events,
+        2,
+        base,
+        profile=PROFILE,
+        events=events,
         start_positions=((2000.0, 1700.0), (10000.0, 9700.0)),
-    )  # fmt: skip
+    )
     with running_emulator(cfg), Client(base, 1) as real:
         types: set[str] = set()
         assert real.pump(2, lambda m: m.get_type() == "HEARTBEAT") is not None

@@ -50,9 +50,13 @@ emulator is unchanged since."""
 def telemetry_digests() -> tuple[list[str], int]:
     """Each vehicle's telemetry digest and the number of events of the scripted run."""
     cfg = EmulatorConfig(
-        profile=builtin_profile("paper-fixed"), vehicles=12, base_port=9, bind_port_base=0,
-        personas=("px4", "ardupilot"), seed=7,
-    )  # fmt: skip
+        profile=builtin_profile("paper-fixed"),
+        vehicles=12,
+        base_port=9,
+        bind_port_base=0,
+        personas=("px4", "ardupilot"),
+        seed=7,
+    )
     emu = Emulator(cfg)
     emu.telemetry.epoch_usec = 0  # SYSTEM_TIME's wall-clock epoch: the one input not seeded
     sent: list[list[bytes]] = [[] for _ in emu.nodes]

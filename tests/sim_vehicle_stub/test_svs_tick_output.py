@@ -170,19 +170,30 @@ def _steps_per_tick(cfg: EmulatorConfig) -> int:
 def test_flat_out_telemetry_is_pymavlink_framing_of_the_replayed_flight() -> None:
     base = free_udp_base(N)
     cfg = EmulatorConfig(
-        profile=PROFILE, vehicles=N, base_port=base, bind_port_base=0, speedup=None, seed=3,
-        personas=("px4", "ardupilot"), start_positions=_start_positions(),
-    )  # fmt: skip
+        profile=PROFILE,
+        vehicles=N,
+        base_port=base,
+        bind_port_base=0,
+        speedup=None,
+        seed=3,
+        personas=("px4", "ardupilot"),
+        start_positions=_start_positions(),
+    )
     probe = Emulator(cfg)
     _configure(probe)
     f = probe.fleet
     assert not f.v_use_vel.any()
     setup = {
-        "pos": f.pos.copy(), "h_target": f.h_target.copy(), "h_vel": f.h_vel.copy(),
-        "use_vel": f.h_use_vel.copy(), "speed": f.speed.copy(), "climb": f.climb.copy(),
-        "descent": f.descent.copy(), "v_target": f.v_target.copy(),
+        "pos": f.pos.copy(),
+        "h_target": f.h_target.copy(),
+        "h_vel": f.h_vel.copy(),
+        "use_vel": f.h_use_vel.copy(),
+        "speed": f.speed.copy(),
+        "climb": f.climb.copy(),
+        "descent": f.descent.copy(),
+        "v_target": f.v_target.copy(),
         "climb_limit": np.array([v.climb_limit for v in probe.vehicles]),
-    }  # fmt: skip
+    }
     received, emu = asyncio.run(_fly(cfg))
     assert emu.tick_errors == 0
     assert emu.telemetry_errors == 0
@@ -224,12 +235,20 @@ def test_flat_out_telemetry_is_pymavlink_framing_of_the_replayed_flight() -> Non
             (m,) = signals  # one reading per tick, in the tick's datagram
             assert m.name == "SENS_SIG"
             pos = state[m.time_boot_ms][i][None, :2]
-            mask, strength = contacts(radii[sensor : sensor + 1], confirms, pos, targets,
-                                      np.ones(len(targets), bool), spec.false_mask)  # fmt: skip
+            mask, strength = contacts(
+                radii[sensor : sensor + 1],
+                confirms,
+                pos,
+                targets,
+                np.ones(len(targets), bool),
+                spec.false_mask,
+            )
             visible = ~(confirms[0] & spec.false_mask)
             assert m.value == np.float32(strength[0][visible].max(initial=0.0))
-            hits = [(float(targets[j, 0]), float(targets[j, 1]), float(strength[0, j]))
-                    for j in np.flatnonzero(mask[0])]  # fmt: skip
+            hits = [
+                (float(targets[j, 0]), float(targets[j, 1]), float(strength[0, j]))
+                for j in np.flatnonzero(mask[0])
+            ]
             sent = [v for v in frames if v.get_type() == "DEBUG_VECT"]
             expect_hits = np.array(hits, dtype=np.float32).reshape(-1, 3).tolist()
             assert [[v.x, v.y, v.z] for v in sent] == expect_hits

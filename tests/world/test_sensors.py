@@ -51,9 +51,13 @@ def test_popup_target_is_sensed_from_its_appear_time_on() -> None:
     for t, expected in ((199.999, [False, False]), (200.0, [True, False]), (400.0, [True, True])):
         present = (appear <= t)[None, :]
         mask, _ = contacts(
-            np.array([400.0]), np.array([True]), np.zeros((1, 2)), targets, present,
+            np.array([400.0]),
+            np.array([True]),
+            np.zeros((1, 2)),
+            targets,
+            present,
             np.zeros(2, dtype=bool),
-        )  # fmt: skip
+        )
         assert mask[0].tolist() == expected
 
 
@@ -124,9 +128,13 @@ def test_entry_time_agrees_with_contacts_just_before_and_after() -> None:
     t = _entry(list(start), list(v), 500.0, [0.0, 0.0], r)
     for dt, expected in ((-1e-6, False), (1e-6, True)):
         mask, _ = contacts(
-            np.array([r]), np.array([True]), (start + v * (t + dt))[None, :],
-            np.zeros((1, 1, 2)), np.ones((1, 1), dtype=bool), np.zeros(1, dtype=bool),
-        )  # fmt: skip
+            np.array([r]),
+            np.array([True]),
+            (start + v * (t + dt))[None, :],
+            np.zeros((1, 1, 2)),
+            np.ones((1, 1), dtype=bool),
+            np.zeros(1, dtype=bool),
+        )
         assert bool(mask[0, 0]) is expected
 
 
