@@ -10,8 +10,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_core.world import TargetTracks, first_entry_time
+from mdm_core.world import TargetTracks
 from mdm_montecarlo import swarm_kernels as kernels
+from mdm_montecarlo.pair_entry import pair_entry_times
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -85,9 +86,10 @@ class SwarmSensors:
         sense(targets, position, ...); ``longest``: the largest absolute coordinate of a step.
         Returns the (run, target) of every confirmation.
 
-        The closed form (mdm_core.world.first_entry_time) is solved only for the
-        vehicle x target pairs that can meet in the interval: those no farther apart than
-        confirm_radius + the longest step + the farthest a target moves in dt.
+        The closed form (mdm_core.world.first_entry_time, compiled per pair in
+        mdm_montecarlo.pair_entry) is solved only for the vehicle x target pairs that can meet
+        in the interval: those no farther apart than confirm_radius + the longest step + the
+        farthest a target moves in dt.
         """
         t = targets.t
         travel = math.sqrt(2.0) * longest + targets.travel
@@ -96,19 +98,17 @@ class SwarmSensors:
         run, lane, index = kernels.open_pairs(
             targets.position, position, nearest, reach * reach, self.real, known
         )
-        pairs = len(run)
-        if pairs == 0:
+        if len(run) == 0:
             return run, index
-        entry = first_entry_time(
+        entry = pair_entry_times(
             position[run, lane],
             step[run, lane] / self.dt,
-            np.full(pairs, self.dt),
-            targets.position[run, index][:, None, :],
-            targets.velocity[run, index][:, None, :],
-            np.full(pairs, self.confirm_radius),
-            np.ones((pairs, 1), dtype=bool),
-            (self.appear[index] - t)[:, None],
-        )[:, 0]
+            self.dt,
+            targets.position[run, index],
+            targets.velocity[run, index],
+            self.confirm_radius,
+            self.appear[index] - t,
+        )
         hit = entry <= self.dt
         run, lane, index = run[hit], lane[hit], index[hit]
         first[run, lane, index] = np.minimum(first[run, lane, index], t + entry[hit])

@@ -159,66 +159,94 @@ def _arrive(
 ) -> int:
     """The iteration of every particle that reached its waypoint (``reached`` (runs,
     vehicles)): its reading into its personal best, then its next velocity and waypoint, in
-    place. Returns how many of them steer by another vehicle's best."""
+    place. Returns how many of them steer by another vehicle's best.
+
+    A step's arrivals are a few of the block's particles: the swarm bests, inertias and steps
+    are computed for them alone (the kernels' per-particle rules on the arrivals gathered as
+    (arrivals, 1) particles; swarm bests over the runs they belong to). The random numbers are
+    still drawn for every particle of the block, in the same order, so the streams and the
+    results are those of the kernels run on every particle."""
     previous_best = waypoint_kernels.take_readings(
         reached, position, reading, source, current, own.position, own.fitness, own.source
     )
+    run, lane = np.nonzero(reached)
+    hit_runs, slot = np.unique(run, return_inverse=True)
     if config.variant == "spso":
-        found = kernels.best_of_linked_peers(own.position, own.fitness, own.source, links)
+        found = kernels.best_of_linked_peers(
+            own.position[hit_runs], own.fitness[hit_runs], own.source[hit_runs], links[hit_runs]
+        )
     else:
-        found = kernels.best_of_all_peers(own.position, own.fitness, own.source)
-    social_position, social_fitness, _, mine = found
+        found = kernels.best_of_all_peers(
+            own.position[hit_runs], own.fitness[hit_runs], own.source[hit_runs]
+        )
+    # The arrivals' swarm bests, as (arrivals, 1) particles.
+    social_position = found[0][slot, lane][:, None]
+    social_fitness = found[1][slot, lane][:, None]
+    mine = found[3][slot, lane][:, None]
+    at = (run, lane)
+    step = velocity[at][:, None]
+    here = position[at][:, None]
+    own_position = own.position[at][:, None]
+    own_fitness = own.fitness[at][:, None]
     if config.variant == "spso":
+        normal = rng.standard_normal(position.shape)
+        uniform = rng.random(position.shape[:-1])
         move = kernels.spso_steps(
-            velocity,
-            position,
-            own.position,
-            own.fitness,
+            step,
+            here,
+            own_position,
+            own_fitness,
             social_position,
             social_fitness,
             mine,
             config.spso_inertia,
             config.spso_acceleration,
-            rng.standard_normal(position.shape),
-            rng.random(position.shape[:-1]),
+            normal[at][:, None],
+            uniform[at][:, None],
             config.max_step,
             False,
         )
-        stuck = reached & (social_fitness <= local_fitness)
-        local_fitness[reached] = social_fitness[reached]
-        if stuck.any():
+        stuck_here = social_fitness[:, 0] <= local_fitness[at]
+        local_fitness[at] = social_fitness[:, 0]
+        if stuck_here.any():
+            stuck = np.zeros_like(reached)
+            stuck[at] = stuck_here
             kernels.relink(rng.random(links.shape), stuck, informants, links)
     else:
-        inertia = np.full(reached.shape, config.inertia)
+        inertia = np.full(own_fitness.shape, config.inertia)
         if config.variant == "arpso":
-            heard = np.broadcast_to(current[:, None], links.shape)
             inertia = kernels.arpso_inertia(
-                previous_best,
-                own.fitness,
-                current,
-                heard,
-                links,
+                previous_best[at][:, None],
+                own_fitness,
+                current[at][:, None],
+                current[run][:, None],
+                links[at][:, None],
                 config.arpso_initial_inertia,
                 config.arpso_speed_weight,
                 config.arpso_aggregation_weight,
             )
+        uniform = rng.random((2, *position.shape))
         move = kernels.pso_steps(
-            velocity,
-            position,
-            own.position,
-            own.fitness,
+            step,
+            here,
+            own_position,
+            own_fitness,
             social_position,
             social_fitness,
             inertia,
             config.cognitive,
             config.social,
-            rng.random((2, *position.shape)),
+            uniform[:, run, lane][:, :, None],
             config.max_step,
             False,
         )
-    follow = reached & (social_fitness > 0)
+    follow_here = social_fitness[:, 0] > 0
+    follow = np.zeros_like(reached)
+    follow[at] = follow_here
     lost = reached & ~follow
     if lost.any():
         waypoint[lost] = explore(explorer, position[lost], rng)
-    waypoint_kernels.steer(reached, follow, position, move, area, waypoint, velocity)
-    return int(np.count_nonzero(follow & ~mine))
+    moves = np.zeros_like(position)
+    moves[at] = move[:, 0]
+    waypoint_kernels.steer(reached, follow, position, moves, area, waypoint, velocity)
+    return int(np.count_nonzero(follow_here & ~mine[:, 0]))
