@@ -239,7 +239,8 @@ def run_swarm_block(
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
     targets_now = sensors.motion(0.0)
     # Only the distances: the first reading is taken after the first step.
-    sensors.sense(targets_now, position, unread, np.zeros(shape), source, nearest)
+    everyone = np.ones(shape, dtype=bool)
+    sensors.sense(targets_now, position, unread, everyone, np.zeros(shape), source, nearest)
     step = np.zeros((*shape, 2))
     guided = np.zeros(shape, dtype=bool)
     # SPSO: the swarm bests the informants' refresh found for the next iteration.
@@ -288,7 +289,7 @@ def run_swarm_block(
 
         # Fitness: the signal sensor, targets known to be confirmed left out.
         targets_now = sensors.motion(t)
-        sensors.sense(targets_now, position, unread, current, source, nearest)
+        sensors.sense(targets_now, position, unread, everyone, current, source, nearest)
         previous_best = kernels.read_into_best(
             own.position, own.fitness, own.source, forget_by, position, current, source
         )

@@ -37,20 +37,23 @@ def sense(
     near: float,
     known: BoolArray,
     real: BoolArray,
+    rows: BoolArray,
     fitness: FloatArray,
     source: IntArray,
     nearest: FloatArray,
 ) -> None:
-    """Every vehicle's fitness and its source, in place in ``fitness`` and ``source`` (runs,
-    vehicles), from ``position`` (runs, vehicles, 2) and ``target`` (runs, targets, 2): the
-    strongest exp(-d / radius) above THRESHOLD of a present target within ``radius`` it does
-    not know to be confirmed (0 and -1 if none), as mdm_core.search.pso.signal_fitness picks
-    it. Strengths are computed only for squared distances below ``near`` (radius^2 with a
-    rounding margin). ``nearest``: the smallest squared distance to a ``real`` target (inf if
-    none), the squares rounded as mdm_core.world.contacts rounds them (_gap)."""
+    """The fitness and its source of every vehicle where ``rows`` (runs, vehicles), in place in
+    ``fitness`` and ``source`` (the others' are left as they are), from ``position`` (runs,
+    vehicles, 2) and ``target`` (runs, targets, 2): the strongest exp(-d / radius) above
+    THRESHOLD of a present target within ``radius`` it does not know to be confirmed (0 and -1
+    if none), as mdm_core.search.pso.signal_fitness picks it. Strengths are computed only for
+    squared distances below ``near`` (radius^2 with a rounding margin). ``nearest``, for every
+    vehicle: the smallest squared distance to a ``real`` target (inf if none), the squares
+    rounded as mdm_core.world.contacts rounds them (_gap)."""
     runs, n, m = known.shape
     for r in range(runs):
         for i in range(n):
+            read = rows[r, i]
             best = 0.0
             found = -1
             closest = np.inf
@@ -59,15 +62,16 @@ def sense(
                 if real[k] and gap < closest:
                     closest = gap
                 # The strength only where the target could be read (the cheap tests first).
-                if gap < near and appear[k] <= t and not known[r, i, k]:
+                if read and gap < near and appear[k] <= t and not known[r, i, k]:
                     distance = math.sqrt(gap)
                     if distance < radius:
                         strength = math.exp(-distance / radius)
                         if strength > THRESHOLD and strength > best:
                             best = strength
                             found = k
-            fitness[r, i] = best
-            source[r, i] = found
+            if read:
+                fitness[r, i] = best
+                source[r, i] = found
             nearest[r, i] = closest
 
 

@@ -45,16 +45,17 @@ class SwarmSensors:
         targets: TargetsNow,
         position: FloatArray,
         known: BoolArray,
+        rows: BoolArray,
         fitness: FloatArray,
         source: IntArray,
         nearest: FloatArray,
     ) -> None:
-        """Every vehicle's fitness and its source (mdm_core.search.pso.signal_fitness) at
-        ``position`` (runs, vehicles, 2), in place: the signal sensor's strongest exp(-d / R)
-        of a present target within R that the vehicle does not know to be confirmed (as
-        mdm_core.world.contacts reads it); strengths are computed only for the pairs nearer
-        than R (a superset from the squared distances). ``nearest``: every vehicle's smallest
-        squared distance to a real target, for confirm."""
+        """The fitness and its source (mdm_core.search.pso.signal_fitness) at ``position``
+        (runs, vehicles, 2) of every vehicle where ``rows``, in place: the signal sensor's
+        strongest exp(-d / R) of a present target within R that the vehicle does not know to
+        be confirmed (as mdm_core.world.contacts reads it); strengths are computed only for the
+        pairs nearer than R (a superset from the squared distances). ``nearest``: every
+        vehicle's smallest squared distance to a real target, for confirm."""
         radius = self.signal_radius
         kernels.sense(
             targets.position,
@@ -65,6 +66,7 @@ class SwarmSensors:
             radius * radius * _NEAR,
             known,
             self.real,
+            rows,
             fitness,
             source,
             nearest,

@@ -97,10 +97,11 @@ def run_waypoint_swarm_block(
 
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
     velocity = waypoint - position
-    targets_now = sensors.motion(0.0)
-    sensors.sense(targets_now, position, unread, reading, source, nearest)
     no_move = np.zeros((*shape, 2))
     no_follow = np.zeros(shape, dtype=bool)
+    targets_now = sensors.motion(0.0)
+    # Only the distances: a particle reads its sensor on arriving at a waypoint.
+    sensors.sense(targets_now, position, unread, no_follow, reading, source, nearest)
     t = 0.0
     iterations = 0
     followed = 0
@@ -114,7 +115,7 @@ def run_waypoint_swarm_block(
         position = new_position
         t += dt
         targets_now = sensors.motion(t)
-        sensors.sense(targets_now, position, unread, reading, source, nearest)
+        sensors.sense(targets_now, position, unread, reached, reading, source, nearest)
         kernels.forget_known(own.fitness, own.source, forget_by)
         if reached.any():
             iterations += int(np.count_nonzero(reached))

@@ -76,6 +76,7 @@ def test_sense_is_signal_fitness_and_the_nearest_real_target(seed: int) -> None:
         radius * radius * (1 + 1e-9),
         known,
         real,
+        np.ones((RUNS, N), dtype=bool),
         fitness,
         source,
         nearest,
@@ -374,3 +375,30 @@ def test_refresh_informants_in_place_is_the_companions_rule(seed: int) -> None:
     _same(best_mine, want_mine)
     assert mine.random() == theirs.random()
     assert (want_links != links).any()  # some particles were stuck and relinked
+
+
+def test_sense_reads_only_the_rows_asked_and_every_nearest_distance() -> None:
+    rng, _, position, known = _state(4)
+    target = rng.uniform(0, 1000, (RUNS, M, 2))
+    appear = np.zeros(M)
+    real = np.array([True, False, True, True, True])
+    radius, near = 300.0, 300.0 * 300.0 * (1 + 1e-9)
+
+    def sensed(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        fitness, nearest = np.full((RUNS, N), -5.0), np.empty((RUNS, N))
+        source = np.full((RUNS, N), -5, dtype=np.intp)
+        kernels.sense(
+            target, position, appear, 0.0, radius, near, known, real, rows, fitness, source, nearest
+        )
+        return fitness, source, nearest
+
+    rows = rng.random((RUNS, N)) < 0.3
+    every_fitness, every_source, every_nearest = sensed(np.ones((RUNS, N), dtype=bool))
+    fitness, source, nearest = sensed(rows)
+
+    assert (every_fitness[rows] > 0).any()
+    _same(fitness[rows], every_fitness[rows])
+    _same(source[rows], every_source[rows])
+    assert (fitness[~rows] == -5.0).all()
+    assert (source[~rows] == -5).all()
+    _same(nearest, every_nearest)
