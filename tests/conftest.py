@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import functools
+import os
+from collections import Counter
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from tests import sitl
+from tests import parallel, sitl
 from tests.markers import MARKERS, markers_for
 from tests.mqtt_harness import clear_retained_of_this_run
 from tests.services import missing
@@ -22,12 +24,46 @@ def pytest_configure(config: pytest.Config) -> None:
         config.addinivalue_line("markers", f"{name}: {description}")
 
 
-@pytest.hookimpl(tryfirst=True)  # before -m deselects by them
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Each test gets the markers of the fixtures it uses (tests/markers.py)."""
+@pytest.hookimpl(wrapper=True)  # before every other plugin: -m deselects by them, xdist groups
+def pytest_collection_modifyitems(
+    config: pytest.Config, items: list[pytest.Item]
+) -> Iterator[None]:
+    """Each test gets the markers of the fixtures it uses (tests/markers.py) and its xdist
+    group (tests/parallel.py)."""
+    found = {item.nodeid: markers_for(getattr(item, "fixturenames", ())) for item in items}
     for item in items:
-        for marker in sorted(markers_for(getattr(item, "fixturenames", ()))):
+        for marker in sorted(found[item.nodeid]):
             item.add_marker(marker)
+    sitl_modules = Counter(_module(i) for i in items if "sitl" in found[i.nodeid])
+    lanes = parallel.sitl_lanes(dict(sitl_modules))
+    for item in items:
+        group = parallel.group_of(found[item.nodeid], _module(item), lanes)
+        if group is not None:
+            item.add_marker(pytest.mark.xdist_group(group))
+    yield
+    if config.getoption("loadgroup", False):  # a pytest-xdist worker of `--dist loadgroup`
+        ungrouped = [
+            i.nodeid for i in items if i.get_closest_marker("xdist_group") and "@" not in i.nodeid
+        ]
+        if ungrouped:  # pytest >= 9.2 keeps node ids where xdist 3.8 cannot add the group
+            raise pytest.UsageError(
+                f"pytest-xdist did not take the SITL and Docker groups (pytest {pytest.__version__}; "
+                f"{ungrouped[0]} has none): install the versions pyproject.toml's dev extra pins"
+            )
+
+
+def _module(item: pytest.Item) -> str:
+    return item.nodeid.split("::", 1)[0]
+
+
+@pytest.fixture(autouse=True)
+def _sitl_instance_base(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A SITL test takes instance indices from its lane's base on (tests/parallel.py), unless
+    MDM_SITL_INSTANCE_BASE was set for the whole run."""
+    marker = request.node.get_closest_marker("xdist_group")
+    base = parallel.instance_base(marker.args[0] if marker else None)
+    if base is not None and sitl.INSTANCE_BASE_ENV not in os.environ:
+        monkeypatch.setenv(sitl.INSTANCE_BASE_ENV, str(base))
 
 
 def _sitl_starter(tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:

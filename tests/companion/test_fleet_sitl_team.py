@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
 import time
 from pathlib import Path
 
@@ -30,6 +29,8 @@ from tests.companion.sitl_team import (
     team_profile,
 )
 from tests.fleet_cli import processes_naming, start_fleet
+from tests.live_web.page import page_command, page_state, page_url
+from tests.services import missing
 from tests.waiting import wait_until
 
 SPEEDUP = 2.0
@@ -44,7 +45,7 @@ def sitl_both() -> None:
     """Both SITL builds (ArduCopter and PX4) are needed; skips with the variable to set."""
     for kind in ("arducopter", "px4"):
         if sitl.sitl_dir(kind) is None:
-            pytest.skip(sitl.skip_reason(kind))
+            missing(sitl.skip_reason(kind))
 
 
 def _close(observers: dict[int, Observer]) -> None:
@@ -211,19 +212,24 @@ def test_an_mqtt_abort_to_all_brings_every_vehicle_home_as_a_normal_end(
     fleet = start_fleet("--profile", str(profile), "--sitl", "mixed", "--sitl-speedup",
                         str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600",
                         "--mqtt", f"127.0.0.1:{mqtt_broker}", "--mqtt-prefix", prefix, "--quiet",
-                        output=tmp_path / "fleet.out")  # fmt: skip
+                        "--web", "127.0.0.1:0", output=tmp_path / "fleet.out")  # fmt: skip
     observers: dict[int, Observer] = {}
     try:
+        page = page_url(tmp_path / "fleet.out", fleet, timeout=300.0)
         team = team_of(out)
         observers = observe(team)
         kinds = {e.index: str(e.autopilot) for e in team}
         wait_until(lambda: _searching(observers), 600.0, "every vehicle at its search altitude",
                    context=lambda: _tail(tmp_path / "fleet.out"))  # fmt: skip
-        subprocess.run(["mosquitto_pub", "-h", "127.0.0.1", "-p", str(mqtt_broker), "-q", "1",
-                        "-t", f"{prefix}/all/cmd", "-m", '{"command": "abort"}'],
-                       check=True, timeout=20)  # fmt: skip
+        shown = wait_until(lambda: page_state(page)["vehicles"], 30.0,
+                           "both SITL vehicles searching on the live page",
+                           until=lambda vs: [v["phase"] for v in vs] == ["search", "search"])  # fmt: skip
+        # the page's abort button: the page's broker client publishes it on {prefix}/all/cmd
+        page_command(page, "all", "abort")
         delays = _rtl_delays(observers, kinds)
         print(f"\nwall s from the MQTT abort (all) to each vehicle in RTL (its observer): {delays}")
+        wait_until(lambda: page_state(page)["vehicles"], 30.0, "RTL for both on the live page",
+                   until=lambda vs: [v["mode"] for v in vs] == ["RTL", "RTL"])  # fmt: skip
         code = fleet.wait(timeout=900)
         traces = {i: o.snapshot() for i, o in observers.items()}
     finally:
@@ -232,6 +238,7 @@ def test_an_mqtt_abort_to_all_brings_every_vehicle_home_as_a_normal_end(
         _close(observers)
     assert code == 0, _tail(tmp_path / "fleet.out")
     assert sorted(delays) == sorted(kinds)
+    assert all(v["armed"] and not v["stale"] and v["alt"] > 30.0 for v in shown), shown
     for i, t in traces.items():
         f = figures(t, kinds[i], fence_polygon(profile))
         assert f.end == "landed, disarmed", f.line(i, kinds[i])

@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import asyncio
+import json
 import re
 import shutil
 import subprocess
+import urllib.request
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
+
+import aiohttp
 
 from tests.waiting import wait_until
 
@@ -29,6 +34,29 @@ def page_url(output: Path, process: subprocess.Popen[bytes], timeout: float = 60
 
     return str(wait_until(said, timeout, "the fleet's live page address",
                           context=output.read_text))  # fmt: skip
+
+
+def page_state(url: str) -> dict[str, Any]:
+    """One snapshot of the page's WebSocket, what the page draws (no browser needed)."""
+
+    async def first() -> dict[str, Any]:
+        async with (
+            aiohttp.ClientSession() as session,
+            session.ws_connect(url.rstrip("/") + "/ws") as ws,
+        ):
+            return dict(json.loads(await ws.receive_str(timeout=10.0)))
+
+    return asyncio.run(first())
+
+
+def page_command(url: str, vehicle: int | str, name: str) -> dict[str, Any]:
+    """POST ``name`` for ``vehicle`` (or "all") as the page's buttons do; the 202's body."""
+    body = json.dumps({"vehicle": vehicle, "command": name}).encode()
+    request = urllib.request.Request(url.rstrip("/") + "/api/command", data=body,
+                                     headers={"Content-Type": "application/json"})  # fmt: skip
+    with urllib.request.urlopen(request, timeout=20) as answer:
+        assert answer.status == 202, answer.status
+        return dict(json.loads(answer.read()))
 
 
 def open_page(driver: WebDriver, url: str) -> None:

@@ -1,0 +1,65 @@
+"""How the suite shares this machine under pytest-xdist (`-n 4 --dist loadgroup`, README
+"Tests"): the SITL tests run in two lanes, a whole module to one lane, each lane on one worker
+with SITL instance indices of its own; the Docker tests in one group (one worker builds the
+images once); every other test goes to whichever worker is free.
+
+A lane is a pytest-xdist group: its tests run one after another on one worker, so at most two
+SITL flights share the cores at a time. Modules are dealt to the lanes longest first, by the
+seconds they took in the last measured run (README "Tests", the durations table); a module not
+measured yet counts DEFAULT_S per test."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+SITL_LANES = 2
+LANE_WIDTH = 4
+"""SITL instance indices per lane: a team of four (instance indices stop at 9, PX4's)."""
+DOCKER_SITL_BASE = 2 * LANE_WIDTH
+"""The first instance index of the Docker tests that fly SITL (two instances: 8 and 9)."""
+DEFAULT_S = 120.0
+
+MEASURED_S: dict[str, float] = {
+    "tests/companion/test_fleet_sitl_team.py": 574.0,
+    "tests/companion/test_sitl_flights.py": 491.0,
+    "tests/companion/test_fleet_file_sitl.py": 151.0,
+    "tests/sim_vehicle_stub/test_svs_differential.py": 118.0,
+    "tests/companion/test_sensor_sources_sitl.py": 102.0,
+    "tests/companion/test_field_mission_sitl.py": 72.0,
+    "tests/companion/test_plan_fence_sitl.py": 66.0,
+    "tests/companion/test_lying_link_sitl.py": 51.0,
+    "tests/mavlink_conformance/test_conformance_sitl.py": 42.0,
+    "tests/companion/test_run_map_own_origin.py": 35.0,
+}
+"""Wall seconds per SITL module in the last measured run (README "Tests")."""
+
+
+def sitl_lanes(tests_per_module: dict[str, int]) -> dict[str, int]:
+    """Each SITL module's lane: longest first, to the lane with the least so far."""
+    cost = {m: MEASURED_S.get(m, DEFAULT_S * n) for m, n in tests_per_module.items()}
+    load = [0.0] * SITL_LANES
+    lanes: dict[str, int] = {}
+    for module in sorted(cost, key=lambda m: (-cost[m], m)):
+        lane = min(range(SITL_LANES), key=lambda k: (load[k], k))
+        lanes[module] = lane
+        load[lane] += cost[module]
+    return lanes
+
+
+def group_of(markers: Iterable[str], module: str, lanes: dict[str, int]) -> str | None:
+    """The xdist group of a test with ``markers`` in ``module`` (None: any worker)."""
+    found = set(markers)
+    if "docker" in found:
+        return "docker"
+    if "sitl" in found:
+        return f"sitl-{lanes[module]}"
+    return None
+
+
+def instance_base(group: str | None) -> int | None:
+    """The first SITL instance index of a test in ``group`` (None: not a SITL group)."""
+    if group == "docker":
+        return DOCKER_SITL_BASE
+    if group is not None and group.startswith("sitl-"):
+        return int(group.removeprefix("sitl-")) * LANE_WIDTH
+    return None
