@@ -306,15 +306,15 @@ def test_field_profile_on_px4_keeps_its_own_fence_and_stays_inside(
     profile = load_profile("field-duebendorf")
     origin = profile.origin
     inst = px4(speedup=SPEEDUP, home=FENCED_HOME)
-    assert inst.index < profile.fleet.vehicles, "instance index beyond the profile's 4 vehicles"
+    # the profile's vehicle 0 flown by whichever instance (system id index + 1) was free
     comp = Companion(
         tmp_path,
         "field-duebendorf",
-        inst.index,
+        0,
         inst.companion_url,
         "pymavlink",
         duration=90.0,
-        extra=("--sensor-source", "virtual"),
+        extra=("--sensor-source", "virtual", "--system-id", str(inst.sysid)),
     )
     obs = Observer(inst.observer_url, inst.sysid)
     context = _trace_context(obs, comp)
