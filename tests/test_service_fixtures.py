@@ -42,7 +42,9 @@ def test_fleet_processes_finds_a_process_naming_the_tests_folder(fleet_processes
     marker = fleet_processes / "still-running"
     proc = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)", str(marker)])
     try:
-        assert proc.pid in processes_naming(str(fleet_processes))
+        # found once the child has exec'd (until then its command line is pytest's)
+        wait_until(lambda: processes_naming(str(fleet_processes)), 10.0,
+                   "the child in /proc with its command line", until=lambda p: proc.pid in p)  # fmt: skip
     finally:
         proc.kill()
         proc.wait()
