@@ -1,5 +1,6 @@
 """Share of level-1 search time within 30 m of a field fence, batch: waypoints clamped onto the
-inset fence (the companion before issue 39's item 6) against waypoints redrawn inside it.
+inset fence by the companion (`policy.out_of_area: reflect` on the search area, no fence in
+the policy) against waypoints redrawn inside it (`redraw`).
 
 Each vehicle starts where the companion starts it (the engine's periphery start point clamped
 into the inset fence) and flies straight legs at ``fleet.speed`` (as the engine does) to each
@@ -32,7 +33,7 @@ def _share(profile_name: str, fenced: bool, runs: int, seed: int) -> tuple[float
     profile = builtin_profile(profile_name)
     config = policy_config(profile)
     config = dataclasses.replace(config, levels=config.levels[:1])
-    if not fenced:  # the former rule: the area's own, the companion clamps onto the fence
+    if not fenced:  # the area's own rule; the companion clamps onto the fence
         config = dataclasses.replace(config, out_of_area="reflect", fence=())
     policy = SearchPolicy(config)
     fence, inner = fence_for(profile), guidance_fence(profile)

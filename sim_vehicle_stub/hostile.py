@@ -1,5 +1,5 @@
-"""A seeded corpus of well-formed MAVLink messages with hostile contents, and the reproductions
-of issue 12: what a vehicle must survive without crashing, hanging, producing NaN, jumping, or
+"""A seeded corpus of well-formed MAVLink messages with hostile contents, and reproductions of
+hostile sequences once reported against the emulator: what a vehicle must survive without crashing, hanging, producing NaN, jumping, or
 shutting out other clients. Each item is one packed frame (one datagram)."""
 
 from __future__ import annotations
@@ -104,7 +104,7 @@ _MAKERS: tuple[Callable[[np.random.Generator, int], Any], ...] = (
 
 
 def reproductions(target: int) -> list[Any]:
-    """The hostile sequences issue 12 reported, as messages to vehicle ``target``."""
+    """The reported hostile sequences, as messages to vehicle ``target``."""
     nan = math.nan
     climb = d.MAVLink_set_position_target_local_ned_message(
         0, target, 1, 1, 3527, 0, 0, 0, 0, 0, -5.0, 0, 0, 0, 0, 0

@@ -35,7 +35,7 @@ from tests.waiting import wait_until
 
 SPEEDUP = 2.0
 """SITL speed-up: the highest at which four instances and their companions kept 10 Hz
-setpoints on this 2-core host under the other sessions' load (report of issue 39)."""
+setpoints on a loaded 2-core host (benchmarks/sitl_team_speed.py)."""
 SEED = 3
 RTL = {"arducopter": 6, "px4": (4 << 16) | (5 << 24)}  # ArduCopter RTL; PX4 AUTO.RTL
 

@@ -26,7 +26,7 @@ from tests.profile_files import levels, sensors, write_profile_with
 from tests.waiting import wait_until
 
 SPEEDUP = 5
-HOME = (47.405893, 8.663214, 440.0)  # inside the Duebendorf fence (issue 11)
+HOME = (47.405893, 8.663214, 440.0)  # inside the Duebendorf fence
 RTL = 6  # ArduCopter custom mode
 ON_GROUND = 1  # MAV_LANDED_STATE_ON_GROUND
 

@@ -1,5 +1,5 @@
 """Every case that used to hang the engine or crash the CLI: each now finishes or is refused
-with the field named (issue 13, item 2)."""
+with the field named."""
 
 from __future__ import annotations
 

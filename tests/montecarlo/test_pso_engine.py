@@ -1,5 +1,5 @@
 """The time-stepped engine of the swarm baselines (mdm_montecarlo.social_engine), flying the
-reading used before issue 33 ("swarm given MDM's detection sensor": one iteration per update
+labelled reading "swarm given MDM's detection sensor" (one iteration per update
 interval, the detection sensor's signal, bests of confirmed targets forgotten)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Rules the real autopilots keep and the emulator broke (issue 12, items 1-3 and 5): no motion
+"""Rules the real autopilots keep and the emulator must keep too: no motion
 while disarmed, recovery after a disarm in the air, speed and altitude limits, one AMSL
 convention, mission acks, DO_REPOSITION, acceleration and yaw-rate targets."""
 

@@ -1,5 +1,5 @@
 """More than 10,000 hostile inputs per run (well-formed messages with nasty values from eight
-rotating sockets, the reproductions of issue 12, malformed datagrams) at a PX4 and an ArduPilot
+rotating sockets, the reported hostile sequences, malformed datagrams) at a PX4 and an ArduPilot
 vehicle, with the invariants checked after every batch: the emulator alive with no tick error,
 every vehicle heartbeating at its rate, no NaN/inf in state or telemetry, no motion faster than
 the persona's speed limit, a clean client's commands answered; at the end a clean client arms

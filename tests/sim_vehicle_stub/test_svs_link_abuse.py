@@ -1,4 +1,4 @@
-"""Another local sender cannot cut a client's link (issue 12, item 4): the heartbeat cannot be
+"""Another local sender cannot cut a client's link: the heartbeat cannot be
 switched off, senders that come later do not take an active client's peer slot, garbage from
 strangers does not use up a known client's flood budget, mode spam does not flood heartbeats."""
 

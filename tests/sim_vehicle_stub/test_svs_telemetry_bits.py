@@ -1,5 +1,5 @@
-"""A seeded emulator run's telemetry, byte for byte, is what it was before the sim loop was made
-faster (issue 15): 12 vehicles of both personas flying position, velocity, acceleration and
+"""A seeded emulator run's telemetry, byte for byte, is the recorded one (the sim loop's fast
+path must not change a byte): 12 vehicles of both personas flying position, velocity, acceleration and
 yaw-rate setpoints with their sensors on, a changed stream rate, an RTL, a LAND and a mode change
 mid-run; 90 sim s at 10 Hz. The digests are those of commit b12c0e8 (before the change), one
 set per kind of CPU numpy computes differently on; a change of telemetry that is meant must say
