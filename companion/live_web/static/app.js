@@ -45,7 +45,8 @@ function drawScene() {
   const step = niceStep(Math.max(north, east));
   for (let x = Math.floor(e0 / step) * step; x <= e1; x += step) {
     el("line", { x1: x, x2: x, y1: -n1, y2: -n0, stroke: "#ccd", "vector-effect": "non-scaling-stroke" }, grid);
-    el("text", { x: x, y: -n0, class: "gridlabel", fill: "#889" }, grid).textContent = `${x} E`;
+    // below the southern edge, apart from the north labels that stand above their lines
+    el("text", { x: x, y: -n0, class: "gridlabel", fill: "#889", "dominant-baseline": "hanging" }, grid).textContent = `${x} E`;
   }
   for (let y = Math.floor(n0 / step) * step; y <= n1; y += step) {
     el("line", { x1: e0, x2: e1, y1: -y, y2: -y, stroke: "#ccd", "vector-effect": "non-scaling-stroke" }, grid);
