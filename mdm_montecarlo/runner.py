@@ -229,6 +229,7 @@ def _run_jobs(
                 blocks[futures[fut]].append(fut.result())
                 done(blocks[futures[fut]][-1].per_vehicle.shape[0])
     elif workers > 1:
+        _load_kernels([profiles[i] for i, _, _ in jobs])
         work = [(i, profiles[i], seed, b, n) for i, b, n in jobs]
         for i, result in imap_unordered(_indexed_block, work, workers, meanwhile):
             blocks[i].append(result)
@@ -237,6 +238,20 @@ def _run_jobs(
         for i, b, n in jobs:
             blocks[i].append(simulate_block(profiles[i], seed, b, n))
             done(n)
+
+
+def _load_kernels(profiles: list[MissionProfile]) -> None:
+    """One run of the first profile of each engine (batch, interval swarm, waypoint swarm),
+    here, thrown away: numba loads an engine's cached kernels on its first call (about 0.45
+    CPU-s for the three), so the workers forked after this share them instead of each loading
+    its own. The run's streams are its own (block 0 of seed 0); no result depends on it."""
+    firsts = {_engine(p): p for p in reversed(profiles)}
+    for profile in firsts.values():
+        simulate_block(profile, 0, 0, 1)
+
+
+def _engine(profile: MissionProfile) -> str:
+    return profile.policy.swarm.iteration if is_swarm(profile) else "batch"
 
 
 def _collect(profile: MissionProfile, seed: int, results: list[BlockResult]) -> MissionResults:
