@@ -23,6 +23,30 @@ FloatArray = NDArray[np.float64]
 
 
 @compiled
+def disc_entry(
+    north: float, east: float, rvx: float, rvy: float, c: float, lo: float, span: float
+) -> float:
+    """The first time in [``lo``, ``span``] at which a point (``north``, ``east``) from a disc's
+    centre, moving at (``rvx``, ``rvy``) relative to it, is inside the disc (``c``: its squared
+    distance less the squared radius); inf where it is not. first_entry_time's closed form and
+    boundary crossing, in its order of operations."""
+    a = rvx * rvx + rvy * rvy
+    b = north * rvx + east * rvy
+    disc = b * b - a * c
+    if a > 1e-12:
+        root = math.sqrt(max(disc, 0.0))
+        s1 = (-b - root) / a
+        s2 = (-b + root) / a
+        hit = disc > 0
+    else:
+        s1 = -np.inf
+        s2 = np.inf
+        hit = c < 0
+    first = max(s1, lo)
+    return first if hit and first < s2 and first <= span else np.inf
+
+
+@compiled
 def entry_times_of(
     start: FloatArray,
     velocity: FloatArray,
@@ -85,23 +109,8 @@ def entry_times_of(
                 lo = max(appear[j] - now, 0.0)
                 if not (dist2 <= reach * reach and lo <= span):
                     continue
-                rvx = vx - tvx
-                rvy = vy - tvy
-                a = rvx * rvx + rvy * rvy
-                b = north * rvx + east * rvy
-                c = dist2 - r2
-                disc = b * b - a * c
-                if a > 1e-12:
-                    root = math.sqrt(max(disc, 0.0))
-                    s1 = (-b - root) / a
-                    s2 = (-b + root) / a
-                    hit = disc > 0
-                else:
-                    s1 = -np.inf
-                    s2 = np.inf
-                    hit = c < 0
-                first = max(s1, lo)
-                if hit and first < s2 and first <= span:
+                first = disc_entry(north, east, vx - tvx, vy - tvy, dist2 - r2, lo, span)
+                if first != np.inf:
                     out[i, j] = first + begin
                     found = True
             if found or end >= leg:

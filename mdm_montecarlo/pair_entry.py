@@ -3,9 +3,9 @@ confirmation disc (mdm_montecarlo.swarm_sensors.confirm).
 
 A step of a swarm engine leaves a few dozen pairs to solve; ``mdm_core.world.first_entry_time``
 solved them with a dozen numpy passes whose per-call cost was most of the confirmation's time.
-Here each pair is one pass of the same arithmetic in the same order (reach bound, closed form,
-boundary crossing), so the times are bit-identical (tests/montecarlo/test_pair_entry.py
-compares the two on random pairs).
+Here each pair is one pass of the same arithmetic in the same order (reach bound, then the
+closed form and boundary crossing of entry_kernel.disc_entry), so the times are bit-identical
+(tests/montecarlo/test_pair_entry.py compares the two on random pairs).
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from mdm_core.jit import compiled
 from mdm_core.world.sensors import REACH_SLACK
+from mdm_montecarlo.entry_kernel import disc_entry
 
 FloatArray = NDArray[np.float64]
 
@@ -54,20 +55,5 @@ def pair_entry_times(
             continue
         rvx = vx - target_velocity[q, 0]
         rvy = vy - target_velocity[q, 1]
-        c = dist2 - radius * radius
-        a = rvx * rvx + rvy * rvy
-        b = north * rvx + east * rvy
-        disc = b * b - a * c
-        if a > 1e-12:
-            root = math.sqrt(max(disc, 0.0))
-            s1 = (-b - root) / a
-            s2 = (-b + root) / a
-            hit = disc > 0
-        else:
-            s1 = -np.inf
-            s2 = np.inf
-            hit = c < 0
-        first = max(s1, lo)
-        if hit and first < s2 and first <= duration:
-            out[q] = first
+        out[q] = disc_entry(north, east, rvx, rvy, dist2 - radius * radius, lo, duration)
     return out
