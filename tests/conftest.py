@@ -11,6 +11,7 @@ from typing import Any
 
 import pytest
 
+from companion.fleet.sitl_team import INSTANCE_BASE_ENV
 from tests import parallel, sitl
 from tests.markers import MARKERS, markers_for
 from tests.mqtt_harness import clear_retained_of_this_run
@@ -62,8 +63,8 @@ def _sitl_instance_base(request: pytest.FixtureRequest, monkeypatch: pytest.Monk
     MDM_SITL_INSTANCE_BASE was set for the whole run."""
     marker = request.node.get_closest_marker("xdist_group")
     base = parallel.instance_base(marker.args[0] if marker else None)
-    if base is not None and sitl.INSTANCE_BASE_ENV not in os.environ:
-        monkeypatch.setenv(sitl.INSTANCE_BASE_ENV, str(base))
+    if base is not None and INSTANCE_BASE_ENV not in os.environ:
+        monkeypatch.setenv(INSTANCE_BASE_ENV, str(base))
 
 
 def _sitl_starter(tmp_path: Path) -> Iterator[Callable[..., sitl.SitlInstance]]:

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from companion.fleet.sitl_team import ports_free, sitl_ports
+from companion.fleet.sitl_team import INSTANCE_BASE_ENV, companion_link, ports_free, sitl_ports
 
 Kind = Literal["arducopter", "px4"]
 
@@ -32,7 +32,6 @@ _SHARED = {
     "px4": REPO.parent / "shared" / "sitl" / "px4",
 }
 _SCRIPT = {"arducopter": "start-arducopter", "px4": "start-px4"}
-INSTANCE_BASE_ENV = "MDM_SITL_INSTANCE_BASE"
 # PX4 sends its offboard link to UDP 14540+i, and i = 10 would be the GCS port 14550.
 _MAX_INSTANCE = {"arducopter": 40, "px4": 9}
 
@@ -68,7 +67,7 @@ class SitlInstance:
     @property
     def companion_url(self) -> str:
         """The vehicle's primary link: ArduCopter SERIAL0 (TCP), PX4's offboard link (UDP)."""
-        return companion_url(self.kind, self.index)
+        return companion_link(self.kind, self.index)
 
     @property
     def observer_url(self) -> str:
@@ -107,13 +106,6 @@ def free_index(kind: Kind) -> int:
         f"no free {kind} SITL instance index in {base}..{_MAX_INSTANCE[kind]} "
         f"({INSTANCE_BASE_ENV}={base}; {kind} instances stop at {_MAX_INSTANCE[kind]})"
     )
-
-
-def companion_url(kind: Kind, index: int) -> str:
-    """The primary link of instance ``index`` (see ``SitlInstance.companion_url``)."""
-    if kind == "arducopter":
-        return f"tcp:127.0.0.1:{5760 + 10 * index}"
-    return f"udpin:0.0.0.0:{14540 + index}"
 
 
 def start(

@@ -105,7 +105,7 @@ def ports_free(tcp: list[int], udp: list[int]) -> bool:
     return True
 
 
-def _link(kind: Autopilot, index: int) -> str:
+def companion_link(kind: Autopilot, index: int) -> str:
     """The vehicle's primary link: ArduCopter SERIAL0 (TCP), PX4's offboard link (UDP)."""
     return (
         f"tcp:127.0.0.1:{5760 + 10 * index}"
@@ -212,7 +212,7 @@ def _start(
     # its own process group, and SIGTERM when the fleet dies without stopping it
     process = processes.start(cmd, log, dict(os.environ), append=False)
     entry = VehicleEntry(
-        index=vehicle, link=_link(kind, index), system_id=index + 1, autopilot=kind
+        index=vehicle, link=companion_link(kind, index), system_id=index + 1, autopilot=kind
     )
     member = SitlVehicle(entry, process, log)
     # Ready to probe once it holds its link's port (a probing connection would take

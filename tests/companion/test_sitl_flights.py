@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 from companion.fence_from_profile import fence_for
+from companion.fleet.sitl_team import companion_link
 from companion.link.local_frame import LocalFrame
 from companion.telemetry.mission_log import read_records
 from mdm_profiles import load_profile
@@ -151,7 +152,7 @@ def test_flies_through_takeover_kill_and_restart(
     started = time.monotonic()
     index = sitl.free_index(ap.kind)
     profile = _profile(tmp_path / "sitl-small.yaml", vehicles=index + 1)
-    url = sitl.companion_url(ap.kind, index)
+    url = companion_link(ap.kind, index)
     comp = Companion(tmp_path, profile, index, url, backend, duration=600.0)
     obs: Observer | None = None
     try:

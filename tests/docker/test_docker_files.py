@@ -15,8 +15,8 @@ from typing import Any
 import pytest
 import yaml
 
+from companion.fleet.sitl_team import companion_link
 from mdm_profiles import load_profile
-from tests import sitl
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCKER = ROOT / "docker"
@@ -194,4 +194,4 @@ def test_arducopter_env_file_names_serial0_of_instance_i_for_companion_i() -> No
     services = _ours(_compose("compose.sitl.yaml"))
     assert len(settings) == len(services)
     for i in range(len(services)):
-        assert settings[f"MDM_CONNECT_{i}"] == sitl.companion_url("arducopter", i)
+        assert settings[f"MDM_CONNECT_{i}"] == companion_link("arducopter", i)
