@@ -150,19 +150,20 @@ class VehicleTelemetry:
                 len(self.outbox),
                 self.outbox.path,
             )
-        if self.channel.connected.is_set():
+        if not self.channel.connected.is_set():
+            return
+        if self.vehicle is not None:  # the last state: the end action's mode, landed
             with contextlib.suppress(aiomqtt.MqttError):
-                if self.vehicle is not None:  # the last state: the end action's mode, landed
-                    await self.channel.publish(
-                        self.topics.state, _json(self.vehicle.snapshot()), timeout=2.0
-                    )
-                await self.channel.publish(
-                    self.topics.status,
-                    self._status("offline", clean=True),
-                    qos=1,
-                    retain=True,
-                    timeout=2.0,
-                )
+                state = _json(self.vehicle.snapshot())
+                await self.channel.publish(self.topics.state, state, timeout=2.0)
+        with contextlib.suppress(aiomqtt.MqttError):  # offline even when that one failed
+            await self.channel.publish(
+                self.topics.status,
+                self._status("offline", clean=True),
+                qos=1,
+                retain=True,
+                timeout=2.0,
+            )
 
     # -- commands --------------------------------------------------------------------------
 
