@@ -35,11 +35,14 @@ def test_a_wrong_frame_is_caught_at_the_fence_and_flown_home(tmp_path: Path) -> 
             land_wait=300.0,
             sensor_source="virtual",
         ) as flight:
+            seen = flight.mission.seen
+            # 20 vehicle s into the search: the transit's northward momentum gone (its start
+            # point is 20 m from the northern edge), the vehicle on a leg inside the fence
             await wait_until_async(
-                lambda: flight.mission.phase,
+                lambda: (flight.mission.phase, seen.search_start, seen.clock.now),
                 120.0,
-                "the search",
-                until=lambda phase: phase is Phase.SEARCH,
+                "20 vehicle s of search",
+                until=lambda s: s[0] is Phase.SEARCH and s[1] is not None and s[2] >= s[1] + 20.0,
             )
             assert link.alignment is not None
             link.alignment.east -= 2500.0  # the vehicle now believes it is 2.5 km further west
