@@ -76,7 +76,7 @@ def _rate(stamps: list[float], s: Session) -> float:
     """Messages per vehicle second from wall arrival times within one window."""
     if len(stamps) < 2 or stamps[-1] <= stamps[0]:
         return 0.0
-    return (len(stamps) - 1) / s.vehicle_seconds(stamps[-1] - stamps[0])
+    return (len(stamps) - 1) / s.vehicle_seconds(stamps[0], stamps[-1])
 
 
 def check_heartbeat(s: Session) -> CheckResult:

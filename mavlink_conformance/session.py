@@ -16,6 +16,10 @@ from mavlink_conformance.errors import ConformanceError
 __all__ = ["LinkClosedError", "Session", "mavutil"]
 
 
+_STAMPED = ("ATTITUDE", "GLOBAL_POSITION_INT", "LOCAL_POSITION_NED", "SYSTEM_TIME")
+"""Messages that carry the vehicle's ``time_boot_ms``."""
+
+
 class LinkClosedError(ConformanceError, ConnectionError):
     """The vehicle closed the connection (TCP EOF or reset): nothing more can be checked."""
 
@@ -104,8 +108,20 @@ class Session:
             mavutil.mavlink.MAV_TYPE_GCS, mavutil.mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0
         )
 
-    def vehicle_seconds(self, wall: float) -> float:
-        return wall * self.speed
+    def vehicle_seconds(self, start: float, end: float) -> float:
+        """Vehicle seconds between two wall arrival times, read from the vehicle's own clock
+        (``time_boot_ms`` of the messages that arrived between them) so that a vehicle or a
+        reader that fell behind wall time (a loaded machine) is measured in its own time; the
+        wall span times the TIMESYNC speed-up when fewer than two stamped messages arrived."""
+        boot: list[int] = [
+            m.time_boot_ms
+            for kind in _STAMPED
+            for t, m in self.seen.get(kind, ())
+            if start <= t <= end
+        ]
+        if len(boot) >= 2 and max(boot) > min(boot):
+            return (max(boot) - min(boot)) / 1000.0
+        return (end - start) * self.speed
 
     def command(self, command: int, *params: float, tries: int = 3) -> Any:
         """Send COMMAND_LONG (retrying) and return its COMMAND_ACK, or None."""

@@ -4,6 +4,7 @@ against a vehicle that only sends heartbeats, which must fail."""
 from __future__ import annotations
 
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -16,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from mavlink_conformance import run_checks
-from mavlink_conformance.checks import check_heartbeat, check_mavlink2
+from mavlink_conformance.checks import check_heartbeat, check_mavlink2, check_streams
 from mavlink_conformance.cli import main as conformance_main
 from mavlink_conformance.session import Session
 from sim_vehicle_stub.mavlink import dialect
@@ -46,12 +47,12 @@ EXPECTED = {
 
 
 @contextmanager
-def sim_vehicle(*args: str) -> Iterator[None]:
+def sim_vehicle(*args: str) -> Iterator[subprocess.Popen[bytes]]:
     exe = Path(sys.executable).parent / "sim-vehicle"
     cmd = [str(exe), "--speedup", "5", "--log-level", "WARNING", *args]
     proc = subprocess.Popen(cmd, env={**os.environ, "MAVLINK20": "1"})
     try:
-        yield
+        yield proc
     finally:
         proc.terminate()
         proc.wait(10)
@@ -64,6 +65,36 @@ def test_emulator_px4_over_udp_passes_every_check() -> None:
         results = run_checks(f"udpin:127.0.0.1:{base + 1}", sysid=2, timeout=5.0)
     assert {r.name for r in results} == EXPECTED
     assert [r.line() for r in results if not r.passed] == []
+
+
+@pytest.mark.timeout(60)
+def test_stream_rates_are_measured_in_vehicle_time_when_the_vehicle_falls_behind() -> None:
+    """A vehicle stopped for 1.6 wall s in the middle of the rate window (a loaded machine: the
+    emulator drops the lost time rather than race through it) still streams at the asked rate in
+    its own time, and the check measures it there: wall time times the TIMESYNC speed-up would
+    count 8 of the window's 15 vehicle s that never happened (about 2.3 Hz for 5)."""
+    base = free_udp_base(1)
+    with sim_vehicle("-n", "1", "--base-port", str(base), "--bind-port-base", "0") as proc:
+        session = Session(f"udpin:127.0.0.1:{base}", sysid=None, source_system=250, timeout=5.0)
+        try:
+            session.send_heartbeat()
+            assert check_heartbeat(session).passed
+            pause = threading.Timer(1.2, _stop_for, (proc, 1.6))
+            pause.start()
+            result = check_streams(session)
+            pause.join()
+        finally:
+            session.close()
+    assert session.speed == pytest.approx(5.0, rel=0.2)
+    assert result.passed, result.detail
+    rates = [float(part.split()[1]) for part in result.detail.split(";")[0].split(", ")]
+    assert all(abs(rate - 5.0) < 1.0 for rate in rates), result.detail
+
+
+def _stop_for(proc: subprocess.Popen[bytes], seconds: float) -> None:
+    os.kill(proc.pid, signal.SIGSTOP)
+    time.sleep(seconds)
+    os.kill(proc.pid, signal.SIGCONT)
 
 
 @pytest.mark.timeout(60)
