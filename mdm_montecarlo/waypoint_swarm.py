@@ -19,9 +19,9 @@ confirmation is known to the whole run at once. What the sensor reads and what t
 forget follow ``signal_sensor`` / ``signal_radius``, ``read_confirmed`` and
 ``after_confirmation`` (docs/model.md, "Social-cognitive baselines").
 
-Randomness: the same SeedSequence([seed, block]) streams as the other engines; the draws of a
-step are made for every particle of the block in a fixed order, so results do not depend on the
-number of workers.
+Randomness: the same SeedSequence([seed, block]) streams as the other engines. An arrival step
+draws only the numbers its arrivals use, in a fixed order (the arrivals in run, then vehicle
+order), so results do not depend on the number of workers.
 """
 
 from __future__ import annotations
@@ -165,8 +165,9 @@ def _arrive(
     A step's arrivals are a few of the block's particles: the swarm bests, inertias and steps
     are computed for them alone (the kernels' per-particle rules on the arrivals gathered as
     (arrivals, 1) particles; swarm bests over the runs they belong to). The random numbers are
-    still drawn for every particle of the block, in the same order, so the streams and the
-    results are those of the kernels run on every particle."""
+    drawn for them alone, the arrivals in run, then vehicle order: PSO/ARPSO r1 then r2,
+    (2, arrivals, axes); SPSO the normals (arrivals, 2), the radii's uniforms (arrivals), then the
+    informant keys (stuck, vehicles) of those stuck; then the explorers' waypoints."""
     previous_best = waypoint_kernels.take_readings(
         reached, position, reading, source, current, own.position, own.fitness, own.source
     )
@@ -190,8 +191,8 @@ def _arrive(
     own_position = own.position[at][:, None]
     own_fitness = own.fitness[at][:, None]
     if config.variant == "spso":
-        normal = rng.standard_normal(position.shape)
-        uniform = rng.random(position.shape[:-1])
+        normal = rng.standard_normal((run.size, 1, 2))
+        uniform = rng.random((run.size, 1))
         move = kernels.spso_steps(
             step,
             here,
@@ -202,8 +203,8 @@ def _arrive(
             mine,
             config.spso_inertia,
             config.spso_acceleration,
-            normal[at][:, None],
-            uniform[at][:, None],
+            normal,
+            uniform,
             config.max_step,
             False,
         )
@@ -212,7 +213,10 @@ def _arrive(
         if stuck_here.any():
             stuck = np.zeros_like(reached)
             stuck[at] = stuck_here
-            kernels.relink(rng.random(links.shape), stuck, informants, links)
+            # relink reads the keys of the stuck particles' rows only.
+            keys = np.empty(links.shape)
+            keys[stuck] = rng.random((int(np.count_nonzero(stuck_here)), links.shape[-1]))
+            kernels.relink(keys, stuck, informants, links)
     else:
         inertia = np.full(own_fitness.shape, config.inertia)
         if config.variant == "arpso":
@@ -226,7 +230,7 @@ def _arrive(
                 config.arpso_speed_weight,
                 config.arpso_aggregation_weight,
             )
-        uniform = rng.random((2, *position.shape))
+        uniform = rng.random((2, run.size, 1, 2))
         move = kernels.pso_steps(
             step,
             here,
@@ -237,7 +241,7 @@ def _arrive(
             inertia,
             config.cognitive,
             config.social,
-            uniform[:, run, lane][:, :, None],
+            uniform,
             config.max_step,
             False,
         )

@@ -85,10 +85,12 @@ def test_kept_bests_of_confirmed_targets_draw_the_swarm_there() -> None:
     assert kept.tnc.mean() < forgot.tnc.mean() - 0.25
 
 
-@pytest.mark.parametrize("method", ["PSO", "SPSO", "ARPSO"])
-def test_a_step_toward_a_far_best_is_at_most_delta1(method: str) -> None:
-    """A particle that arrives with the swarm's best 15 km away steps at most delta_1 (4 km,
-    the single-sensor step) toward it; one that has not arrived keeps its waypoint."""
+def _arrive_one(
+    method: str, rng: np.random.Generator, local_fitness: float = 0.0, informants: int = 2
+) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One run of three particles: particle 0 arrives at (1000, 1000) with the swarm's best
+    (fitness 0.5, vehicle 1's) 15 km east and SPSO's last local best ``local_fitness``; 1 and 2
+    fly on. Returns (followed, position, waypoint, velocity, links) after the arrival step."""
     profile = _profile("fixed", method, *TEXT)
     delta1 = profile.policy.levels[0].step
     config = replace(swarm_config(profile), max_step=delta1, constant_speed=False)
@@ -100,7 +102,7 @@ def test_a_step_toward_a_far_best_is_at_most_delta1(method: str) -> None:
     links = np.ones((1, 3, 3), dtype=bool) & ~np.eye(3, dtype=bool)
     followed = _arrive(
         config,
-        2,
+        informants,
         own,
         reached,
         position,
@@ -110,17 +112,49 @@ def test_a_step_toward_a_far_best_is_at_most_delta1(method: str) -> None:
         velocity,
         waypoint,
         links,
-        np.zeros((1, 3)),
+        np.full((1, 3), local_fitness),
         CompiledWaypoints(policy_config(profile)),
         np.array([20000.0, 20000.0]),
-        np.random.default_rng(1),
+        rng,
     )
+    return followed, position, waypoint, velocity, links
+
+
+@pytest.mark.parametrize("method", ["PSO", "SPSO", "ARPSO"])
+def test_a_step_toward_a_far_best_is_at_most_delta1(method: str) -> None:
+    """A particle that arrives with the swarm's best 15 km away steps at most delta_1 (4 km,
+    the single-sensor step) toward it; one that has not arrived keeps its waypoint."""
+    delta1 = _profile("fixed", method, *TEXT).policy.levels[0].step
+    followed, position, waypoint, velocity, _ = _arrive_one(method, np.random.default_rng(1))
     step = waypoint[0, 0] - position[0, 0]
     assert 0 < np.hypot(*step) <= delta1 + 1e-9
     assert step[0] > 0  # toward the best, east of it
     assert np.array_equal(velocity[0, 0], step)
     assert np.array_equal(waypoint[0, 2], [900.0, 900.0])
     assert followed == 1
+
+
+@pytest.mark.parametrize(
+    ("method", "stuck"), [("PSO", False), ("ARPSO", False), ("SPSO", False), ("SPSO", True)]
+)
+def test_an_arrival_step_draws_the_arrivals_numbers_only(method: str, stuck: bool) -> None:
+    """One particle of three arrives: the step draws its numbers alone, in the documented
+    order (PSO/ARPSO r1, r2 per axis; SPSO normals, radius uniform, then its informant keys
+    when its local best did not improve), so the generator ends where those draws leave it."""
+    rng = np.random.default_rng(5)
+    # SPSO with informants=1: the stuck particle's new link follows its smallest key.
+    _, _, _, _, links = _arrive_one(method, rng, local_fitness=0.9 if stuck else 0.0, informants=1)
+    want = np.random.default_rng(5)
+    if method == "SPSO":
+        want.standard_normal((1, 1, 2))
+        want.random((1, 1))
+        if stuck:
+            keys = want.random(3)
+            keys[0] = np.inf
+            assert np.array_equal(links[0, 0], keys == keys.min())
+    else:
+        want.random((2, 1, 1, 2))
+    assert rng.bit_generator.state == want.bit_generator.state
 
 
 def test_waypoint_iterations_refuse_delayed_or_lost_messages() -> None:
