@@ -246,9 +246,18 @@ def _reproduce(args: argparse.Namespace) -> int:
         header = f"**PARTIAL REPORT: interrupted (Ctrl-C); {partial}.** " + header
     from mdm_montecarlo.report import write_report  # see _import_report
 
-    path = write_report(out, rows, measured, results, header, workers=_workers(args.workers))
+    # The record is taken before the figures: the samples written beside them carry it.
     record = collect(seed=args.seed, started=args.started, command_line=args.command_line)
-    write_result_files(out, [(case_columns(c), res) for c, res in results.items()], record)
+    configs = [(case_columns(c), res) for c, res in results.items()]
+    path = write_report(
+        out,
+        rows,
+        measured,
+        results,
+        header,
+        workers=_workers(args.workers),
+        meanwhile=lambda: write_result_files(out, configs, record),
+    )
     append_provenance(path, record)
     if partial:
         print(f"mdm-montecarlo: interrupted; {partial}, partial report: {path}", file=sys.stderr)

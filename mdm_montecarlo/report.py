@@ -8,6 +8,7 @@ import gc
 import os
 from collections import Counter
 from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -187,10 +188,13 @@ def write_report(
     results: dict[Case, MissionResults],
     header: str,
     workers: int = 1,
+    meanwhile: Callable[[], object] | None = None,
 ) -> Path:
     """Write report.md, results.csv and PNGs into ``folder``; returns the report path.
 
-    ``workers`` > 1 draws the plots in that many processes.
+    ``workers`` > 1 draws the plots in that many processes. ``meanwhile`` (the other result
+    files) runs in a thread while the plots are drawn; report.md is written once both are
+    done, and an exception of ``meanwhile`` is raised here.
     """
     folder.mkdir(parents=True, exist_ok=True)
     plots: list[Plot] = []
@@ -244,19 +248,33 @@ def write_report(
                     (plot_table, (str(folder / png), table, scenario, cases, of_plot, paper))
                 )
             lines += [f"![{table} {scenario}]({png})", ""]
-    _draw(plots, workers)
+    _draw(plots, workers, meanwhile)
     path = folder / "report.md"
     path.write_text("\n".join(lines), encoding="utf-8")
     return path
 
 
-def _draw(plots: list[Plot], workers: int) -> None:
-    if workers <= 1 or len(plots) <= 1:
-        for plot, args in plots:
-            plot(*args)
-        return
-    for _ in imap_unordered(_plot, list(plots), workers):
-        pass
+def _draw(plots: list[Plot], workers: int, meanwhile: Callable[[], object] | None) -> None:
+    """Draw the plots, in ``workers`` processes if more than one, with ``meanwhile`` in a
+    thread of this process, started once the plot workers are forked (a fork while another
+    thread runs could copy a lock it holds). Waits for both, also when the drawing fails or
+    is interrupted: no result file is left half written."""
+    side: list[Future[object]] = []
+    with ThreadPoolExecutor(max_workers=1) as pool:
+
+        def start() -> None:
+            if meanwhile is not None:
+                side.append(pool.submit(meanwhile))
+
+        if workers <= 1 or len(plots) <= 1:
+            start()
+            for plot, args in plots:
+                plot(*args)
+        else:
+            for _ in imap_unordered(_plot, list(plots), workers, started=start):
+                pass
+    for done in side:
+        done.result()
 
 
 def _plot(plot: Callable[..., None], args: tuple[Any, ...]) -> None:

@@ -80,6 +80,10 @@ def test_ctrl_c_on_reproduce_keeps_the_finished_rows_in_a_marked_partial_report(
     assert 2 <= finished < configurations
     rows = (out / "results.csv").read_text().splitlines()[1:]
     assert len(rows) == finished
+    runs = (out / "samples-runs.csv").read_text().splitlines()[1:]
+    assert len(runs) == finished * 1000
+    assert (out / "samples-runs.parquet").is_file()
+    assert (out / "provenance.json").is_file()
 
 
 def test_ctrl_c_on_a_long_run_prints_one_line_and_the_partial_row() -> None:
