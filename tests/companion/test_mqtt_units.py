@@ -6,17 +6,19 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
+import os
 from pathlib import Path
 
 import pytest
 
+from companion.autopilots.base import FlightMode
 from companion.telemetry import events
 from companion.telemetry.events import LogFormatError
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_argv, mqtt_spec
 from companion.telemetry.mqtt.commands import Command, CommandError, parse_command
 from companion.telemetry.mqtt.outbox import EventOutbox
 from companion.telemetry.mqtt.settings import settings_for
-from companion.telemetry.mqtt.vehicle_telemetry import cancel_and_wait
+from companion.telemetry.mqtt.vehicle_telemetry import VehicleTelemetry, cancel_and_wait
 from mdm_profiles.mqtt_spec import MqttSpec
 
 
@@ -175,3 +177,52 @@ def test_a_task_whose_wait_for_lost_the_cancellation_still_ends() -> None:
         assert task.cancelled()
 
     asyncio.run(main())
+
+
+class _Landed:
+    """A vehicle that has finished: what the telemetry reads of it on its way out."""
+
+    def operator_pause(self) -> str | None:
+        return "done"
+
+    def operator_resume(self) -> str | None:
+        return "done"
+
+    def operator_end(self, action: FlightMode, reason: str) -> str | None:
+        return "done"
+
+    def snapshot(self) -> dict[str, object]:
+        return {"phase": "done"}
+
+    def emit(self, event: str, **fields: object) -> None:
+        pass
+
+
+def test_leaving_ends_a_state_loop_that_lost_its_cancellation(tmp_path: Path) -> None:
+    """The companion that did not exit in CI (killed by the fleet 30 s after its mission): its
+    state loop lost the one cancellation a TaskGroup passes to its children (wait_for inside a
+    publish), and only that one; each MQTT loop is now cancelled and waited for by itself."""
+    spec = MqttSpec(host="127.0.0.1", topic_prefix=f"mdm/test-lost-cancel-{os.getpid()}")
+    telemetry = VehicleTelemetry.open(spec, profile_name="t", vehicle=0, log_dir=tmp_path)
+    lost: list[float] = []
+
+    async def state_loop_losing_one_cancel() -> None:
+        while True:
+            try:
+                await asyncio.sleep(0.05)
+            except asyncio.CancelledError:
+                if lost:
+                    raise
+                lost.append(asyncio.get_running_loop().time())
+
+    telemetry._publish_state = state_loop_losing_one_cancel  # type: ignore[method-assign]
+
+    async def main() -> None:
+        async def fly() -> None:
+            async with telemetry.running(_Landed()):
+                await asyncio.sleep(0.3)
+
+        await asyncio.wait_for(fly(), 15.0)
+
+    asyncio.run(main())  # before: TimeoutError, the loop ran on
+    assert len(lost) == 1, "the state loop was never cancelled"

@@ -84,25 +84,43 @@ class VehicleTelemetry:
     async def running(self, vehicle: Operated) -> AsyncIterator[None]:
         """Connect and serve while the body runs; then deliver what is left (bounded) and leave."""
         self.vehicle = vehicle
-        task = asyncio.create_task(self._run(), name=f"v{self.topics.vehicle}-mqtt")
+        tasks = self._start()
         try:
             yield
         finally:
             await self._drain()
-            await cancel_and_wait(task)
+            for task in tasks:
+                await cancel_and_wait(task)
             self.outbox.close()
 
     # -- loops -----------------------------------------------------------------------------
 
-    async def _run(self) -> None:
+    def _start(self) -> list[asyncio.Task[None]]:
+        """The connection, the event delivery and the state loop, each a task of its own that
+        ``running`` cancels and waits for by itself: in a TaskGroup only the group's first
+        cancellation reaches them, and a loop that lost it (cancel_and_wait) ran on forever.
+        One of them failing stops the others; the events stay in the outbox."""
         n = self.topics.vehicle
-        try:
-            async with asyncio.TaskGroup() as tg:
-                tg.create_task(self.channel.run(), name=f"v{n}-mqtt-connection")
-                tg.create_task(self._deliver(), name=f"v{n}-mqtt-events")
-                tg.create_task(self._publish_state(), name=f"v{n}-mqtt-state")
-        except Exception:
-            log.exception("MQTT stopped; events stay in %s for the next start", self.outbox.path)
+        tasks = [
+            asyncio.create_task(self.channel.run(), name=f"v{n}-mqtt-connection"),
+            asyncio.create_task(self._deliver(), name=f"v{n}-mqtt-events"),
+            asyncio.create_task(self._publish_state(), name=f"v{n}-mqtt-state"),
+        ]
+
+        def stopped(task: asyncio.Task[None]) -> None:
+            if task.cancelled() or task.exception() is None:
+                return
+            log.error(
+                "MQTT stopped; events stay in %s for the next start",
+                self.outbox.path,
+                exc_info=task.exception(),
+            )
+            for other in tasks:
+                other.cancel()
+
+        for task in tasks:
+            task.add_done_callback(stopped)
+        return tasks
 
     async def _deliver(self) -> None:
         """Send the outbox oldest first; acknowledge the delivered prefix of each batch."""
@@ -205,8 +223,8 @@ async def cancel_and_wait(task: asyncio.Task[None]) -> None:
 
     On Python 3.11, asyncio.wait_for loses a cancellation that arrives in the loop iteration
     its wait completes in (CPython issue 86296, fixed in 3.12), and aiomqtt waits for every
-    publish through it. A state loop that lost its cancellation ran on, its TaskGroup waited
-    for it, and the companion never exited (seen under load: `fleet did not end`)."""
+    publish through it. A state loop that lost its cancellation ran on and the companion
+    never exited (seen under load: `fleet did not end`, a companion killed after its mission)."""
     while not task.done():
         task.cancel()
         await asyncio.wait({task}, timeout=_RECANCEL_S)
