@@ -48,10 +48,23 @@ EXPECTED = {
 
 @contextmanager
 def sim_vehicle(*args: str) -> Iterator[subprocess.Popen[bytes]]:
+    """The emulator as a process, yielded once it is up (its sockets bound, its TCP servers
+    listening: on a loaded machine its start takes longer than a check's first wait)."""
     exe = Path(sys.executable).parent / "sim-vehicle"
-    cmd = [str(exe), "--speedup", "5", "--log-level", "WARNING", *args]
-    proc = subprocess.Popen(cmd, env={**os.environ, "MAVLINK20": "1"})
+    cmd = [str(exe), "--speedup", "5", "--log-level", "INFO", *args]
+    proc = subprocess.Popen(cmd, env={**os.environ, "MAVLINK20": "1"}, stderr=subprocess.PIPE)
+    up = threading.Event()
+
+    def read_log() -> None:
+        assert proc.stderr is not None
+        for line in proc.stderr:
+            if b"emulator up" in line:
+                up.set()
+
+    reader = threading.Thread(target=read_log, daemon=True)
+    reader.start()
     try:
+        assert up.wait(60), f"sim-vehicle not up within 60 s (exit code {proc.poll()})"
         yield proc
     finally:
         proc.terminate()
