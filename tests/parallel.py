@@ -1,4 +1,4 @@
-"""How the suite shares this machine under pytest-xdist (`-n 4 --dist loadgroup`, README
+"""How the suite shares this machine under pytest-xdist (`-n 3 --dist loadgroup`, README
 "Tests"): the SITL tests run in two lanes, a whole module to one lane, each lane on one worker
 with SITL instance indices of its own; the Docker tests in one group (one worker builds the
 images once); every other test goes to whichever worker is free.
