@@ -1,9 +1,10 @@
 """A companion's MQTT side: events through the durable outbox (QoS 1, in order), state at a
 rate, a retained online/offline status with a last will, and operator commands in.
 
-It runs beside the mission as its own task (``vI-mqtt``), never inside the mission's
-TaskGroup: whatever happens to the broker or to this code, the vehicle keeps flying. ``emit``
-(the EventSink side, called by the decision loop) only appends to a file and a queue.
+It runs beside the mission as tasks of its own (``vI-mqtt-connection``, ``-events``,
+``-state``), never inside the mission's TaskGroup: whatever happens to the broker or to this
+code, the vehicle keeps flying. ``emit`` (the EventSink side, called by the decision loop) only
+appends to a file and a queue.
 """
 
 from __future__ import annotations
@@ -229,4 +230,4 @@ async def cancel_and_wait(task: asyncio.Task[None]) -> None:
         task.cancel()
         await asyncio.wait({task}, timeout=_RECANCEL_S)
     if not task.cancelled():
-        task.exception()  # _run logs its own errors; retrieved so asyncio does not warn
+        task.exception()  # logged by _start's callback; retrieved so asyncio does not warn
