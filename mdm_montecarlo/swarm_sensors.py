@@ -63,7 +63,7 @@ class SwarmSensors:
             self.appear,
             targets.t,
             radius,
-            radius * radius * _NEAR,
+            radius * radius * NEAR,
             known,
             self.real,
             rows,
@@ -132,7 +132,7 @@ class TargetsNow:
 
 _SLACK = 1.0
 """Metres added to the reach of a confirmation step (rounding margin, far above it)."""
-_NEAR = 1.0 + 1e-9
+NEAR = 1.0 + 1e-9
 """Relative margin on R^2 so that the pairs nearer than R are all kept despite rounding."""
 
 
