@@ -58,7 +58,6 @@ def compare_samples(
 ) -> Comparison:
     """Compare sample ``b`` with sample ``a`` (each needs at least two values)."""
     from scipy.special import stdtrit
-    from scipy.stats import mannwhitneyu
 
     x, y = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     if len(x) < 2 or len(y) < 2:
@@ -73,7 +72,7 @@ def compare_samples(
         welch_p = float(2 * _t_sf(abs(diff) / se, df))
     else:
         half, welch_p = 0.0, (1.0 if diff == 0 else 0.0)
-    test = mannwhitneyu(y, x, alternative="two-sided", method="asymptotic")
+    u, u_p = _mann_whitney(y, x)
     pooled = np.sqrt(((na - 1) * va + (nb - 1) * vb) / (na + nb - 2))
     low, high = _bootstrap(x, y, resamples)
     return Comparison(
@@ -85,13 +84,34 @@ def compare_samples(
         difference=diff,
         ci95=(diff - half, diff + half),
         welch_p=welch_p,
-        mann_whitney_u=float(test.statistic),
-        mann_whitney_p=float(test.pvalue),
+        mann_whitney_u=u,
+        mann_whitney_p=u_p,
         bootstrap_ci95=(low, high),
         bootstrap_resamples=resamples,
         cohens_d=float(diff / pooled) if pooled > 0 else float("nan"),
-        rank_biserial=float(2 * test.statistic / (na * nb) - 1),
+        rank_biserial=float(2 * u / (na * nb) - 1),
     )
+
+
+def _mann_whitney(y: NDArray[np.float64], x: NDArray[np.float64]) -> tuple[float, float]:
+    """U of sample y against x (ties count half) and its two-sided p: the normal approximation
+    with the tie correction and a continuity correction of 1/2, as scipy.stats.mannwhitneyu's
+    method="asymptotic" computes it (whose import alone costs reproduce about 0.45 CPU-s)."""
+    from scipy.special import ndtr
+
+    ny, nx = len(y), len(x)
+    n = ny + nx
+    _, where, counts = np.unique(np.concatenate([y, x]), return_inverse=True, return_counts=True)
+    # The average rank of each distinct value (ranks from 1), summed over y's values.
+    ranks = np.cumsum(counts) - (counts - 1) / 2.0
+    u = float(ranks[where[:ny]].sum()) - ny * (ny + 1) / 2.0
+    ties = float((counts.astype(float) ** 3 - counts).sum())
+    sigma = np.sqrt(ny * nx / 12.0 * ((n + 1) - ties / (n * (n - 1))))
+    excess = max(u, ny * nx - u) - ny * nx / 2.0
+    if sigma == 0:
+        return u, 1.0
+    p = 2.0 * float(ndtr(-(excess - 0.5) / sigma))
+    return u, min(max(p, 0.0), 1.0)
 
 
 def _t_sf(t: float, df: float) -> float:

@@ -65,6 +65,24 @@ def test_welch_and_the_rank_test_agree_with_scipy() -> None:
     assert c.bootstrap_ci95[0] < c.difference < c.bootstrap_ci95[1]
 
 
+@pytest.mark.parametrize(
+    ("a", "b"),
+    [
+        ([3, 4, 4, 5, 2, 4, 3, 3, 4, 6] * 30, [4, 5, 5, 3, 4, 6, 5, 4, 5, 7] * 25),  # ties
+        ([0.31, 2.5, 1.7], [0.2, 3.9]),  # a few values, no ties
+        ([1.0, 1.0, 1.0], [1.0, 1.0]),  # one value: p = 1
+        ([0.0, 0.0, 0.0], [2.0, 2.0, 2.0, 2.0]),  # two constant samples apart
+        (list(range(50)), list(range(50))),  # the same sample
+        ([31500.0, 29800.0, 40000.0, 40000.0], [40000.0, 22000.0, 40000.0, 35100.0]),  # caps
+    ],
+)
+def test_the_rank_test_is_scipys_asymptotic_one(a: list[float], b: list[float]) -> None:
+    c = compare_samples("T_S", np.array(a), np.array(b), resamples=100)
+    u = stats.mannwhitneyu(b, a, alternative="two-sided", method="asymptotic")
+    assert c.mann_whitney_u == pytest.approx(float(u.statistic), rel=1e-12)
+    assert c.mann_whitney_p == pytest.approx(float(u.pvalue), rel=1e-9, abs=1e-15)
+
+
 def test_a_folder_of_several_configurations_needs_one_named(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
