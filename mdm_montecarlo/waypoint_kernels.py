@@ -1,6 +1,6 @@
 """Compiled (numba) per-particle passes of the waypoint swarm (mdm_montecarlo.waypoint_swarm):
-what happens on a particle's arrival at its waypoint, over (runs, vehicles) in one loop each
-instead of a dozen masked numpy assignments."""
+what happens on a particle's arrival at its waypoint, over the arrivals (run, vehicle) in one
+loop each instead of a dozen masked numpy assignments over every particle."""
 
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ IntArray = NDArray[np.intp]
 
 @compiled
 def take_readings(
-    reached: BoolArray,
+    run: IntArray,
+    lane: IntArray,
     position: FloatArray,
     reading: FloatArray,
     source: IntArray,
@@ -25,26 +26,27 @@ def take_readings(
     own_fitness: FloatArray,
     own_source: IntArray,
 ) -> FloatArray:
-    """For every particle that ``reached`` its waypoint: its ``reading`` there becomes its
-    ``current`` fitness, and a strictly better one its personal best (``own_*``), in place.
-    Returns the personal bests' fitness before (ARPSO's evolution speed)."""
-    previous = own_fitness.copy()
-    runs, n = reached.shape
-    for r in range(runs):
-        for i in range(n):
-            if reached[r, i]:
-                current[r, i] = reading[r, i]
-                if reading[r, i] > own_fitness[r, i]:
-                    own_position[r, i, 0] = position[r, i, 0]
-                    own_position[r, i, 1] = position[r, i, 1]
-                    own_fitness[r, i] = reading[r, i]
-                    own_source[r, i] = source[r, i]
+    """For every arrival (``run``, ``lane``): its ``reading`` there becomes its ``current``
+    fitness, and a strictly better one its personal best (``own_*``), in place. Returns the
+    arrivals' personal bests' fitness before (ARPSO's evolution speed)."""
+    previous = np.empty(run.shape[0])
+    for a in range(run.shape[0]):
+        r = run[a]
+        i = lane[a]
+        previous[a] = own_fitness[r, i]
+        current[r, i] = reading[r, i]
+        if reading[r, i] > own_fitness[r, i]:
+            own_position[r, i, 0] = position[r, i, 0]
+            own_position[r, i, 1] = position[r, i, 1]
+            own_fitness[r, i] = reading[r, i]
+            own_source[r, i] = source[r, i]
     return previous
 
 
 @compiled
 def steer(
-    reached: BoolArray,
+    run: IntArray,
+    lane: IntArray,
     follow: BoolArray,
     position: FloatArray,
     move: FloatArray,
@@ -52,15 +54,15 @@ def steer(
     waypoint: FloatArray,
     velocity: FloatArray,
 ) -> None:
-    """For every particle that ``reached`` its waypoint: where it ``follow``s a best, its next
-    waypoint is position + move clipped to the area (0 .. area per axis); its velocity becomes
-    the displacement to its next waypoint (the others' waypoints are already drawn). In place."""
-    runs, n = reached.shape
-    for r in range(runs):
-        for i in range(n):
-            if reached[r, i]:
-                for a in range(2):
-                    x = position[r, i, a]
-                    if follow[r, i]:
-                        waypoint[r, i, a] = min(max(x + move[r, i, a], 0.0), area[a])
-                    velocity[r, i, a] = waypoint[r, i, a] - x
+    """For every arrival (``run``, ``lane``): where it ``follow``s a best, its next waypoint is
+    position + ``move`` (arrivals, 2) clipped to the area (0 .. area per axis); its velocity
+    becomes the displacement to its next waypoint (the others' waypoints are already drawn).
+    In place."""
+    for a in range(run.shape[0]):
+        r = run[a]
+        i = lane[a]
+        for k in range(2):
+            x = position[r, i, k]
+            if follow[a]:
+                waypoint[r, i, k] = min(max(x + move[a, k], 0.0), area[k])
+            velocity[r, i, k] = waypoint[r, i, k] - x

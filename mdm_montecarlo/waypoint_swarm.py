@@ -228,10 +228,10 @@ def _arrive(
     drawn for them alone, the arrivals in run, then vehicle order: PSO/ARPSO r1 then r2,
     (2, arrivals, axes); SPSO the normals (arrivals, 2), the radii's uniforms (arrivals), then the
     informant keys (stuck, vehicles) of those stuck; then the explorers' waypoints."""
-    previous_best = waypoint_kernels.take_readings(
-        reached, position, reading, source, current, own.position, own.fitness, own.source
-    )
     run, lane = np.nonzero(reached)
+    previous_best = waypoint_kernels.take_readings(
+        run, lane, position, reading, source, current, own.position, own.fitness, own.source
+    )
     hit_runs, slot = np.unique(run, return_inverse=True)
     if config.variant == "spso":
         found = kernels.best_of_linked_peers(
@@ -281,7 +281,7 @@ def _arrive(
         inertia = np.full(own_fitness.shape, config.inertia)
         if config.variant == "arpso":
             inertia = kernels.arpso_inertia(
-                previous_best[at][:, None],
+                previous_best[:, None],
                 own_fitness,
                 current[at][:, None],
                 current[run][:, None],
@@ -306,12 +306,8 @@ def _arrive(
             False,
         )
     follow_here = social_fitness[:, 0] > 0
-    follow = np.zeros_like(reached)
-    follow[at] = follow_here
-    lost = reached & ~follow
+    lost = ~follow_here
     if lost.any():
-        waypoint[lost] = explore(explorer, position[lost], rng)
-    moves = np.zeros_like(position)
-    moves[at] = move[:, 0]
-    waypoint_kernels.steer(reached, follow, position, moves, area, waypoint, velocity)
+        waypoint[run[lost], lane[lost]] = explore(explorer, position[run[lost], lane[lost]], rng)
+    waypoint_kernels.steer(run, lane, follow_here, position, move[:, 0], area, waypoint, velocity)
     return int(np.count_nonzero(follow_here & ~mine[:, 0]))
