@@ -317,7 +317,10 @@ def _entry(
 def read_arrivals(
     arrived: IntArray,
     position: FloatArray,
-    target: FloatArray,
+    seg_start: FloatArray,
+    seg_velocity: FloatArray,
+    grid_dt: float,
+    moving: bool,
     appear: FloatArray,
     t: float,
     radius: float,
@@ -330,18 +333,19 @@ def read_arrivals(
     source: IntArray,
 ) -> None:
     """swarm_kernels.sense's reading for the ``arrived`` particles (flat indices) alone, at
-    ``position`` (particles, 2), targets (runs, targets, 2) at time t: the strongest
-    exp(-d / radius) above THRESHOLD of a present target within ``radius``, the targets the run
-    confirmed by step ``now`` left out where ``unread_known``; ``fitness`` and ``source``
-    (particles,) in place (0 and -1 if none)."""
+    ``position`` (particles, 2), the targets where TargetTracks.motion puts them at time t:
+    the strongest exp(-d / radius) above THRESHOLD of a present target within ``radius``, the
+    targets the run confirmed by step ``now`` left out where ``unread_known``; ``fitness`` and
+    ``source`` (particles,) in place (0 and -1 if none)."""
     m = appear.shape[0]
     for p in arrived:
         run = p // n_vehicles
         best = 0.0
         found = -1
         for k in range(m):
-            dx = target[run, k, 0] - position[p, 0]
-            dy = target[run, k, 1] - position[p, 1]
+            tx, ty = _target_at(seg_start, seg_velocity, grid_dt, moving, run, k, t)
+            dx = tx - position[p, 0]
+            dy = ty - position[p, 1]
             gap = dx * dx + dy * dy
             known = unread_known and known_step[run, k] <= now
             if gap < near and appear[k] <= t and not known:

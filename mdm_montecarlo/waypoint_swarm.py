@@ -17,11 +17,11 @@ a step ends that particle's iteration at the end of the step, so an iteration ta
 step. Confirmations are the closed form along every step's segment (swarm_sensors' arithmetic),
 and a confirmation is known to the whole run at once. Since nothing changes a particle's course
 before it arrives, each leg is solved when it starts (mdm_montecarlo.waypoint_legs: its steps,
-its arrival, its confirmations) and the engine jumps from one step with arrivals to the next:
-the same results, to the bit, as stepping every particle every interval
-(tests/montecarlo/test_waypoint_legs.py), for a third less CPU. What the sensor reads and what the bests
-forget follow ``signal_sensor`` / ``signal_radius``, ``read_confirmed`` and
-``after_confirmation`` (docs/model.md, "Social-cognitive baselines").
+its arrival, its confirmations), and the block runs compiled from one step with arrivals to the
+next (mdm_montecarlo.waypoint_rounds): the same results, to the bit, as stepping every particle
+every interval (tests/montecarlo/test_waypoint_legs.py), in about a quarter of its CPU time.
+What the sensor reads and what the bests forget follow ``signal_sensor`` / ``signal_radius``,
+``read_confirmed`` and ``after_confirmation`` (docs/model.md, "Social-cognitive baselines").
 
 Randomness: the same SeedSequence([seed, block]) streams as the other engines. An arrival step
 draws only the numbers its arrivals use, in a fixed order (the arrivals in run, then vehicle
@@ -40,11 +40,13 @@ from mdm_core.search.pso import Best, SwarmConfig
 from mdm_core.search.swarm_iteration import explore
 from mdm_core.world import Scenario
 from mdm_montecarlo import swarm_kernels as kernels
-from mdm_montecarlo import waypoint_kernels, waypoint_legs
+from mdm_montecarlo import waypoint_legs
+from mdm_montecarlo.compiled_step import CompiledPolicy
 from mdm_montecarlo.compiled_tracks import compiled_tracks
-from mdm_montecarlo.compiled_waypoints import CompiledWaypoints
+from mdm_montecarlo.compiled_waypoints import RULES
 from mdm_montecarlo.engine import BlockResult, block_rngs
 from mdm_montecarlo.swarm_sensors import NEAR
+from mdm_montecarlo.waypoint_rounds import RULE_COLUMNS, VARIANTS, fly_waypoints
 from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]
@@ -59,9 +61,8 @@ def run_waypoint_swarm_block(
     (arrivals), ``followed`` those that went for a best held by another vehicle."""
     scenario = Scenario.from_profile(profile)
     spec = profile.policy.swarm
-    delta1 = profile.policy.levels[0].step
-    config = replace(swarm_config(profile), max_step=delta1, constant_speed=False)
-    explorer = CompiledWaypoints(policy_config(profile))
+    config = swarm_rules(profile)
+    explorer = CompiledPolicy(policy_config(profile))
     rng_targets, rng_start, rng = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
     shape = (n_runs, n_vehicles)
@@ -71,123 +72,79 @@ def run_waypoint_swarm_block(
     times = _step_times(dt, stop)
     last = len(times) - 1
     targets = scenario.targets
-    real = ~targets.false_mask
     tracks = compiled_tracks(scenario, n_runs, rng_targets, stop)
     seg_start, seg_velocity = tracks.segments(float(times[-1]))
     radius = signal_radius(profile)
-    confirm_radius = scenario.confirmation.radius
     position = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
-    area = np.asarray(scenario.area.size, dtype=float)
     # The step at which each run first confirms each target (last + 1: not by the last step).
     known_step = np.full((n_runs, targets.count), last + 1, dtype=np.intp)
     conf_time = np.full((n, targets.count), np.inf)
     conf_step = np.full((n, targets.count), last + 1, dtype=np.intp)
-    arrival_step = np.empty(n, dtype=np.intp)
-    arrival = np.empty((n, 2))
-
     own = Best(position.copy(), np.zeros(shape), np.full(shape, -1, dtype=np.intp))
-    # Each particle's reading at its last waypoint (ARPSO's aggregation degree).
-    current = np.zeros(shape)
-    reading = np.zeros(shape)
-    source = np.full(shape, -1, dtype=np.intp)
     links = np.broadcast_to(~np.eye(n_vehicles, dtype=bool), (*shape, n_vehicles)).copy()
     if config.variant == "spso":
         links = kernels.informants(rng.random((n_runs, n_vehicles, n_vehicles)), spec.informants)
-    # SPSO: the local best each particle steered by at its last arrival.
-    local_fitness = np.zeros(shape)
-
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
-    velocity = waypoint - position
-
-    def walk(starting: NDArray[np.intp], begin: int) -> None:
-        waypoint_legs.walk_legs(
-            starting,
-            position.reshape(n, 2),
-            waypoint.reshape(n, 2),
-            begin,
-            times,
-            dt,
-            profile.fleet.speed * dt,
-            area,
-            n_vehicles,
-            seg_start,
-            seg_velocity,
-            tracks.grid_dt,
-            tracks.moving,
-            tracks.max_speed,
-            targets.appear_times,
-            real,
-            confirm_radius,
-            known_step,
-            conf_time,
-            conf_step,
-            arrival_step,
-            arrival,
-        )
-
-    walk(np.arange(n), 0)
-    # The time-stepped loop stops at the first step past the mission duration by which every
-    # run has confirmed every real target, or after the last step.
-    past_duration = max(int(np.searchsorted(times, profile.mission.duration)), 1)
-    iterations = 0
-    followed = 0
-    while True:
-        due = int(arrival_step.min())
-        all_known = int(known_step[:, real].max(initial=0))
-        end = min(max(past_duration, all_known), last)
-        if end < due:
-            break
-        # Every confirmation by step ``due`` is known: later legs start after it.
-        arrived = np.flatnonzero(arrival_step == due)
-        flat = position.reshape(n, 2)
-        flat[arrived] = arrival[arrived]
-        reached = np.zeros(n, dtype=bool)
-        reached[arrived] = True
-        reached = reached.reshape(shape)
-        t = float(times[due])
-        waypoint_legs.read_arrivals(
-            arrived,
-            flat,
-            tracks.motion(np.arange(n_runs), np.full(n_runs, t))[0],
-            targets.appear_times,
-            t,
-            radius,
-            radius * radius * NEAR,
-            known_step,
-            due,
-            not spec.read_confirmed,
-            n_vehicles,
-            reading.reshape(n),
-            source.reshape(n),
-        )
-        if spec.after_confirmation == "forget":
-            waypoint_legs.forget_confirmed(
-                own.fitness.reshape(n), own.source.reshape(n), known_step, due, n_vehicles
-            )
-        iterations += arrived.size
-        followed += _arrive(
-            config,
-            spec.informants,
-            own,
-            reached,
-            position,
-            reading,
-            source,
-            current,
-            velocity,
-            waypoint,
-            links,
-            local_fitness,
-            explorer,
-            area,
-            rng,
-        )
-        walk(arrived, due)
-        if end == due:
-            break
+    assert explorer.table is not None  # else explore raised the numpy draws' error
+    end, iterations, followed = fly_waypoints(
+        VARIANTS[config.variant],
+        rules_of(config),
+        spec.informants,
+        times,
+        dt,
+        profile.fleet.speed * dt,
+        # The time-stepped loop stops from the first step past the mission duration on.
+        max(int(np.searchsorted(times, profile.mission.duration)), 1),
+        position,
+        waypoint,
+        waypoint - position,
+        own.position,
+        own.fitness,
+        own.source,
+        np.zeros(shape),  # each particle's reading at its last waypoint
+        np.full(shape, -1, dtype=np.intp),  # and the target it came from
+        np.zeros(shape),  # the reading as its current fitness (ARPSO's aggregation degree)
+        links,
+        np.zeros(shape),  # SPSO: the local best each particle steered by at its last arrival
+        seg_start,
+        seg_velocity,
+        tracks.grid_dt,
+        tracks.moving,
+        tracks.max_speed,
+        targets.appear_times,
+        ~targets.false_mask,
+        scenario.confirmation.radius,
+        radius,
+        radius * radius * NEAR,
+        not spec.read_confirmed,
+        spec.after_confirmation == "forget",
+        explorer.table,
+        explorer.area,
+        RULES[explorer.config.out_of_area],
+        explorer.config.waypoint_origin == "anchor",
+        explorer.config.confine_to_detection,
+        np.asarray(scenario.area.size, dtype=float),
+        known_step,
+        conf_time,
+        conf_step,
+        rng,
+    )
     first = waypoint_legs.keep_first(conf_time, conf_step, known_step, end, n_vehicles)
-    t_end = float(times[end])
-    return BlockResult(block, first.reshape(*shape, -1), iterations, t_end * n, followed)
+    return BlockResult(
+        block, first.reshape(*shape, -1), iterations, float(times[end]) * n, followed
+    )
+
+
+def swarm_rules(profile: MissionProfile) -> SwarmConfig:
+    """The profile's swarm with |v| at most the single-sensor step delta_1 (level 1's step)."""
+    return replace(
+        swarm_config(profile), max_step=profile.policy.levels[0].step, constant_speed=False
+    )
+
+
+def rules_of(config: SwarmConfig) -> FloatArray:
+    """The swarm's constants as waypoint_rounds.arrive reads them (its ``rules`` columns)."""
+    return np.array([float(getattr(config, name)) for name in RULE_COLUMNS])
 
 
 def _step_times(dt: float, stop: float) -> FloatArray:
@@ -199,115 +156,3 @@ def _step_times(dt: float, stop: float) -> FloatArray:
         t += dt
         times.append(t)
     return np.asarray(times)
-
-
-def _arrive(
-    config: SwarmConfig,
-    informants: int,
-    own: Best,
-    reached: BoolArray,
-    position: FloatArray,
-    reading: FloatArray,
-    source: NDArray[np.intp],
-    current: FloatArray,
-    velocity: FloatArray,
-    waypoint: FloatArray,
-    links: BoolArray,
-    local_fitness: FloatArray,
-    explorer: CompiledWaypoints,
-    area: FloatArray,
-    rng: np.random.Generator,
-) -> int:
-    """The iteration of every particle that reached its waypoint (``reached`` (runs,
-    vehicles)): its reading into its personal best, then its next velocity and waypoint, in
-    place. Returns how many of them steer by another vehicle's best.
-
-    A step's arrivals are a few of the block's particles: the swarm bests, inertias and steps
-    are computed for them alone (the kernels' per-particle rules on the arrivals gathered as
-    (arrivals, 1) particles; swarm bests over the runs they belong to). The random numbers are
-    drawn for them alone, the arrivals in run, then vehicle order: PSO/ARPSO r1 then r2,
-    (2, arrivals, axes); SPSO the normals (arrivals, 2), the radii's uniforms (arrivals), then the
-    informant keys (stuck, vehicles) of those stuck; then the explorers' waypoints."""
-    run, lane = np.nonzero(reached)
-    previous_best = waypoint_kernels.take_readings(
-        run, lane, position, reading, source, current, own.position, own.fitness, own.source
-    )
-    hit_runs, slot = np.unique(run, return_inverse=True)
-    if config.variant == "spso":
-        found = kernels.best_of_linked_peers(
-            own.position[hit_runs], own.fitness[hit_runs], own.source[hit_runs], links[hit_runs]
-        )
-    else:
-        found = kernels.best_of_all_peers(
-            own.position[hit_runs], own.fitness[hit_runs], own.source[hit_runs]
-        )
-    # The arrivals' swarm bests, as (arrivals, 1) particles.
-    social_position = found[0][slot, lane][:, None]
-    social_fitness = found[1][slot, lane][:, None]
-    mine = found[3][slot, lane][:, None]
-    at = (run, lane)
-    step = velocity[at][:, None]
-    here = position[at][:, None]
-    own_position = own.position[at][:, None]
-    own_fitness = own.fitness[at][:, None]
-    if config.variant == "spso":
-        normal = rng.standard_normal((run.size, 1, 2))
-        uniform = rng.random((run.size, 1))
-        move = kernels.spso_steps(
-            step,
-            here,
-            own_position,
-            own_fitness,
-            social_position,
-            social_fitness,
-            mine,
-            config.spso_inertia,
-            config.spso_acceleration,
-            normal,
-            uniform,
-            config.max_step,
-            False,
-        )
-        stuck_here = social_fitness[:, 0] <= local_fitness[at]
-        local_fitness[at] = social_fitness[:, 0]
-        if stuck_here.any():
-            stuck = np.zeros_like(reached)
-            stuck[at] = stuck_here
-            # relink reads the keys of the stuck particles' rows only.
-            keys = np.empty(links.shape)
-            keys[stuck] = rng.random((int(np.count_nonzero(stuck_here)), links.shape[-1]))
-            kernels.relink(keys, stuck, informants, links)
-    else:
-        inertia = np.full(own_fitness.shape, config.inertia)
-        if config.variant == "arpso":
-            inertia = kernels.arpso_inertia(
-                previous_best[:, None],
-                own_fitness,
-                current[at][:, None],
-                current[run][:, None],
-                links[at][:, None],
-                config.arpso_initial_inertia,
-                config.arpso_speed_weight,
-                config.arpso_aggregation_weight,
-            )
-        uniform = rng.random((2, run.size, 1, 2))
-        move = kernels.pso_steps(
-            step,
-            here,
-            own_position,
-            own_fitness,
-            social_position,
-            social_fitness,
-            inertia,
-            config.cognitive,
-            config.social,
-            uniform,
-            config.max_step,
-            False,
-        )
-    follow_here = social_fitness[:, 0] > 0
-    lost = ~follow_here
-    if lost.any():
-        waypoint[run[lost], lane[lost]] = explore(explorer, position[run[lost], lane[lost]], rng)
-    waypoint_kernels.steer(run, lane, follow_here, position, move[:, 0], area, waypoint, velocity)
-    return int(np.count_nonzero(follow_here & ~mine[:, 0]))

@@ -5,20 +5,20 @@ solved in one piece (swarm_kernels.fly, SwarmSensors.sense and confirm on every 
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
-from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
-from mdm_core.search.pso import Best
+from mdm_core.search.from_profile import policy_config, signal_radius
+from mdm_core.search.pso import Best, SwarmConfig
 from mdm_core.search.swarm_iteration import explore
 from mdm_core.world import Scenario
 from mdm_montecarlo import swarm_kernels as kernels
+from mdm_montecarlo.compiled_step import CompiledPolicy
 from mdm_montecarlo.compiled_tracks import compiled_tracks
-from mdm_montecarlo.compiled_waypoints import CompiledWaypoints
+from mdm_montecarlo.compiled_waypoints import RULES
 from mdm_montecarlo.engine import BlockResult, block_rngs
 from mdm_montecarlo.swarm_sensors import SwarmSensors
-from mdm_montecarlo.waypoint_swarm import _arrive
+from mdm_montecarlo.waypoint_rounds import VARIANTS, arrive
+from mdm_montecarlo.waypoint_swarm import rules_of, swarm_rules
 from mdm_profiles import MissionProfile
 
 
@@ -26,10 +26,8 @@ def stepped_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -
     """run_waypoint_swarm_block, every particle flown, sensed and confirmed on every step."""
     scenario = Scenario.from_profile(profile)
     spec = profile.policy.swarm
-    config = replace(
-        swarm_config(profile), max_step=profile.policy.levels[0].step, constant_speed=False
-    )
-    explorer = CompiledWaypoints(policy_config(profile))
+    config = swarm_rules(profile)
+    explorer = CompiledPolicy(policy_config(profile))
     rng_targets, rng_start, rng = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
     shape = (n_runs, n_vehicles)
@@ -85,9 +83,10 @@ def stepped_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -
         kernels.forget_known(own.fitness, own.source, forget_by)
         if reached.any():
             iterations += int(np.count_nonzero(reached))
-            followed += _arrive(
+            followed += arrive_reached(
                 config,
                 spec.informants,
+                explorer,
                 own,
                 reached,
                 position,
@@ -98,10 +97,58 @@ def stepped_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -
                 waypoint,
                 links,
                 local_fitness,
-                explorer,
                 area,
                 rng,
             )
         if t >= profile.mission.duration and bool(np.isfinite(first.min(axis=1)[:, real]).all()):
             break
     return BlockResult(block, first, iterations, float(t * n), followed)
+
+
+def arrive_reached(
+    config: SwarmConfig,
+    informants: int,
+    explorer: CompiledPolicy,
+    own: Best,
+    reached: np.ndarray,
+    position: np.ndarray,
+    reading: np.ndarray,
+    source: np.ndarray,
+    current: np.ndarray,
+    velocity: np.ndarray,
+    waypoint: np.ndarray,
+    links: np.ndarray,
+    local_fitness: np.ndarray,
+    area: np.ndarray,
+    rng: np.random.Generator,
+) -> int:
+    """waypoint_rounds.arrive for the particles where ``reached`` (runs, vehicles)."""
+    run, lane = np.nonzero(reached)
+    assert explorer.table is not None
+    return int(
+        arrive(
+            VARIANTS[config.variant],
+            rules_of(config),
+            informants,
+            run,
+            lane,
+            own.position,
+            own.fitness,
+            own.source,
+            position,
+            reading,
+            source,
+            current,
+            velocity,
+            waypoint,
+            links,
+            local_fitness,
+            explorer.table,
+            explorer.area,
+            RULES[explorer.config.out_of_area],
+            explorer.config.waypoint_origin == "anchor",
+            explorer.config.confine_to_detection,
+            area,
+            rng,
+        )
+    )

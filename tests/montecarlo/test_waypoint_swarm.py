@@ -3,21 +3,20 @@ memory options (policy.swarm.after_confirmation, read_confirmed)."""
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
-from mdm_core.search.from_profile import policy_config, swarm_config
+from mdm_core.search.from_profile import policy_config
 from mdm_core.search.pso import Best
-from mdm_montecarlo.compiled_waypoints import CompiledWaypoints
+from mdm_montecarlo.compiled_step import CompiledPolicy
 from mdm_montecarlo.runner import run_missions
 from mdm_montecarlo.social_engine import run_swarm_block
 from mdm_montecarlo.study import Case
-from mdm_montecarlo.waypoint_swarm import _arrive
+from mdm_montecarlo.waypoint_swarm import swarm_rules
 from mdm_profiles import MissionProfile
 from mdm_profiles.loader import ProfileError
 from mdm_profiles.overrides import apply_overrides
+from tests.montecarlo.stepped_waypoint_swarm import arrive_reached
 
 WAYPOINT = ("policy.swarm.iteration=waypoint",)
 CONFIRMATION = (
@@ -92,17 +91,17 @@ def _arrive_one(
     (fitness 0.5, vehicle 1's) 15 km east and SPSO's last local best ``local_fitness``; 1 and 2
     fly on. Returns (followed, position, waypoint, velocity, links) after the arrival step."""
     profile = _profile("fixed", method, *TEXT)
-    delta1 = profile.policy.levels[0].step
-    config = replace(swarm_config(profile), max_step=delta1, constant_speed=False)
+    config = swarm_rules(profile)
     position = np.array([[[1000.0, 1000.0], [16000.0, 1000.0], [500.0, 500.0]]])
     own = Best(position.copy(), np.array([[0.0, 0.5, 0.0]]), np.array([[-1, 3, -1]]))
     reached = np.array([[True, False, False]])
     waypoint = np.array([[[1000.0, 1000.0], [16000.0, 1000.0], [900.0, 900.0]]])
     velocity = np.zeros((1, 3, 2))
     links = np.ones((1, 3, 3), dtype=bool) & ~np.eye(3, dtype=bool)
-    followed = _arrive(
+    followed = arrive_reached(
         config,
         informants,
+        CompiledPolicy(policy_config(profile)),
         own,
         reached,
         position,
@@ -113,7 +112,6 @@ def _arrive_one(
         waypoint,
         links,
         np.full((1, 3), local_fitness),
-        CompiledWaypoints(policy_config(profile)),
         np.array([20000.0, 20000.0]),
         rng,
     )
