@@ -16,18 +16,20 @@ zero happens (where one does, the Python model would have raised).
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, TypeVar, cast
+from typing import Any, Literal, TypeVar, cast
 
 from numba import njit
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 
-def compiled(fn: F, *, nogil: bool = True) -> F:
+def compiled(fn: F, *, nogil: bool = True, inline: bool = False) -> F:
     """``fn`` compiled in nopython mode with numpy's error model, cached on disk if possible;
     with the GIL released unless ``nogil`` is False (a kernel updating state that other threads
-    read whole)."""
+    read whole). ``inline``: compiled into each kernel that calls it instead of called (a
+    kernel called once per lane, whose call would cost more than its arithmetic)."""
+    mode: Literal["never", "always"] = "always" if inline else "never"
     try:
-        return cast(F, njit(cache=True, nogil=nogil, error_model="numpy")(fn))
+        return cast(F, njit(cache=True, nogil=nogil, error_model="numpy", inline=mode)(fn))
     except RuntimeError:  # "cannot cache function ...: no locator available"
-        return cast(F, njit(nogil=nogil, error_model="numpy")(fn))
+        return cast(F, njit(nogil=nogil, error_model="numpy", inline=mode)(fn))

@@ -84,13 +84,46 @@ def fly_rounds(
     grown copy once a lane remembers more targets than it has room for)."""
     last = radii.shape[0] - 1
     rounds = 0
+    # One round's arrays, allocated once for every lane of the block and cut to the round's
+    # lanes: allocated afresh each round, they cost page faults and zeroing as big as their use.
+    total, m = first.shape
+    lane_buf = np.empty(total, dtype=np.intp)
+    run_buf = np.empty(total, dtype=np.intp)
+    t_buf = np.empty(total)
+    unit_buf = np.empty((total, 2))
+    leg_buf = np.empty(total)
+    left_buf = np.empty(total)
+    horizon_buf = np.empty(total)
+    exact_buf = np.empty(total, dtype=np.bool_)
+    sensed_buf = np.empty((total, m), dtype=np.bool_)
+    entry = np.empty(m)
+    reached_buf = np.empty(total, dtype=np.bool_)
+    contacts_buf = np.empty((total, m), dtype=np.bool_)
+    where_buf = np.empty((total, m, 2))
+    flags_buf = np.empty((total, 4), dtype=np.bool_)
+    now_buf = np.empty(total)
+    at_buf = np.empty((total, 2))
     while True:
-        lanes = np.flatnonzero(active)
-        if lanes.size == 0:
+        n = 0
+        for lane in range(total):
+            if active[lane]:
+                lane_buf[n] = lane
+                n += 1
+        if n == 0:
             return DONE, 0.0, rounds, memory
-        runs = lanes // n_vehicles
-        t = time[lanes]
-        unit, leg, left, horizon, until = legs(
+        lanes = lane_buf[:n]
+        runs = run_buf[:n]
+        t = t_buf[:n]
+        exact = exact_buf[:n]
+        for i in range(n):
+            runs[i] = lanes[i] // n_vehicles
+            t[i] = time[lanes[i]]
+            exact[i] = memory_rule == EXACT or level[lanes[i]] == last
+        unit = unit_buf[:n]
+        leg = leg_buf[:n]
+        left = left_buf[:n]
+        horizon = horizon_buf[:n]
+        until = legs(
             waypoint,
             position,
             time,
@@ -102,12 +135,13 @@ def fly_rounds(
             lanes,
             runs,
             speed,
+            unit,
+            leg,
+            left,
+            horizon,
         )
         if moving and math.floor(until / grid_dt + NODE_EPS) >= filled:
             return GROW, until, rounds, memory
-        exact = np.empty(lanes.size, dtype=np.bool_)
-        for i in range(lanes.size):
-            exact[i] = memory_rule == EXACT or level[lanes[i]] == last
         sensed = eligible(
             known,
             known_until,
@@ -124,9 +158,13 @@ def fly_rounds(
             grid_dt,
             moving,
             memory_radius,
+            sensed_buf[:n],
         )
         visible = grown  # the next rounds see this call's paths
-        reached, contacts, where = advance(
+        reached = reached_buf[:n]
+        contacts = contacts_buf[:n]
+        where = where_buf[:n]
+        advance(
             level,
             blind_until,
             memory,
@@ -151,8 +189,20 @@ def fly_rounds(
             grown,
             moving,
             speed,
+            entry,
+            reached,
+            contacts,
+            where,
         )
-        new, flags = step_lanes(
+        now = now_buf[:n]
+        at = at_buf[:n]
+        for i in range(n):
+            now[i] = time[lanes[i]]
+            at[i, 0] = position[lanes[i], 0]
+            at[i, 1] = position[lanes[i], 1]
+        new = contacts  # the step turns the contacts into the new confirmations in place
+        flags = flags_buf[:n]
+        step_lanes(
             level,
             entered,
             blind_until,
@@ -160,8 +210,8 @@ def fly_rounds(
             memory,
             memory_count,
             lanes,
-            time[lanes],
-            position[lanes],
+            now,
+            at,
             reached,
             contacts,
             where,
@@ -177,10 +227,12 @@ def fly_rounds(
             from_anchor,
             confine,
             rng,
+            new,
+            flags,
         )
         confirmed = flags[:, CONFIRMED]
         memory = remember_confirmed(memory, memory_count, lanes, new, where, confirmed)
-        for i in range(lanes.size):
+        for i in range(n):
             if confirmed[i]:
                 known_until[lanes[i]] = -np.inf
         rounds += 1

@@ -109,21 +109,24 @@ def step_lanes(
     from_anchor: bool,
     confine: bool,
     rng: np.random.Generator,
-) -> tuple[BoolArray, BoolArray]:
+    new: BoolArray,
+    flags: BoolArray,
+) -> None:
     """SearchPolicy.step without the memory update, lanes distinct.
 
-    Updates level, entered, blind_until, anchor and waypoint in place; returns the new
-    confirmations (n, m) and the flags (n, 4) DETECTED, CONFIRMED, EXPIRED, REDRAW."""
+    Updates level, entered, blind_until, anchor and waypoint in place; writes the new
+    confirmations ``new`` (n, m) and the flags ``flags`` (n, 4) DETECTED, CONFIRMED, EXPIRED,
+    REDRAW. ``new`` may be ``contacts`` itself: a lane's row of contacts is read only before
+    its row of ``new`` is written."""
     n, m = contacts.shape
     last = radii.shape[0] - 1
-    new = contacts.copy()
-    flags = np.zeros((n, 4), dtype=np.bool_)
     known2 = memory_radius**2
     for i in range(n):
         lane = lanes[i]
         lvl = level[lane]
         seen = False
         for j in range(m):
+            new[i, j] = contacts[i, j]
             seen = seen or new[i, j]
         if seen:
             count = memory_count[lane]
@@ -145,7 +148,8 @@ def step_lanes(
                 near = nearest2(memory, count, lane, position[i, 0], position[i, 1])
                 ignored = ignored or (detecting and near < radii[lvl] ** 2)
             if ignored:
-                new[i, :] = False
+                for j in range(m):
+                    new[i, j] = False
         has = False
         for j in range(m):
             has = has or new[i, j]
@@ -176,24 +180,43 @@ def step_lanes(
         flags[i, EXPIRED] = expired
         flags[i, REDRAW] = changed or reached[i]
         if not confirmed:
-            new[i, :] = False
-    chosen = lanes[flags[:, REDRAW]]
-    if chosen.size:
+            for j in range(m):
+                new[i, j] = False
+    # The redrawn lanes' levels, anchors and positions, gathered in one loop (numba's masked
+    # and fancy indexing of the same took twice as long).
+    count = 0
+    for i in range(n):
+        count += flags[i, REDRAW]
+    chosen = np.empty(count, dtype=np.intp)
+    chosen_level = np.empty(count, dtype=level.dtype)
+    chosen_anchor = np.empty((count, 2))
+    chosen_position = np.empty((count, 2))
+    c = 0
+    for i in range(n):
+        if flags[i, REDRAW]:
+            lane = lanes[i]
+            chosen[c] = lane
+            chosen_level[c] = level[lane]
+            chosen_anchor[c, 0] = anchor[lane, 0]
+            chosen_anchor[c, 1] = anchor[lane, 1]
+            chosen_position[c, 0] = position[i, 0]
+            chosen_position[c, 1] = position[i, 1]
+            c += 1
+    if count:
         points = next_waypoints(
             table,
-            level[chosen],
-            anchor[chosen],
-            position[flags[:, REDRAW]],
+            chosen_level,
+            chosen_anchor,
+            chosen_position,
             area,
             rule,
             from_anchor,
             confine,
             rng,
         )
-        for c in range(chosen.size):
+        for c in range(count):
             waypoint[chosen[c], 0] = points[c, 0]
             waypoint[chosen[c], 1] = points[c, 1]
-    return new, flags
 
 
 class CompiledPolicy(CompiledWaypoints):
@@ -239,7 +262,10 @@ class CompiledPolicy(CompiledWaypoints):
         """SearchPolicy.step for distinct ``lanes`` (as the engine steps them)."""
         if self._table is None:
             return super().step(state, lanes, obs, rng)
-        new_confirmations, flags = step_lanes(
+        n, m = obs.contacts.shape
+        new_confirmations = np.empty((n, m), dtype=bool)
+        flags = np.empty((n, 4), dtype=bool)
+        step_lanes(
             state.level,
             state.entered,
             state.blind_until,
@@ -264,6 +290,8 @@ class CompiledPolicy(CompiledWaypoints):
             self.config.waypoint_origin == "anchor",
             self.config.confine_to_detection,
             rng,
+            new_confirmations,
+            flags,
         )
         confirmed = flags[:, CONFIRMED]
         state.memory = remember_confirmed(

@@ -68,6 +68,7 @@ class RememberedTargets:
             self._tracks.grid_dt,
             self._tracks.moving,
             self.radius,
+            np.empty((lanes.shape[0], self.known.shape[1]), dtype=bool),
         )
 
     def forget(self, lanes: IntArray) -> None:
@@ -92,18 +93,21 @@ def eligible(
     grid_dt: float,
     moving: bool,
     radius: float,
+    out: BoolArray,
 ) -> BoolArray:
     """RememberedTargets.eligible's loop: the answers of the stale lanes recomputed in place
-    (``known``, ``until``), then every exact lane's row. ``visible`` is the tracks' top speed
-    before this round's growth: a higher one than ``speed[0]`` voids every window first."""
+    (``known``, ``until``), then every lane's row of ``out`` (n, m), which it returns: not
+    known on the exact lanes, True on the others. ``visible`` is the tracks' top speed before
+    this round's growth: a higher one than ``speed[0]`` voids every window first."""
     if visible > speed[0]:
         speed[0] = visible
         until[:] = -np.inf
     n, m = lanes.shape[0], known.shape[1]
-    out = np.ones((n, m), dtype=np.bool_)
     r2 = radius * radius
     for i in range(n):
         if not exact[i]:
+            for j in range(m):
+                out[i, j] = True
             continue
         lane = lanes[i]
         if t[i] >= until[lane]:

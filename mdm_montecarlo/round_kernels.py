@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from mdm_core.jit import compiled
 from mdm_core.world.targets import NODE_EPS
 from mdm_montecarlo.compiled_step import DISC, nearest2
-from mdm_montecarlo.entry_kernel import entry_times_of
+from mdm_montecarlo.entry_kernel import entry_row
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -52,17 +52,17 @@ def legs(
     lanes: IntArray,
     runs: IntArray,
     speed: float,
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, float]:
-    """Per lane: unit vector to the waypoint (n, 2), leg seconds, seconds to the deadline
-    (SearchPolicy.deadline), horizon seconds; and the latest time any leg reaches (for the
-    tracks' growth)."""
-    n = lanes.shape[0]
-    unit = np.zeros((n, 2))
-    leg = np.empty(n)
-    left = np.empty(n)
-    horizon = np.empty(n)
+    unit: FloatArray,
+    leg: FloatArray,
+    left: FloatArray,
+    horizon: FloatArray,
+) -> float:
+    """Per lane, written to the (n,) and (n, 2) arrays it is given: unit vector to the waypoint
+    ``unit``, leg seconds ``leg``, seconds to the deadline ``left`` (SearchPolicy.deadline),
+    horizon seconds ``horizon``. Returns the latest time any leg reaches (for the tracks'
+    growth)."""
     until = 0.0
-    for i in range(n):
+    for i in range(lanes.shape[0]):
         lane = lanes[i]
         t = time[lane]
         ox = waypoint[lane, 0] - position[lane, 0]
@@ -71,6 +71,9 @@ def legs(
         if dist > 0:
             unit[i, 0] = ox / dist
             unit[i, 1] = oy / dist
+        else:
+            unit[i, 0] = 0.0
+            unit[i, 1] = 0.0
         leg[i] = dist / speed
         deadline = entered[lane] + lifetimes[level[lane]]
         if math.isfinite(blind_until[lane]) and level[lane] == 0:
@@ -78,7 +81,7 @@ def legs(
         left[i] = deadline - t
         horizon[i] = max(min(leg[i], left[i], stop[runs[i]] - t), 0.0)
         until = max(until, t + horizon[i])
-    return unit, leg, left, horizon, until
+    return until
 
 
 @compiled
@@ -107,84 +110,85 @@ def advance(
     target_speed: float,
     moving: bool,
     speed: float,
-) -> tuple[BoolArray, BoolArray, FloatArray]:
+    entry: FloatArray,
+    reached: BoolArray,
+    contacts: BoolArray,
+    where: FloatArray,
+) -> None:
     """Fly every lane to its next event: ``position`` and ``time`` are updated in place.
 
     ``eligible`` (n, m) comes in with the remembered targets of the lanes that check exactly
-    cleared. Returns the lanes that reached their waypoint, the contacts (n, m) and the
-    contacted targets' positions (n, m, 2; only the contacts' entries are written: the policy
-    step reads no other)."""
+    cleared. Writes the lanes that reached their waypoint ``reached`` (n,), the contacts
+    ``contacts`` (n, m) and the contacted targets' positions ``where`` (n, m, 2; only the
+    contacts' entries are written: the policy step reads no other). ``entry`` (m,) holds one
+    lane's entry times at a time. A lane's event depends on its own state and the targets
+    only, so each lane is flown through before the next."""
     n, m = eligible.shape
     last = radii.shape[0] - 1
-    start = np.empty((n, 2))
-    velocity = np.empty((n, 2))
-    radius = np.empty(n)
-    t = np.empty(n)
     for i in range(n):
         lane = lanes[i]
         lvl = level[lane]
-        t[i] = time[lane]
-        start[i, 0] = position[lane, 0]
-        start[i, 1] = position[lane, 1]
-        velocity[i, 0] = unit[i, 0] * speed
-        velocity[i, 1] = unit[i, 1] * speed
-        radius[i] = radii[lvl]
+        t = time[lane]
+        start_x = position[lane, 0]
+        start_y = position[lane, 1]
+        vx = unit[i, 0] * speed
+        vy = unit[i, 1] * speed
         detecting = lvl < last
-        ignored = detecting and t[i] < blind_until[lane]
+        ignored = detecting and t < blind_until[lane]
         if detection_memory == DISC:
-            near = nearest2(memory, memory_count[lane], lane, start[i, 0], start[i, 1])
+            near = nearest2(memory, memory_count[lane], lane, start_x, start_y)
             ignored = ignored or (detecting and near < radii[lvl] ** 2)
         for j in range(m):
             if ignored or (lvl == last and false_mask[j]):
                 eligible[i, j] = False
-    entry = entry_times_of(
-        start,
-        velocity,
-        horizon,
-        t,
-        runs,
-        radius,
-        eligible,
-        appear,
-        seg_start,
-        seg_velocity,
-        grid_dt,
-        target_speed,
-        moving,
-    )
-    reached = np.zeros(n, dtype=np.bool_)
-    contacts = np.zeros((n, m), dtype=np.bool_)
-    where = np.empty((n, m, 2))
-    for i in range(n):
-        lane = lanes[i]
+        row = runs[i] if moving else 0
+        entry_row(
+            start_x,
+            start_y,
+            vx,
+            vy,
+            horizon[i],
+            t,
+            row,
+            radii[lvl],
+            eligible,
+            i,
+            appear,
+            seg_start,
+            seg_velocity,
+            grid_dt,
+            target_speed,
+            moving,
+            entry,
+        )
         soonest = np.inf
         for j in range(m):
-            soonest = min(soonest, entry[i, j])
+            soonest = min(soonest, entry[j])
         hit = soonest <= horizon[i]
-        new_t = t[i] + (soonest if hit else horizon[i])
+        new_t = t + (soonest if hit else horizon[i])
         if not hit and horizon[i] == left[i]:
             # Land exactly on a deadline so the policy sees the index run out (no float creep).
-            new_t = t[i] + left[i]
+            new_t = t + left[i]
         step = soonest if hit else horizon[i]
-        if not hit and horizon[i] >= leg[i]:
-            reached[i] = True
+        reached[i] = not hit and horizon[i] >= leg[i]
+        if reached[i]:
             position[lane, 0] = waypoint[lane, 0]
             position[lane, 1] = waypoint[lane, 1]
         else:
-            position[lane, 0] = start[i, 0] + velocity[i, 0] * step
-            position[lane, 1] = start[i, 1] + velocity[i, 1] * step
+            position[lane, 0] = start_x + vx * step
+            position[lane, 1] = start_y + vy * step
         time[lane] = new_t
         if not hit:
+            for j in range(m):
+                contacts[i, j] = False
             continue
-        row = runs[i] if moving else 0
         k = math.floor(new_t / grid_dt + NODE_EPS) if moving else 0
         offset = new_t - k * grid_dt if moving else 0.0
         for j in range(m):
-            contacts[i, j] = entry[i, j] <= soonest + CONTACT_EPS
+            contacts[i, j] = entry[j] <= soonest + CONTACT_EPS
             if contacts[i, j]:
                 where[i, j, 0] = seg_velocity[row, k, j, 0] * offset + seg_start[row, k, j, 0]
                 where[i, j, 1] = seg_velocity[row, k, j, 1] * offset + seg_start[row, k, j, 1]
-    return reached, contacts, where
 
 
 @compiled

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mdm_core.world import Scenario, TargetTracks, first_entry_time
-from mdm_montecarlo.entry_kernel import entry_times_of
+from mdm_montecarlo.entry_kernel import entry_row
 from mdm_profiles import builtin_profile
 
 RUNS = 200
@@ -81,21 +81,27 @@ def test_kernel_equals_the_numpy_closed_form_on_random_legs(profile_name: str) -
     appear = scenario.targets.appear_times
 
     seg_start, seg_velocity = tracks.segments(float(np.max(t + leg.duration)))
-    got = entry_times_of(
-        leg.start,
-        leg.velocity,
-        leg.duration,
-        t,
-        runs,
-        radius,
-        eligible,
-        appear,
-        seg_start,
-        seg_velocity,
-        tracks.grid_dt,
-        tracks.max_speed,
-        tracks.moving,
-    )
+    got = np.empty(eligible.shape)
+    for i in range(LANES):
+        entry_row(
+            leg.start[i, 0],
+            leg.start[i, 1],
+            leg.velocity[i, 0],
+            leg.velocity[i, 1],
+            leg.duration[i],
+            t[i],
+            runs[i] if tracks.moving else 0,
+            radius[i],
+            eligible,
+            i,
+            appear,
+            seg_start,
+            seg_velocity,
+            tracks.grid_dt,
+            tracks.max_speed,
+            tracks.moving,
+            got[i],
+        )
     expected = _piecewise(tracks, runs, t, leg, radius, eligible, appear)
 
     np.testing.assert_array_equal(got, expected)
