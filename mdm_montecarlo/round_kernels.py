@@ -135,9 +135,9 @@ def advance(
         vy = unit[i, 1] * speed
         detecting = lvl < last
         ignored = detecting and t < blind_until[lane]
-        if detection_memory == DISC:
-            near = nearest2(memory, memory_count[lane], lane, start_x, start_y)
-            ignored = ignored or (detecting and near < radii[lvl] ** 2)
+        if detection_memory == DISC and detecting and not ignored:
+            # Only where it decides: the distance to the remembered targets.
+            ignored = nearest2(memory, memory_count[lane], lane, start_x, start_y) < radii[lvl] ** 2
         for j in range(m):
             if ignored or (lvl == last and false_mask[j]):
                 eligible[i, j] = False
