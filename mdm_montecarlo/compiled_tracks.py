@@ -11,7 +11,10 @@ rest with the numpy version's operations in its order: the same paths bit for bi
 
 from __future__ import annotations
 
+import json
 import math
+import threading
+from collections import OrderedDict
 
 import numpy as np
 from numpy.typing import NDArray
@@ -50,6 +53,51 @@ class CompiledTracks(TargetTracks):
         )
         self._max_speed = max(self._max_speed, float(np.sqrt(speed2)))
         self._filled = end
+
+
+def shared_tracks(
+    scenario: Scenario, n_runs: int, rng: np.random.Generator, horizon: float
+) -> TargetTracks:
+    """compiled_tracks, drawn once per thread for every block that asks for the same paths.
+
+    A block's targets are drawn from a stream of its own seed and block number whatever the
+    configuration (common random numbers), so every configuration of a scenario with moving
+    targets walks the same paths in block b: the first to ask draws them, the next ones read
+    them (and draw further where they need to). The paths depend only on the targets' start
+    points, the area, the walk, the grid, the number of runs and the stream's state; growing
+    them in the same chunks from the same stream gives the same segments whoever asks, so
+    results are those of tracks drawn afresh (tests/montecarlo/test_shared_tracks.py). The
+    last ``KEPT`` are kept, per thread (a thread grows only its own)."""
+    if scenario.walk is None:
+        return compiled_tracks(scenario, n_runs, rng, horizon)
+    spec = scenario.targets
+    key = (
+        spec.positions.tobytes(),
+        spec.positions.shape,
+        repr(scenario.area),
+        repr(scenario.walk),
+        scenario.grid_dt,
+        n_runs,
+        json.dumps(rng.bit_generator.state, sort_keys=True),
+    )
+    kept: OrderedDict[tuple[object, ...], TargetTracks] = _kept.__dict__.setdefault(
+        "tracks", OrderedDict()
+    )
+    tracks = kept.get(key)
+    if tracks is None:
+        tracks = compiled_tracks(scenario, n_runs, rng, horizon)
+        kept[key] = tracks
+        while len(kept) > KEPT:
+            kept.popitem(last=False)
+    else:
+        kept.move_to_end(key)
+    return tracks
+
+
+KEPT = 2
+"""Paths kept per thread: every moving-target scenario of a study's block (about 50 MB each for
+1000 runs to reproduce's 40 000 s cap)."""
+_kept = threading.local()
 
 
 def compiled_tracks(

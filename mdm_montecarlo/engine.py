@@ -34,7 +34,7 @@ from mdm_core.search.from_profile import policy_config
 from mdm_core.world import Scenario
 from mdm_montecarlo.block_rounds import DONE, fly_rounds
 from mdm_montecarlo.compiled_step import CompiledPolicy
-from mdm_montecarlo.compiled_tracks import compiled_tracks
+from mdm_montecarlo.compiled_tracks import shared_tracks
 from mdm_montecarlo.compiled_waypoints import RULES
 from mdm_montecarlo.remembered import RememberedTargets
 from mdm_profiles import MissionProfile
@@ -74,7 +74,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     speed = profile.fleet.speed
     duration = profile.mission.duration
     cap = max(profile.mission.ts_cap, duration)
-    tracks = compiled_tracks(scenario, n_runs, rng_targets, cap)
+    tracks = shared_tracks(scenario, n_runs, rng_targets, cap)
     start = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
 
     n = n_runs * n_vehicles

@@ -61,7 +61,7 @@ from mdm_core.search.pso import Best, SwarmConfig, forget
 from mdm_core.search.swarm_iteration import BestOf, explore
 from mdm_core.world import Scenario
 from mdm_montecarlo import swarm_kernels as kernels
-from mdm_montecarlo.compiled_tracks import compiled_tracks
+from mdm_montecarlo.compiled_tracks import shared_tracks
 from mdm_montecarlo.compiled_waypoints import CompiledWaypoints
 from mdm_montecarlo.engine import BlockResult, block_rngs
 from mdm_montecarlo.swarm_sensors import SwarmSensors
@@ -194,7 +194,7 @@ def run_swarm_block(
     targets = scenario.targets
     real = ~targets.false_mask
     sensors = SwarmSensors(
-        tracks=compiled_tracks(
+        tracks=shared_tracks(
             scenario, n_runs, rng_targets, max(profile.mission.ts_cap, profile.mission.duration)
         ),
         runs=np.arange(n_runs),

@@ -42,7 +42,7 @@ from mdm_core.world import Scenario
 from mdm_montecarlo import swarm_kernels as kernels
 from mdm_montecarlo import waypoint_legs
 from mdm_montecarlo.compiled_step import CompiledPolicy
-from mdm_montecarlo.compiled_tracks import compiled_tracks
+from mdm_montecarlo.compiled_tracks import shared_tracks
 from mdm_montecarlo.compiled_waypoints import RULES
 from mdm_montecarlo.engine import BlockResult, block_rngs
 from mdm_montecarlo.swarm_sensors import NEAR
@@ -72,7 +72,7 @@ def run_waypoint_swarm_block(
     times = _step_times(dt, stop)
     last = len(times) - 1
     targets = scenario.targets
-    tracks = compiled_tracks(scenario, n_runs, rng_targets, stop)
+    tracks = shared_tracks(scenario, n_runs, rng_targets, stop)
     seg_start, seg_velocity = tracks.segments(float(times[-1]))
     radius = signal_radius(profile)
     position = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)

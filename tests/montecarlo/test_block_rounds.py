@@ -33,7 +33,7 @@ def test_paths_drawn_as_needed_give_the_same_block_as_paths_drawn_first(
         monkeypatch.setattr(tracks, "segments", grow)
         return tracks
 
-    monkeypatch.setattr(engine, "compiled_tracks", counted)
+    monkeypatch.setattr(engine, "shared_tracks", counted)
     lazy = engine.run_block(profile, 5, 0, 40)
     # Not vacuous: the loop came back for more path many times, mid-block.
     assert sum(g > 0 for g in growths) >= 3
@@ -45,7 +45,7 @@ def test_paths_drawn_as_needed_give_the_same_block_as_paths_drawn_first(
         tracks.segments(horizon)
         return tracks
 
-    monkeypatch.setattr(engine, "compiled_tracks", drawn_first)
+    monkeypatch.setattr(engine, "shared_tracks", drawn_first)
     eager = engine.run_block(profile, 5, 0, 40)
     np.testing.assert_array_equal(lazy.per_vehicle, eager.per_vehicle)
     assert lazy.events == eager.events
