@@ -58,7 +58,7 @@ from numpy.typing import NDArray
 
 from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.pso import Best, SwarmConfig, forget
-from mdm_core.search.swarm_iteration import BestOf, explore
+from mdm_core.search.swarm_iteration import BestOf
 from mdm_core.world import Scenario
 from mdm_montecarlo import swarm_kernels as kernels
 from mdm_montecarlo.compiled_tracks import shared_tracks
@@ -236,7 +236,7 @@ def run_swarm_block(
         best_of = _best_of_linked_peers if config.variant == "spso" else _best_of_all_peers
         heard, heard_current = _heard_from_own(own), _to_every_receiver(current)
 
-    waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
+    waypoint = explorer.explore(position.reshape(n, 2), rng).reshape(*shape, 2)
     targets_now = sensors.motion(0.0)
     # Only the distances: the first reading is taken after the first step.
     everyone = np.ones(shape, dtype=bool)
@@ -271,7 +271,7 @@ def run_swarm_block(
         # Particles that lost their best go back to exploring from where they are.
         lost = guided & ~follow
         if lost.any():
-            waypoint[lost] = explore(explorer, position[lost], rng)
+            waypoint[lost] = explorer.explore(position[lost], rng)
         new_position, step, reached, longest = kernels.fly(
             position, swarm_move, follow, waypoint, speed * dt, area
         )
@@ -285,7 +285,7 @@ def run_swarm_block(
         steps += 1
 
         if reached.any():
-            waypoint[reached] = explore(explorer, position[reached], rng)
+            waypoint[reached] = explorer.explore(position[reached], rng)
 
         # Fitness: the signal sensor, targets known to be confirmed left out.
         targets_now = sensors.motion(t)

@@ -37,7 +37,6 @@ from numpy.typing import NDArray
 
 from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.pso import Best, SwarmConfig
-from mdm_core.search.swarm_iteration import explore
 from mdm_core.world import Scenario
 from mdm_montecarlo import swarm_kernels as kernels
 from mdm_montecarlo import waypoint_legs
@@ -84,7 +83,7 @@ def run_waypoint_swarm_block(
     links = np.broadcast_to(~np.eye(n_vehicles, dtype=bool), (*shape, n_vehicles)).copy()
     if config.variant == "spso":
         links = kernels.informants(rng.random((n_runs, n_vehicles, n_vehicles)), spec.informants)
-    waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
+    waypoint = explorer.explore(position.reshape(n, 2), rng).reshape(*shape, 2)
     assert explorer.table is not None  # else explore raised the numpy draws' error
     end, iterations, followed = fly_waypoints(
         VARIANTS[config.variant],

@@ -12,6 +12,7 @@ from mdm_core.search import Observation, SearchPolicy
 from mdm_core.search.from_profile import policy_config
 from mdm_core.search.levels import PolicyConfig
 from mdm_core.search.policy import PolicyState
+from mdm_core.search.swarm_iteration import explore
 from mdm_montecarlo.compiled_step import CompiledPolicy
 from mdm_profiles import builtin_profile
 
@@ -124,3 +125,16 @@ def test_start_waypoints_equal_the_numpy_policy() -> None:
     b = CompiledPolicy(config).start(start, np.zeros(LANES), np.random.default_rng(2))
     _assert_same_state(b, a)
     assert not np.array_equal(a.waypoint, start)
+
+
+@pytest.mark.parametrize("config", _variants())
+def test_explore_is_the_swarms_explore_without_its_state(config: PolicyConfig) -> None:
+    """CompiledWaypoints.explore: swarm_iteration.explore's level-1 waypoints, bit for bit, and
+    the stream left where it leaves it (the swarm engines call it thousands of times)."""
+    start = np.random.default_rng(3).uniform(0, 20000, (LANES, 2))
+    policy = CompiledPolicy(config)
+    ours, theirs = np.random.default_rng(4), np.random.default_rng(4)
+    got = policy.explore(start, ours)
+    np.testing.assert_array_equal(got, explore(SearchPolicy(config), start, theirs))
+    assert ours.bit_generator.state == theirs.bit_generator.state
+    assert not np.array_equal(got, start)
