@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from sim_vehicle_stub.cli import main as sim_vehicle_main
-from tests.emulator_harness import Client, make_config, mavutil, running_emulator
+from tests.emulator_harness import Client, free_udp_base, make_config, mavutil, running_emulator
 
 
 @pytest.mark.timeout(60)
@@ -92,14 +92,15 @@ def test_bad_commands_get_nacks_and_nothing_breaks() -> None:
 def test_sim_vehicle_cli_runs_vehicles_and_writes_events_and_stats(tmp_path: Path) -> None:
     events, stats = tmp_path / "events.jsonl", tmp_path / "stats.json"
     exe = Path(sys.executable).parent / "sim-vehicle"
+    base = free_udp_base(3, gap=80)  # send to base.., bound on base + 80..
     cmd = [
         str(exe), "--profile", "paper-popup", "-n", "3", "--persona", "px4,ardupilot",
-        "--base-port", "25300", "--bind-port-base", "25380", "--speedup", "50",
+        "--base-port", str(base), "--bind-port-base", str(base + 80), "--speedup", "50",
         "--duration", "250", "--events", str(events), "--stats", str(stats), "--log-level", "WARNING",
     ]  # fmt: skip
     proc = subprocess.Popen(cmd, env={**os.environ, "MAVLINK20": "1"})
     try:
-        with Client(25301, 2) as c:
+        with Client(base + 1, 2) as c:
             hb = c.pump(10, lambda m: m.get_type() == "HEARTBEAT")
             assert hb is not None
             assert hb.autopilot == 3

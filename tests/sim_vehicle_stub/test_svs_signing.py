@@ -13,7 +13,7 @@ import pytest
 
 from mavlink_signing import passphrase_to_secret
 from sim_vehicle_stub.cli import main as sim_vehicle_main
-from tests.emulator_harness import Client, make_config, running_emulator
+from tests.emulator_harness import Client, free_udp_base, make_config, running_emulator
 
 log = logging.getLogger(__name__)
 KEY = passphrase_to_secret("mdm-signing-test")
@@ -39,8 +39,9 @@ def _armed(c: Client) -> bool:
 
 @pytest.mark.timeout(90)
 def test_signed_client_arms_takes_off_and_flies_offboard_under_signing(tmp_path: Path) -> None:
-    config = make_config(1, 25300, signing_key=KEY, events=tmp_path / "events.jsonl")
-    with running_emulator(config) as emu, _signed(Client(25300, 1), KEY) as c:
+    base = free_udp_base(1)
+    config = make_config(1, base, signing_key=KEY, events=tmp_path / "events.jsonl")
+    with running_emulator(config) as emu, _signed(Client(base, 1), KEY) as c:
         hb = c.pump(5, lambda m: m.get_type() == "HEARTBEAT")
         assert hb is not None
         assert hb.get_signed()  # pymavlink with the key verified the vehicle's signature
