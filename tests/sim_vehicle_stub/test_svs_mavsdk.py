@@ -95,9 +95,11 @@ async def _fly(sysid: int, system: Any, gcs: GcsListener) -> None:
 
 @pytest.mark.timeout(120)
 def test_mavsdk_connects_to_12_vehicles_and_flies_offboard_velocity_and_position() -> None:
-    base = free_udp_base(N + 1)
+    # The vehicles' own ports in a probed range too: bound to port 0, one could land on a port
+    # MAVSDK is about to listen on (CI rehearsal: "Connection failed: BIND_ERROR").
+    base = free_udp_base(N + 1, gap=N + 1)
     gcs_port = base + N  # the emulator's ground-station output
-    cfg = make_config(N, base, gcs=True, gcs_port=gcs_port)
+    cfg = make_config(N, base, gcs=True, gcs_port=gcs_port, bind_port_base=base + N + 1)
 
     async def main() -> None:
         loop = asyncio.get_running_loop()
