@@ -285,18 +285,8 @@ class CompiledWaypoints(CompiledMemoryPolicy):
     ) -> FloatArray:
         if self._table is None:
             return super()._next_waypoints(state, lanes, position, rng)
-        return np.asarray(
-            next_waypoints(
-                self._table,
-                state.level[lanes],
-                state.anchor[lanes],
-                np.ascontiguousarray(position, dtype=np.float64),
-                self._bounds,
-                RULES[self.config.out_of_area],
-                self.config.waypoint_origin == "anchor",
-                self.config.confine_to_detection,
-                rng,
-            )
+        return self._compiled_draw(
+            self._table, state.level[lanes], state.anchor[lanes], position, rng
         )
 
     def explore(self, position: FloatArray, rng: np.random.Generator) -> FloatArray:
@@ -306,12 +296,25 @@ class CompiledWaypoints(CompiledMemoryPolicy):
         if self._table is None:
             return explore(self, position, rng)
         start = np.array(position, dtype=float)
+        return self._compiled_draw(
+            self._table, np.zeros(len(start), dtype=np.intp), start.copy(), start, rng
+        )
+
+    def _compiled_draw(
+        self,
+        table: FloatArray,
+        level: IntArray,
+        anchor: FloatArray,
+        position: FloatArray,
+        rng: np.random.Generator,
+    ) -> FloatArray:
+        """next_waypoints for lanes at ``level`` with these anchors and positions."""
         return np.asarray(
             next_waypoints(
-                self._table,
-                np.zeros(len(start), dtype=np.intp),
-                start.copy(),
-                start,
+                table,
+                level,
+                anchor,
+                np.ascontiguousarray(position, dtype=np.float64),
                 self._bounds,
                 RULES[self.config.out_of_area],
                 self.config.waypoint_origin == "anchor",
