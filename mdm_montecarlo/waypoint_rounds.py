@@ -303,33 +303,36 @@ def fly_waypoints(
     flat = position.reshape(n, 2)
     arrival_step = np.empty(n, dtype=np.intp)
     arrival = np.empty((n, 2))
-    walk_legs(
-        np.arange(n),
-        flat,
-        waypoint.reshape(n, 2),
-        0,
-        times,
-        dt,
-        distance,
-        area,
-        n_vehicles,
-        seg_start,
-        seg_velocity,
-        grid_dt,
-        moving,
-        top_speed,
-        appear,
-        real,
-        confirm_radius,
-        known_step,
-        conf_time,
-        conf_step,
-        arrival_step,
-        arrival,
-    )
+    # Every particle's first leg from step 0, then the legs of each step's arrivals.
+    starting = np.arange(n)
+    begin = 0
     iterations = 0
     followed = 0
     while True:
+        walk_legs(
+            starting,
+            flat,
+            waypoint.reshape(n, 2),
+            begin,
+            times,
+            dt,
+            distance,
+            area,
+            n_vehicles,
+            seg_start,
+            seg_velocity,
+            grid_dt,
+            moving,
+            top_speed,
+            appear,
+            real,
+            confirm_radius,
+            known_step,
+            conf_time,
+            conf_step,
+            arrival_step,
+            arrival,
+        )
         due = arrival_step.min()
         all_known = 0
         for r in range(runs):
@@ -393,29 +396,8 @@ def fly_waypoints(
             area,
             rng,
         )
-        walk_legs(
-            arrived,
-            flat,
-            waypoint.reshape(n, 2),
-            due,
-            times,
-            dt,
-            distance,
-            area,
-            n_vehicles,
-            seg_start,
-            seg_velocity,
-            grid_dt,
-            moving,
-            top_speed,
-            appear,
-            real,
-            confirm_radius,
-            known_step,
-            conf_time,
-            conf_step,
-            arrival_step,
-            arrival,
-        )
         if end == due:
+            # The stepped loop stops after this step's arrivals: their next legs are not flown.
             return end, iterations, followed
+        starting = arrived
+        begin = due
