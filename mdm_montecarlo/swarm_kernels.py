@@ -15,6 +15,7 @@ so on those machines the swarm rows differ from the numpy engine's before this m
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -63,16 +64,27 @@ def sense(
                     closest = gap
                 # The strength only where the target could be read (the cheap tests first).
                 if read and gap < near and appear[k] <= t and not known[r, i, k]:
-                    distance = math.sqrt(gap)
-                    if distance < radius:
-                        strength = math.exp(-distance / radius)
-                        if strength > THRESHOLD and strength > best:
-                            best = strength
-                            found = k
+                    strength = signal(gap, radius)
+                    if strength > best:
+                        best = strength
+                        found = k
             if read:
                 fitness[r, i] = best
                 source[r, i] = found
             nearest[r, i] = closest
+
+
+@partial(compiled, inline=True)
+def signal(gap: float, radius: float) -> float:
+    """The signal sensor's reading of a target ``gap`` (squared metres) away: exp(-d / radius)
+    within ``radius`` where it is above THRESHOLD, else 0 (mdm_core.search.pso.signal_fitness's
+    strength, the C library's exp)."""
+    distance = math.sqrt(gap)
+    if distance < radius:
+        strength = math.exp(-distance / radius)
+        if strength > THRESHOLD:
+            return strength
+    return 0.0
 
 
 @compiled

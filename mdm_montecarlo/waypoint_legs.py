@@ -17,14 +17,15 @@ engine keeps a vehicle's confirmation only where it was made in that step (``kee
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mdm_core.jit import compiled
-from mdm_core.world.sensors import THRESHOLD
 from mdm_core.world.targets import NODE_EPS
 from mdm_montecarlo.entry_kernel import disc_entry
+from mdm_montecarlo.swarm_kernels import signal
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -158,11 +159,7 @@ def _fly(
         flying = 0
         for i in range(x.shape[0]):
             going = arrived[i] > last
-            scale = min(1.0, distance / max(gap[i], 1e-12))
-            nx = min(max(x[i] + (wx[i] - x[i]) * scale, 0.0), width)
-            ny = min(max(y[i] + (wy[i] - y[i]) * scale, 0.0), height)
-            # fly's distance left, which is the next step's gap as well.
-            left = math.sqrt((wx[i] - nx) * (wx[i] - nx) + (wy[i] - ny) * (wy[i] - ny))
+            nx, ny, left = _step(x[i], y[i], wx[i], wy[i], gap[i], distance, width, height)
             x[i] = nx if going else x[i]
             y[i] = ny if going else y[i]
             gap[i] = left if going else gap[i]
@@ -203,9 +200,7 @@ def _confirm_on_leg(
     q = begin
     while q < last:
         q += 1
-        scale = min(1.0, distance / max(gap, 1e-12))
-        nx = min(max(x + (wx - x) * scale, 0.0), area[0])
-        ny = min(max(y + (wy - y) * scale, 0.0), area[1])
+        nx, ny, left = _step(x, y, wx, wy, gap, distance, area[0], area[1])
         for j in candidates:
             if conf_step[p, j] <= last:
                 continue
@@ -231,9 +226,29 @@ def _confirm_on_leg(
                 known_step[run, j] = min(known_step[run, j], q)
         x = nx
         y = ny
-        gap = math.sqrt((wx - x) * (wx - x) + (wy - y) * (wy - y))
+        gap = left
         if gap <= 1e-6:
             return
+
+
+@partial(compiled, inline=True)
+def _step(
+    x: float,
+    y: float,
+    wx: float,
+    wy: float,
+    gap: float,
+    distance: float,
+    width: float,
+    height: float,
+) -> tuple[float, float, float]:
+    """One step of swarm_kernels.fly from (x, y) towards (wx, wy), ``gap`` away: at most
+    ``distance``, clipped to the area (0 .. width, 0 .. height). Returns the new position and
+    fly's distance left, which is the next step's gap as well."""
+    scale = min(1.0, distance / max(gap, 1e-12))
+    nx = min(max(x + (wx - x) * scale, 0.0), width)
+    ny = min(max(y + (wy - y) * scale, 0.0), height)
+    return nx, ny, math.sqrt((wx - nx) * (wx - nx) + (wy - ny) * (wy - ny))
 
 
 @compiled
@@ -349,12 +364,10 @@ def read_arrivals(
             gap = dx * dx + dy * dy
             known = unread_known and known_step[run, k] <= now
             if gap < near and appear[k] <= t and not known:
-                d = math.sqrt(gap)
-                if d < radius:
-                    strength = math.exp(-d / radius)
-                    if strength > THRESHOLD and strength > best:
-                        best = strength
-                        found = k
+                strength = signal(gap, radius)
+                if strength > best:
+                    best = strength
+                    found = k
         fitness[p] = best
         source[p] = found
 
