@@ -34,8 +34,8 @@ from code_commit import commit_of
 from pymavlink import mavutil
 
 import companion
-from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry.mission_log import read_records
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
 
 _TICK = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
 

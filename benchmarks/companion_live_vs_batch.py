@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from companion.fleet.runner import FleetOptions, run_fleet
 from mdm_core.metrics import confirmed_within, team_times
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
 from mdm_montecarlo.engine import run_block
 from mdm_profiles import load_profile
 

@@ -20,10 +20,10 @@ import dataclasses
 import numpy as np
 
 from companion.fence_from_profile import fence_for, guidance_fence
-from companion.fleet.flight_checks import NEAR_FENCE_M
 from mdm_core.search import Observation, SearchPolicy
 from mdm_core.search.from_profile import policy_config
 from mdm_core.world import Scenario
+from mdm_ground.fleet.flight_checks import NEAR_FENCE_M
 from mdm_profiles import builtin_profile
 
 

@@ -1,5 +1,5 @@
-"""The `companion` command: `run` flies one vehicle, `fleet` runs the emulator and N companions,
-`map` draws a run directory's map."""
+"""The `companion` command: `run` flies one vehicle; the ground tools add `fleet` (the emulator
+and N companions), `map`, `profile` and `watch` (:mod:`companion.ground_tools`)."""
 
 from __future__ import annotations
 
@@ -14,16 +14,13 @@ from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
+from companion import ground_tools
 from companion.autopilots import FlightMode
-from companion.fleet.cli_args import add_fleet_parser
 from companion.fly import REFUSED, STOPPED_BY_SECOND_SIGNAL, check_flight, fly
 from companion.link.factory import BACKENDS, Backend, make_link
-from companion.live_web.cli_args import add_watch_parser
 from companion.mission import MissionConfig
 from companion.mission.mission_exit import MissionExit
-from companion.run_map.cli_args import add_map_parser, map_after_run, map_command
 from companion.sensors.factory import SENSOR_SOURCES
-from companion.site_files.cli_args import add_profile_parser
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
 from mavlink_signing import ENV_VAR, load_signing_key
 from mdm_core.ports import VEHICLE_UDP_BASE
@@ -85,22 +82,23 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     add_mqtt_arguments(p)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The `companion` command line: `run` and `fleet`."""
+def build_parser(
+    tools: ground_tools.GroundTools | str | None = None,
+) -> argparse.ArgumentParser:
+    """The `companion` command line: `run` and the ground tools' subcommands (``tools``, by
+    default whatever :func:`ground_tools.load` finds)."""
     parser = argparse.ArgumentParser(prog="companion", description=__doc__)
     add_version_flag(parser)
     sub = parser.add_subparsers(dest="command", required=True)
     _run_parser(sub)
-    add_fleet_parser(sub)
-    add_map_parser(sub)
-    add_profile_parser(sub)
-    add_watch_parser(sub)
+    ground_tools.add_parsers(sub, ground_tools.load() if tools is None else tools)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `companion` command."""
-    args = build_parser().parse_args(argv)
+    tools = ground_tools.load()
+    args = build_parser(tools).parse_args(argv)
     logging.basicConfig(
         level=logging.DEBUG if getattr(args, "verbose", False) else logging.INFO,
         format="%(asctime)s %(levelname)s %(name)s: %(message)s",
@@ -108,19 +106,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "run":
             return run_command(args)
-        if args.command == "map":
-            return map_command(args)
-        if args.command == "profile":
-            from companion.site_files.commands import profile_command
-
-            return profile_command(args)
-        if args.command == "watch":
-            from companion.live_web.commands import watch_command
-
-            return watch_command(args)
-        from companion.fleet.command import fleet_command
-
-        return fleet_command(args)
+        if isinstance(tools, str):
+            return ground_tools.refused(args.command, tools)
+        return tools.run(args)
     except ProfileError as exc:
         print(f"companion: {exc}", file=sys.stderr)
         return 2
@@ -191,7 +179,7 @@ def _say_end(vehicle: int, reason: str, end: MissionExit | None) -> None:
 def _map(config: MissionConfig, reason: str, skip: bool) -> None:
     """The run's map, unless asked for none or a second signal asked to exit at once."""
     if not skip and reason != STOPPED_BY_SECOND_SIGNAL:
-        map_after_run(config.log_dir, config.profile, [config.vehicle], f"map-{config.vehicle}")
+        ground_tools.draw_run_map(config.log_dir, config.profile, config.vehicle)
 
 
 def _exit_status(reason: str, end: MissionExit | None) -> int:

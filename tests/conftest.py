@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from companion.fleet.sitl_team import INSTANCE_BASE_ENV
+from mdm_ground.fleet.sitl_team import INSTANCE_BASE_ENV
 from tests import parallel, sitl
 from tests.markers import MARKERS, markers_for
 from tests.mqtt_harness import clear_retained_of_this_run

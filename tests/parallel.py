@@ -20,16 +20,16 @@ DOCKER_SITL_BASE = 2 * LANE_WIDTH
 DEFAULT_S = 120.0
 
 MEASURED_S: dict[str, float] = {
-    "tests/companion/test_fleet_sitl_team.py": 595.0,
+    "tests/ground/test_fleet_sitl_team.py": 595.0,
     "tests/companion/test_sitl_flights.py": 498.0,
-    "tests/companion/test_fleet_file_sitl.py": 145.0,
+    "tests/ground/test_fleet_file_sitl.py": 145.0,
     "tests/companion/test_sensor_sources_sitl.py": 134.0,
     "tests/sim_vehicle_stub/test_svs_differential.py": 119.0,
     "tests/companion/test_lying_link_sitl.py": 58.0,
     "tests/companion/test_plan_fence_sitl.py": 53.0,
     "tests/companion/test_field_mission_sitl.py": 47.0,
     "tests/mavlink_conformance/test_conformance_sitl.py": 42.0,
-    "tests/companion/test_run_map_own_origin.py": 35.0,
+    "tests/ground/test_run_map_own_origin.py": 35.0,
 }
 """Wall seconds per SITL module in the last measured run (README "Tests")."""
 

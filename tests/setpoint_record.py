@@ -49,8 +49,8 @@ from typing import Any
 from pymavlink import mavutil
 
 import companion
-from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry.mission_log import read_records
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
 
 PROFILE = """
 name: setpoint-record

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from companion.fleet.sitl_team import INSTANCE_BASE_ENV, companion_link, ports_free, sitl_ports
+from mdm_ground.fleet.sitl_team import INSTANCE_BASE_ENV, companion_link, ports_free, sitl_ports
 
 Kind = Literal["arducopter", "px4"]
 

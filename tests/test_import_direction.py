@@ -1,4 +1,6 @@
-"""Imports run one way: mdm_profiles <- mdm_core <- {companion, sim_vehicle_stub, mdm_montecarlo}.
+"""Imports run one way: mdm_profiles <- mdm_core <- {companion, sim_vehicle_stub, mdm_montecarlo},
+and companion (the vehicle side) <- mdm_ground (the ground tools), never back: a vehicle installed
+without the ground tools' dependencies still runs ``companion run``.
 
 Every import statement of every module (also those inside functions) is read with ``ast``; a
 package may import only the packages listed for it here.
@@ -19,6 +21,7 @@ ALLOWED: dict[str, set[str]] = {
     "mdm_provenance": set(),
     "mdm_core": {"mdm_profiles"},
     "companion": {"mdm_core", "mdm_profiles", "mavlink_signing", "mdm_provenance"},
+    "mdm_ground": {"companion", "mdm_core", "mdm_profiles", "mavlink_signing", "mdm_provenance"},
     "sim_vehicle_stub": {"mdm_core", "mdm_profiles", "mavlink_signing", "mdm_provenance"},
     "mdm_montecarlo": {"mdm_core", "mdm_profiles", "mdm_provenance"},
     "mavlink_conformance": {"mavlink_signing", "mdm_provenance"},

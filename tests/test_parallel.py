@@ -15,7 +15,7 @@ def test_modules_are_dealt_longest_first_to_the_emptier_lane() -> None:
 
 
 def test_the_measured_seconds_count_before_the_default() -> None:
-    teams = "tests/companion/test_fleet_sitl_team.py"
+    teams = "tests/ground/test_fleet_sitl_team.py"
     lanes = parallel.sitl_lanes({teams: 1, "x.py": 4, "y.py": 1})
     assert lanes[teams] != lanes["x.py"]  # 600 s measured against 480 s by default
 

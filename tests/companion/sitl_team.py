@@ -16,9 +16,9 @@ from typing import Any
 import yaml
 
 from companion.fence_from_profile import guidance_fence
-from companion.fleet.sitl_team import observer_link
-from companion.fleet.vehicles_file import VehicleEntry
 from companion.mission.start_point import start_point
+from mdm_ground.fleet.sitl_team import observer_link
+from mdm_ground.fleet.vehicles_file import VehicleEntry
 from mdm_profiles import load_profile
 from tests.companion.sitl_observer import Observer, Trace
 

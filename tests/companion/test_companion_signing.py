@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
-from companion.fleet.runner import FleetOptions, run_fleet
 from companion.link.messages import Heartbeat
 from companion.link.pymavlink_link import PymavlinkLink
 from mavlink_signing import passphrase_to_secret
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
 from tests.emulator_harness import make_config, running_emulator
 
 PASSPHRASE = "companion-signing-test"

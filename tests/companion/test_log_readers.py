@@ -7,11 +7,11 @@ from pathlib import Path
 
 import pytest
 
-from companion.fleet.outcome import vehicle_end
-from companion.fleet.progress import read_progress
-from companion.run_map.tracks import Sample, read_track
 from companion.telemetry import MissionLog, events
 from companion.telemetry.events import LogFormatError
+from mdm_ground.fleet.outcome import vehicle_end
+from mdm_ground.fleet.progress import read_progress
+from mdm_ground.run_map.tracks import Sample, read_track
 
 
 def _log(path: Path, logged: list[tuple[float, events.DurableEvent]]) -> None:

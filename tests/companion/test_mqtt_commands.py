@@ -14,8 +14,8 @@ from typing import Any
 
 import pytest
 
-from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import events, read_log, read_records
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
 from tests.mqtt_harness import Subscriber, publish, retained_topics
 from tests.profile_files import write_profile_with
 from tests.waiting import wait_until

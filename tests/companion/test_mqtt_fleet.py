@@ -10,8 +10,8 @@ from typing import Any
 
 import pytest
 
-from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
 from tests.mqtt_harness import Subscriber, retained_topics
 from tests.profile_files import sensors, write_profile_with
 from tests.waiting import wait_until

@@ -13,8 +13,8 @@ from typing import Any
 
 import pytest
 
-from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import read_records
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
 from tests.mqtt_harness import Broker, Subscriber, publish
 from tests.profile_files import levels, write_profile_with
 from tests.waiting import wait_until

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from companion.fleet.runner import FleetOptions, run_fleet
 from companion.telemetry import events, read_log, read_records
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
 from tests.mqtt_harness import Broker, Subscriber, publish
 from tests.profile_files import levels, sensors, write_profile_with
 from tests.waiting import wait_until

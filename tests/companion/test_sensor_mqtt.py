@@ -13,9 +13,9 @@ from typing import Any
 
 import pytest
 
-from companion.fleet.runner import FleetOptions, run_fleet
 from companion.link.local_frame import LocalFrame
 from companion.telemetry import events, read_log, read_records
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
 from mdm_profiles import load_profile
 from tests.emulator_harness import free_udp_base
 from tests.mqtt_harness import Subscriber, publish

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from companion.fleet.runner import FleetOptions, run_fleet
 from companion.sensors.virtual_source import VirtualSensorSource
 from companion.telemetry import events, read_log, read_records
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
 from mdm_profiles import builtin_profile, load_profile
 from sim_vehicle_stub.config import EmulatorConfig
 from sim_vehicle_stub.emulator import Emulator

@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 
 from companion.fence_from_profile import fence_for
-from companion.fleet.sitl_team import companion_link
 from companion.link.local_frame import LocalFrame
 from companion.telemetry.mission_log import read_records
+from mdm_ground.fleet.sitl_team import companion_link
 from mdm_profiles import load_profile
 from tests import sitl
 from tests.companion.sitl_observer import Observer, Trace

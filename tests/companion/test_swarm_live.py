@@ -11,9 +11,9 @@ from typing import Any
 
 import pytest
 
-from companion.fleet.runner import FleetOptions, run_fleet
-from companion.fleet.scoring import FleetResult
 from companion.telemetry import read_records
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
+from mdm_ground.fleet.scoring import FleetResult
 from mdm_profiles import builtin_profile, write_profile
 from mdm_profiles.overrides import apply_overrides
 

@@ -22,9 +22,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-from companion.fleet.runner import FleetOptions, run_fleet
 from companion.mission.swarm_core import LIVE_READING
 from companion.telemetry import read_records
+from mdm_ground.fleet.runner import FleetOptions, run_fleet
 from tests.profile_files import sensors, write_profile_with
 
 pytestmark = pytest.mark.usefixtures("fleet_processes", "mqtt_broker")

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from companion.fleet.scoring import score
 from companion.telemetry import read_records
+from mdm_ground.fleet.scoring import score
 from mdm_profiles import load_profile
 from tests.docker.stack import Stack, all_events, project
 from tests.mqtt_harness import free_port, publish

@@ -15,7 +15,7 @@ from typing import Any
 import pytest
 import yaml
 
-from companion.fleet.sitl_team import companion_link
+from mdm_ground.fleet.sitl_team import companion_link
 from mdm_profiles import load_profile
 
 ROOT = Path(__file__).resolve().parents[2]

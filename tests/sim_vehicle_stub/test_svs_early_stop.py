@@ -1,7 +1,7 @@
 """A stop (SIGTERM, Ctrl-C) that reaches `sim-vehicle` while it starts, before its event loop
 handles signals (numba loading the kernels takes about a second), ends it cleanly: the fleet
 stops an emulator whose companions failed at once, and that must not read as the emulator
-failing (tests/companion/test_fleet_failures.py)."""
+failing (tests/ground/test_fleet_failures.py)."""
 
 from __future__ import annotations
 

@@ -1,0 +1,185 @@
+"""The page's pieces without a browser or broker: address flags, access rules, and what the
+team's messages make of the state the page draws."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from companion.telemetry.mqtt.channel import Received
+from companion.telemetry.mqtt.settings import MqttSettings
+from mdm_ground.fleet.gcs import parse_gcs
+from mdm_ground.live_web.access import AccessError, resolve_access
+from mdm_ground.live_web.cli_args import parse_web
+from mdm_ground.live_web.fleet_state import CommandOutcome, FleetState
+from mdm_ground.live_web.mqtt_feed import MqttFeed
+from mdm_ground.live_web.replay import Replay
+from tests.profile_files import profile_with
+
+
+def _state() -> FleetState:
+    return FleetState(profile_with("units"), show_targets=True, stale_after=5.0)
+
+
+@pytest.mark.parametrize(
+    ("value", "expected"),
+    [("8765", ("127.0.0.1", 8765)), ("0.0.0.0:80", ("0.0.0.0", 80)), ("[::1]:0", ("::1", 0))],
+)
+def test_web_addresses_are_read(value: str, expected: tuple[str, int]) -> None:
+    assert parse_web(value) == expected
+
+
+@pytest.mark.parametrize("value", ["::1:80", "host:", "host:70000", ":80", "a:b"])
+def test_bad_web_addresses_are_refused_naming_the_flag(value: str) -> None:
+    with pytest.raises(ValueError, match="--web"):
+        parse_web(value)
+
+
+@pytest.mark.parametrize(
+    "value", ["udp:1.2.3.4:5", "udpout:host.local:5", "udpout:1.2.3.4:0", "udpout:1.2.3.4"]
+)
+def test_bad_gcs_addresses_are_refused_naming_the_flag(value: str) -> None:
+    with pytest.raises(ValueError, match="--gcs"):
+        parse_gcs(value)
+
+
+def test_loopback_is_open_and_any_other_bind_gets_a_token(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.delenv("MDM_WEB_TOKEN", raising=False)
+    local, made = resolve_access("127.0.0.1", read_only=False, token_file=None)
+    assert (local.token, made) == (None, False)
+    local.check_command(None)
+    wide, made = resolve_access("0.0.0.0", read_only=False, token_file=None)
+    assert made
+    assert wide.token is not None
+    with pytest.raises(AccessError, match="a token is required") as e:
+        wide.check_command(None)
+    assert e.value.status == 401
+    wide.check_command(wide.token)
+    (tmp_path / "token").write_text("short\n")
+    with pytest.raises(ValueError, match=r"--web-token-file .* at least 16"):
+        resolve_access("0.0.0.0", read_only=False, token_file=tmp_path / "token")
+    monkeypatch.setenv("MDM_WEB_TOKEN", "t" * 20)
+    env, made = resolve_access("0.0.0.0", read_only=False, token_file=None)
+    assert (env.token, made) == ("t" * 20, False)
+    with pytest.raises(AccessError, match="read-only"):
+        resolve_access("0.0.0.0", read_only=True, token_file=None)[0].check_command("t" * 20)
+
+
+def test_state_messages_move_the_vehicle_and_bad_fields_change_nothing() -> None:
+    s = _state()
+    s.on_state(
+        0,
+        {
+            "t": 10.0,
+            "north": 100.0,
+            "east": 200.0,
+            "alt": 30.0,
+            "mode": "OFFBOARD",
+            "armed": True,
+            "phase": "search",
+            "level": 1,
+            "ci": 0.5,
+            "found": 0,
+            "battery": 87.0,
+        },
+        wall=1000.0,
+    )
+    s.on_state(
+        0,
+        {
+            "t": math.nan,
+            "north": math.inf,
+            "east": 1.0,
+            "alt": "high",
+            "armed": "yes",
+            "level": True,
+        },
+        wall=1001.0,
+    )
+    (v,) = s.snapshot(1002.0, {})["vehicles"]
+    assert (v["north"], v["east"], v["alt"], v["armed"], v["level"]) == (
+        100.0,
+        200.0,
+        30.0,
+        True,
+        1,
+    )
+    assert (v["battery"], v["age"], v["stale"], v["t"]) == (87.0, 1.0, False, 10.0)
+    assert s.snapshot(1006.5, {})["vehicles"][0]["stale"]  # silent for 5.5 s > 5 s
+    s.on_status(0, {"state": "offline"}, wall=1007.0)
+    assert s.snapshot(1007.0, {})["vehicles"][0]["stale"]
+
+
+def test_tracks_go_out_once_per_page() -> None:
+    s, sent = _state(), dict[int, int]()
+    for k in range(3):
+        s.on_state(1, {"north": 10.0 * k, "east": 0.0}, wall=0.0)
+    first = s.snapshot(0.0, sent)["vehicles"][0]
+    s.on_state(1, {"north": 31.0, "east": 0.0}, wall=0.0)
+    s.on_state(1, {"north": 32.0, "east": 0.0}, wall=0.0)  # under 5 m from the last point kept
+    second = s.snapshot(0.0, sent)["vehicles"][0]
+    assert (first["track_from"], len(first["track"])) == (0, 3)
+    assert (second["track_from"], second["track"]) == (3, [(31.0, 0.0)])
+
+
+def test_command_answers_and_refusals_reach_their_command() -> None:
+    s = _state()
+    s.sent(CommandOutcome("a1", "pause", "all", 0.0))
+    s.on_event(0, {"t": 5.0, "event": "command", "command": "pause", "id": "a1"}, wall=0.0)
+    s.on_event(1, {"t": 5.0, "event": "command", "command": "pause", "id": "a1"}, wall=0.0)
+    s.on_event(
+        1,
+        {
+            "t": 5.0,
+            "event": "error",
+            "source": "command",
+            "error": "not searching",
+            "payload": '{"command": "pause", "id": "a1"}',
+        },
+        wall=0.0,
+    )
+    s.on_event(1, {"t": 6.0, "event": "command", "command": "pause", "id": "other"}, wall=0.0)
+    (c,) = s.snapshot(0.0, {})["commands"]
+    assert c["answers"] == {"0": "accepted", "1": "refused: not searching"}
+
+
+def test_tnc_counts_real_targets_within_the_confirmation_radius() -> None:
+    s = _state()  # real target at 1500,1500; false one at 600,2400; confirmation radius 50 m
+    s.on_event(
+        0,
+        {
+            "t": 1.0,
+            "event": "confirmation",
+            "north": 1530.0,
+            "east": 1500.0,
+            "level": 1,
+            "found": 1,
+        },
+        wall=0.0,
+    )
+    s.on_event(
+        1,
+        {"t": 2.0, "event": "confirmation", "north": 600.0, "east": 2400.0, "level": 1, "found": 1},
+        wall=0.0,
+    )
+    assert s.tnc() == 1
+    assert len(s.snapshot(0.0, {})["confirmations"]) == 2
+
+
+def test_a_directory_without_mission_logs_is_refused(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match=r"no mission-I\.jsonl"):
+        Replay(tmp_path, profile_with("units"), show_targets=True)
+
+
+def test_an_event_delivered_twice_counts_once() -> None:
+    s = _state()
+    feed = MqttFeed(MqttSettings("127.0.0.1"), "mdm/units", s)  # not connected: fed by hand
+    event = b'{"seq": 7, "vehicle": 2, "t": 3.0, "event": "detection", "north": 1.0, "east": 2.0, "level": 0}'
+    for payload in (event, event, b"not json", b"[1]"):
+        feed._on_message(Received("mdm/units/uav2/event", payload, retained=False))
+    assert len(s.detections) == 1
+    assert feed.refused == 2
