@@ -6,6 +6,7 @@ import logging
 import math
 from typing import Any
 
+from sim_vehicle_stub.flight_commands import MISSION_COMMANDS, run_flight_command
 from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.node import VehicleNode
 from sim_vehicle_stub.personas.ardupilot import LOCATION_ALT_MAX_M
@@ -58,7 +59,9 @@ class CommandHandler:
             return v.arm(p[0] >= 0.5, force=p[1] == _FORCE_MAGIC)
         if cmd == d.MAV_CMD_DO_SET_MODE:
             mode = v.persona.mode_from_command(p[0], p[1], p[2])
-            return DENIED if mode is None else v.set_mode(mode)
+            return v.persona.unknown_mode_result if mode is None else v.set_mode(mode)
+        if cmd in MISSION_COMMANDS:
+            return run_flight_command(v, cmd, p, frame, self.telemetry.geo)
         if cmd == d.MAV_CMD_NAV_TAKEOFF:
             return v.takeoff(p[6], self.home_alt_amsl)
         if cmd == d.MAV_CMD_NAV_LAND:
@@ -113,7 +116,7 @@ class CommandHandler:
 
     def _request(self, node: VehicleNode, msg_id: int, extra: list[Any]) -> int:
         build = self.telemetry.builders.get(msg_id)
-        if build is None:
+        if build is None or msg_id in node.vehicle.persona.unrequestable:
             return DENIED
         extra.append(build(node.vehicle))
         return ACCEPTED

@@ -32,10 +32,12 @@ from sim_vehicle_stub.fast_streams import (
     contact_payload,
     signal_payload,
 )
+from sim_vehicle_stub.fence_enforcement import breach
 from sim_vehicle_stub.fleet_kinematics import Fleet
 from sim_vehicle_stub.geo_frame import GeoFrame
 from sim_vehicle_stub.handlers import MessageHandler
 from sim_vehicle_stub.mavlink import dialect as d
+from sim_vehicle_stub.mission_protocol import MissionProtocol
 from sim_vehicle_stub.node import VehicleNode
 from sim_vehicle_stub.personas import ProfileFacts, create_persona
 from sim_vehicle_stub.personas.base import Behaviour
@@ -109,11 +111,17 @@ class Emulator:
                 battery_endurance=config.battery_endurance,
             )
             vehicle = Vehicle(
-                i, persona, persona.param_table(facts), self.fleet, self.events, self._now
-            )
+                i, persona, persona.param_table(facts), self.fleet, self.events, self._now,
+                self.geo,
+            )  # fmt: skip
             signing = SigningState(config.signing_key) if config.signing_key else None
             self.nodes.append(VehicleNode(vehicle, Encoder(vehicle.sysid, signing=signing)))
-        self.handler = MessageHandler(CommandHandler(self.telemetry, o.alt), self.geo, self._now)
+        self.handler = MessageHandler(
+            CommandHandler(self.telemetry, o.alt),
+            self.geo,
+            self._now,
+            MissionProtocol(self.telemetry.home_geo),
+        )
         self.udp: list[UdpEndpoint] = []
         self.tcp: list[TcpServer] = []
         self.gcs: GcsEndpoint | None = None
@@ -252,6 +260,8 @@ class Emulator:
         for severity, text in v.status:
             out.append(d.MAVLink_statustext_message(severity, text.encode()))
         v.status.clear()
+        out += v.outbox
+        v.outbox.clear()
         node.send(out)
 
     # ----- sim loop
@@ -348,7 +358,7 @@ class Emulator:
         for node, ok in zip(self.nodes, inside, strict=True):
             v = node.vehicle
             v.update()
-            check_failsafes(v, ok, dt)
+            check_failsafes(v, ok and (not v.armed or breach(v) is None), dt)
         active = np.array([v.limits.sensor for v in vehicles], dtype=np.intp)
         radius = np.array([v.sensor_radius() for v in vehicles])
         readings = self.sensors.tick(t, self.fleet.pos, active, radius)
@@ -382,19 +392,27 @@ class Emulator:
                     self.telemetry_errors += 1
             reading = readings.get(v.index)
             if reading is not None:
-                frames += self._sensor_frames(enc, reading)
+                frames += self._sensor_frames(enc, reading, v.origin)
             if v.status:
                 for severity, text in v.status:
                     frames.append(enc.pack(d.MAVLink_statustext_message(severity, text.encode())))
                 v.status.clear()
+            if v.outbox:
+                frames += [enc.pack(msg) for msg in v.outbox]
+                v.outbox.clear()
             node.send_frames(frames)
 
-    def _sensor_frames(self, enc: Encoder, r: Reading) -> list[bytes]:
+    def _sensor_frames(self, enc: Encoder, r: Reading, origin: tuple[float, float]) -> list[bytes]:
+        """The signal and the contacts, contacts in the vehicle's local frame (from its
+        origin, as LOCAL_POSITION_NED)."""
         name = b"CNF" if r.confirms else b"DET"
         out = [enc.frame(NVF, CRC_EXTRA[NVF], signal_payload(self.clock.boot_ms, r.signal))]
         usec = self.clock.usec
+        on, oe = origin
         out += [
-            enc.frame(DEBUG_VECT, CRC_EXTRA[DEBUG_VECT], contact_payload(name, usec, n, e, s))
+            enc.frame(
+                DEBUG_VECT, CRC_EXTRA[DEBUG_VECT], contact_payload(name, usec, n - on, e - oe, s)
+            )
             for _, n, e, s in r.contacts
         ]
         return out

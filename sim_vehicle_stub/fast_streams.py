@@ -61,11 +61,12 @@ def gpi_rows(
     return _rows(gpi)
 
 
-def lpn_rows(fleet: Fleet, boot_ms: int) -> list[bytes]:
-    """LOCAL_POSITION_NED payloads: time_boot_ms u4, x, y, z, vx, vy, vz f4 (z and vz down)."""
+def lpn_rows(fleet: Fleet, boot_ms: int, origins: np.ndarray) -> list[bytes]:
+    """LOCAL_POSITION_NED payloads: time_boot_ms u4, x, y, z, vx, vy, vz f4 (z and vz down);
+    x, y from each vehicle's local origin (``origins``, (n, 2) in the profile's frame)."""
     lpn = np.empty((len(fleet), 7), np.float32)
     lpn.view(np.uint32)[:, 0] = boot_ms
-    lpn[:, 1:3] = fleet.pos
+    lpn[:, 1:3] = fleet.pos - origins
     lpn[:, 3] = -fleet.alt
     lpn[:, 4:6] = fleet.vel
     lpn[:, 6] = -fleet.vz

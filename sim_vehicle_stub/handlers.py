@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from typing import Any
 
 from sim_vehicle_stub.commands import CommandHandler
-from sim_vehicle_stub.fence_store import FENCE, FenceStore
 from sim_vehicle_stub.geo_frame import GeoFrame
+from sim_vehicle_stub.manual_control import manual_sticks, override_sticks
 from sim_vehicle_stub.mavlink import dialect as d
+from sim_vehicle_stub.mission_protocol import MissionProtocol
 from sim_vehicle_stub.node import VehicleNode
 from sim_vehicle_stub.setpoints import attitude_setpoint, global_setpoint, local_setpoint
 from sim_vehicle_stub.vehicle import ACCEPTED, DENIED
@@ -21,12 +23,17 @@ _FTP_NAK, _FTP_ERR_FAIL = 129, 1
 class MessageHandler:
     """Routes decoded messages of one vehicle to the code that answers them."""
 
-    def __init__(self, commands: CommandHandler, geo: GeoFrame, now: Callable[[], float]) -> None:
+    def __init__(
+        self,
+        commands: CommandHandler,
+        geo: GeoFrame,
+        now: Callable[[], float],
+        missions: MissionProtocol,
+    ) -> None:
         self.commands = commands
         self.geo = geo
         self.now = now
-        self._fences: dict[int, FenceStore] = {}
-        """Each vehicle's fence (mission_type FENCE), by vehicle index."""
+        m = missions
         self._table: dict[str, Callable[[VehicleNode, Any], None]] = {
             "HEARTBEAT": self._heartbeat,
             "COMMAND_LONG": self._command_long,
@@ -38,11 +45,18 @@ class MessageHandler:
             "SET_POSITION_TARGET_LOCAL_NED": self._local_target,
             "SET_POSITION_TARGET_GLOBAL_INT": self._global_target,
             "SET_ATTITUDE_TARGET": self._attitude_target,
-            "MISSION_REQUEST_LIST": self._mission_list,
-            "MISSION_COUNT": self._mission_count,
-            "MISSION_ITEM_INT": self._mission_item,
-            "MISSION_REQUEST_INT": self._mission_request,
-            "MISSION_CLEAR_ALL": self._mission_clear,
+            "MISSION_REQUEST_LIST": m.request_list,
+            "MISSION_COUNT": m.count,
+            "MISSION_WRITE_PARTIAL_LIST": m.partial,
+            "MISSION_ITEM_INT": functools.partial(m.item, legacy=False),
+            "MISSION_ITEM": functools.partial(m.item, legacy=True),
+            "MISSION_REQUEST_INT": functools.partial(m.request, legacy=False),
+            "MISSION_REQUEST": functools.partial(m.request, legacy=True),
+            "MISSION_CLEAR_ALL": m.clear,
+            "MISSION_SET_CURRENT": m.set_current,
+            "MANUAL_CONTROL": self._manual_control,
+            "RC_CHANNELS_OVERRIDE": self._rc_override,
+            "REQUEST_DATA_STREAM": self._data_stream,
             "FILE_TRANSFER_PROTOCOL": self._ftp,
             "TIMESYNC": self._timesync,
         }
@@ -144,81 +158,24 @@ class MessageHandler:
         else:
             node.vehicle.on_setpoint(sp)
 
-    # ----- mission, FTP, time
-    def _fence(self, node: VehicleNode) -> FenceStore:
-        return self._fences.setdefault(node.vehicle.index, FenceStore())
-
-    def _mission_list(self, node: VehicleNode, msg: Any) -> None:
-        kind = getattr(msg, "mission_type", 0)
-        count = len(self._fence(node).items) if kind == FENCE else 0
-        node.send(
-            [
-                d.MAVLink_mission_count_message(
-                    msg.get_srcSystem(), msg.get_srcComponent(), count, kind
-                )
-            ]
-        )
-
-    def _ask_item(self, node: VehicleNode, msg: Any, seq: int) -> None:
-        node.send(
-            [
-                d.MAVLink_mission_request_int_message(
-                    msg.get_srcSystem(), msg.get_srcComponent(), seq, FENCE
-                )
-            ]
-        )
-
-    def _mission_ack(self, node: VehicleNode, msg: Any, result: int) -> None:
-        node.send(
-            [
-                d.MAVLink_mission_ack_message(
-                    msg.get_srcSystem(),
-                    msg.get_srcComponent(),
-                    result,
-                    getattr(msg, "mission_type", 0),
-                )
-            ]
-        )
-
-    def _mission_count(self, node: VehicleNode, msg: Any) -> None:
-        if getattr(msg, "mission_type", 0) == FENCE:
-            result = self._fence(node).begin_upload(msg.count)
-            if result is None:
-                self._ask_item(node, msg, 0)
-            else:
-                self._mission_ack(node, msg, result)
-            return
-        # No mission storage: an empty upload is done at once (MISSION_ACK ACCEPTED, as PX4 and
-        # ArduPilot answer a count of 0), a longer one is refused at once with NO_SPACE instead
-        # of leaving the client to its time-out.
-        ok = msg.count == 0
-        if not ok:
+    # ----- pilot, streams, FTP, time
+    def _manual_control(self, node: VehicleNode, msg: Any) -> None:
+        sticks = manual_sticks(msg)
+        if sticks is None:
             node.stats.nacks += 1
-        self._mission_ack(node, msg, d.MAV_MISSION_ACCEPTED if ok else d.MAV_MISSION_NO_SPACE)
-
-    def _mission_item(self, node: VehicleNode, msg: Any) -> None:
-        if msg.mission_type != FENCE:
-            return
-        next_seq, result = self._fence(node).add_item(msg)
-        if next_seq is not None:
-            self._ask_item(node, msg, next_seq)
-        elif result is not None:
-            self._mission_ack(node, msg, result)
-
-    def _mission_request(self, node: VehicleNode, msg: Any) -> None:
-        if msg.mission_type != FENCE:
-            return
-        target = (msg.get_srcSystem(), msg.get_srcComponent())
-        item = self._fence(node).item_message(target, msg.seq)
-        if item is None:
-            self._mission_ack(node, msg, d.MAV_MISSION_INVALID_SEQUENCE)
         else:
-            node.send([item])
+            node.vehicle.pilot.take(sticks, self.now())
 
-    def _mission_clear(self, node: VehicleNode, msg: Any) -> None:
-        if getattr(msg, "mission_type", 0) in (FENCE, d.MAV_MISSION_TYPE_ALL):
-            self._fence(node).clear()
-        self._mission_ack(node, msg, d.MAV_MISSION_ACCEPTED)
+    def _rc_override(self, node: VehicleNode, msg: Any) -> None:
+        sticks = override_sticks(msg)
+        if sticks is not None:
+            node.vehicle.pilot.take(sticks, self.now())
+
+    def _data_stream(self, node: VehicleNode, msg: Any) -> None:
+        if node.vehicle.persona.data_streams:
+            node.schedule.request_data_stream(
+                int(msg.req_stream_id), int(msg.req_message_rate), bool(msg.start_stop)
+            )
 
     def _ftp(self, node: VehicleNode, msg: Any) -> None:
         req = bytes(msg.payload)

@@ -75,7 +75,10 @@ def local_setpoint(msg: Any, v: Vehicle, t: float) -> NeuSetpoint | None:
         if not _ok(msg.x, msg.y):
             return None
         dn, de = rotate(msg.x, msg.y)
-        position = (dn, de) if frame == LOCAL_NED else (f.pos[i, 0] + dn, f.pos[i, 1] + de)
+        # LOCAL_NED is metres from the vehicle's local origin (where it booted), as on a real
+        # autopilot; the offset frames from where it is now.
+        base = v.origin if frame == LOCAL_NED else (float(f.pos[i, 0]), float(f.pos[i, 1]))
+        position = (base[0] + dn, base[1] + de)
     if use_z:
         if not _ok(msg.z):
             return None

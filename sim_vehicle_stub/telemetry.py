@@ -22,6 +22,8 @@ from sim_vehicle_stub.vehicle import Vehicle
 # battery and the pre-arm check bit that MAVSDK reads for health.
 SENSOR_BITS = 0x1 | 0x2 | 0x4 | 0x8 | 0x20 | 0x8000 | 0x200000 | 0x2000000 | 0x10000000
 
+GEOFENCE = d.MAV_SYS_STATUS_GEOFENCE
+
 DEFAULT_RATES: dict[int, float] = {
     d.MAVLINK_MSG_ID_HEARTBEAT: 1.0,
     d.MAVLINK_MSG_ID_SYS_STATUS: 1.0,
@@ -33,16 +35,35 @@ DEFAULT_RATES: dict[int, float] = {
     d.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 10.0,
     d.MAVLINK_MSG_ID_LOCAL_POSITION_NED: 10.0,
     d.MAVLINK_MSG_ID_ATTITUDE: 10.0,
+    d.MAVLINK_MSG_ID_MISSION_CURRENT: 1.0,
+    d.MAVLINK_MSG_ID_VFR_HUD: 1.0,
 }
 """Hz of sim time; SET_MESSAGE_INTERVAL changes them per vehicle."""
-
-_CAPS = (
-    d.MAV_PROTOCOL_CAPABILITY_MAVLINK2
-    | d.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
-    | d.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
-    | d.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_GLOBAL_INT
-    | d.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
-)
+ON_REQUEST_RATE = 1.0
+"""Hz of a stream that is off by default when a client sets its interval to 0 (default)."""
+DATA_STREAMS: dict[int, tuple[int, ...]] = {
+    d.MAV_DATA_STREAM_EXTENDED_STATUS: (
+        d.MAVLINK_MSG_ID_SYS_STATUS,
+        d.MAVLINK_MSG_ID_GPS_RAW_INT,
+        d.MAVLINK_MSG_ID_MISSION_CURRENT,
+    ),
+    d.MAV_DATA_STREAM_RC_CHANNELS: (
+        d.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW,
+        d.MAVLINK_MSG_ID_RC_CHANNELS,
+    ),
+    d.MAV_DATA_STREAM_POSITION: (
+        d.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
+        d.MAVLINK_MSG_ID_LOCAL_POSITION_NED,
+    ),
+    d.MAV_DATA_STREAM_EXTRA1: (d.MAVLINK_MSG_ID_ATTITUDE,),
+    d.MAV_DATA_STREAM_EXTRA2: (d.MAVLINK_MSG_ID_VFR_HUD,),
+    d.MAV_DATA_STREAM_EXTRA3: (
+        d.MAVLINK_MSG_ID_SYSTEM_TIME,
+        d.MAVLINK_MSG_ID_BATTERY_STATUS,
+    ),
+}
+"""ArduPilot's REQUEST_DATA_STREAM groups (GCS_MAVLink ap_message lists), the messages the
+emulator has of each; MAV_DATA_STREAM_ALL (0) is all of them."""
 
 
 def _message(cls: Any, args: Callable[[Vehicle], tuple[Any, ...]], v: Vehicle) -> Any:
@@ -84,7 +105,7 @@ class PositionRows(dict[int, list[bytes]]):
             c = tel._geodetic()
             rows = gpi_rows(f, boot_ms, c.lat, c.lon, c.amsl)
         elif msg_id == LPN:
-            rows = lpn_rows(f, boot_ms)
+            rows = lpn_rows(f, boot_ms, tel.origins)
         elif msg_id == ATT:
             a = tel._attitude()
             rows = att_rows(f, boot_ms, a.roll, a.pitch)
@@ -107,6 +128,8 @@ class Telemetry:
         self._batch = PositionRows(self)
         self._batch_t = -1.0
         home = fleet.pos.copy()
+        self.origins = home
+        """Each vehicle's local origin (where it booted) in the profile's frame, (n, 2)."""
         lat, lon, _ = geo.to_geodetic(home[:, 0], home[:, 1], np.zeros(len(home)))
         self._home_geo = (np.atleast_1d(lat), np.atleast_1d(lon))
         self.args: dict[int, Callable[[Vehicle], tuple[Any, ...]]] = {
@@ -117,6 +140,9 @@ class Telemetry:
             d.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: self.extended_sys_state_args,
             d.MAVLINK_MSG_ID_GPS_RAW_INT: self.gps_raw_int_args,
             d.MAVLINK_MSG_ID_HOME_POSITION: self.home_position_args,
+            d.MAVLINK_MSG_ID_VFR_HUD: self.vfr_hud_args,
+            d.MAVLINK_MSG_ID_RC_CHANNELS: self.rc_channels_args,
+            d.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW: self.servo_output_raw_args,
         }
         """Constructor arguments of the 1 Hz streams' messages: packed by :attr:`layouts` every
         tick, or made into message objects by :attr:`builders` when asked for."""
@@ -130,6 +156,8 @@ class Telemetry:
                 d.MAVLINK_MSG_ID_LOCAL_POSITION_NED: self.local_position_ned,
                 d.MAVLINK_MSG_ID_ATTITUDE: self.attitude,
                 d.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
+                d.MAVLINK_MSG_ID_MISSION_CURRENT: self.mission_current,
+                d.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN: self.gps_global_origin,
             }
         )
 
@@ -175,8 +203,14 @@ class Telemetry:
 
     def sys_status_args(self, v: Vehicle) -> tuple[Any, ...]:
         pct = round(v.battery * 100)
+        present = enabled = health = SENSOR_BITS
+        if v.persona.reports_geofence:
+            # ArduPilot: present always, enabled with the fence, healthy unless breached.
+            present |= GEOFENCE
+            enabled |= GEOFENCE if v.limits.fence_rules is not None else 0
+            health |= 0 if v.fence_breached else GEOFENCE
         return (
-            SENSOR_BITS, SENSOR_BITS, SENSOR_BITS, 100, self._voltage_mv(v), 500, pct,
+            present, enabled, health, 100, self._voltage_mv(v), 500, pct,
             0, 0, 0, 0, 0, 0, 0, 0, 0,
         )  # fmt: skip
 
@@ -214,12 +248,53 @@ class Telemetry:
         )  # fmt: skip
 
     def home_position_args(self, v: Vehicle) -> tuple[Any, ...]:
-        lat, lon = (a[v.index] for a in self._home_geo)
-        hn, he = v.home
+        lat, lon = self.home_geo(v)[:2]
+        hn, he = v.home[0] - v.origin[0], v.home[1] - v.origin[1]
         return (
             int(lat * 1e7), int(lon * 1e7), round(self.geo.alt * 1000), hn, he, 0.0, [1.0, 0.0, 0.0, 0.0],
             0.0, 0.0, 0.0, self.clock.usec,
         )  # fmt: skip
+
+    def home_geo(self, v: Vehicle) -> tuple[float, float, float]:
+        """(lat, lon, alt AMSL) of the vehicle's home."""
+        if v.home == v.origin:
+            lat, lon = (float(a[v.index]) for a in self._home_geo)
+        else:
+            la, lo, _ = self.geo.to_geodetic(np.array(v.home[0]), np.array(v.home[1]), np.zeros(()))
+            lat, lon = float(la), float(lo)
+        return lat, lon, self.geo.alt
+
+    def gps_global_origin(self, v: Vehicle) -> Any:
+        """The local frame's origin: where the vehicle booted (its first home)."""
+        lat, lon = (float(a[v.index]) for a in self._home_geo)
+        return d.MAVLink_gps_global_origin_message(
+            int(lat * 1e7), int(lon * 1e7), round(self.geo.alt * 1000), self.clock.usec
+        )
+
+    def mission_current(self, v: Vehicle) -> Any:
+        return v.mission_run.current_message()
+
+    def vfr_hud_args(self, v: Vehicle) -> tuple[Any, ...]:
+        i, f = v.index, self.fleet
+        speed = float(np.hypot(*f.vel[i]))
+        hdg = int(math.degrees(float(f.yaw[i])) % 360.0)
+        throttle = 0 if not v.armed else 50
+        return (speed, speed, hdg, throttle, float(self.geo.alt + f.alt[i]), float(f.vz[i]))
+
+    def rc_channels_args(self, v: Vehicle) -> tuple[Any, ...]:
+        """The pilot's sticks as PWM (AETR), 1500 centred; throttle 1000 without a pilot."""
+        s = v.pilot.sticks
+        if s is None:
+            pwm = [1500, 1500, 1000, 1500]
+        else:
+            pwm = [round(1500 + 500 * s.right), round(1500 - 500 * s.forward),
+                   round(1500 + 500 * s.up), round(1500 + 500 * s.yaw)]  # fmt: skip
+        return (self.clock.boot_ms, 16, *pwm, *([1500] * 14), 255)
+
+    def servo_output_raw_args(self, v: Vehicle) -> tuple[Any, ...]:
+        """Four motors at idle (1000) disarmed, near hover (1500) armed."""
+        out = 1000 if not v.armed or v.landed else 1500
+        return (self.clock.usec % 2**32, 0, out, out, out, out, 0, 0, 0, 0)
 
     def global_position_int(self, v: Vehicle) -> Any:
         c, i, f = self._geodetic(), v.index, self.fleet
@@ -233,8 +308,8 @@ class Telemetry:
     def local_position_ned(self, v: Vehicle) -> Any:
         i, f = v.index, self.fleet
         return d.MAVLink_local_position_ned_message(
-            self.clock.boot_ms, f.pos[i, 0], f.pos[i, 1], -f.alt[i], f.vel[i, 0], f.vel[i, 1],
-            -f.vz[i],
+            self.clock.boot_ms, f.pos[i, 0] - v.origin[0], f.pos[i, 1] - v.origin[1], -f.alt[i],
+            f.vel[i, 0], f.vel[i, 1], -f.vz[i],
         )  # fmt: skip
 
     def attitude(self, v: Vehicle) -> Any:
@@ -246,15 +321,24 @@ class Telemetry:
         )
 
     def autopilot_version(self, v: Vehicle) -> Any:
-        caps = _CAPS | (
-            d.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
-            if v.persona.bytewise_ints
-            else d.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST
-        )
-        version = (1 << 24) | (15 << 16) | (0 << 8) | 255
+        """The persona's real capabilities (less what the emulator lacks: FTP, terrain, flight
+        termination, compass calibration) and firmware version, measured on its SITL."""
+        p = v.persona
         return d.MAVLink_autopilot_version_message(
-            caps, version, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8, 0, 0, v.sysid
+            p.capabilities, p.firmware_version, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8, 0, 0, v.sysid
         )
+
+
+STREAMABLE = frozenset(
+    (
+        *DEFAULT_RATES,
+        d.MAVLINK_MSG_ID_AUTOPILOT_VERSION,
+        d.MAVLINK_MSG_ID_RC_CHANNELS,
+        d.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW,
+        d.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN,
+    )
+)
+"""Messages a client may give an interval (the default streams and those sent on request)."""
 
 
 class StreamSchedule:
@@ -266,10 +350,10 @@ class StreamSchedule:
 
     def set_interval(self, msg_id: int, interval_us: float) -> bool:
         """SET_MESSAGE_INTERVAL semantics: -1 off, 0 default, else microseconds."""
-        if msg_id not in DEFAULT_RATES and msg_id != d.MAVLINK_MSG_ID_AUTOPILOT_VERSION:
+        if msg_id not in STREAMABLE:
             return False
         if interval_us == 0:
-            self.interval[msg_id] = 1.0 / DEFAULT_RATES.get(msg_id, 1.0)
+            self.interval[msg_id] = 1.0 / DEFAULT_RATES.get(msg_id, ON_REQUEST_RATE)
         elif interval_us < 0:
             self.interval.pop(msg_id, None)
             self.next_due.pop(msg_id, None)
@@ -278,6 +362,21 @@ class StreamSchedule:
             self.interval[msg_id] = max(interval_us * 1e-6, 1e-3)
         self.next_due.setdefault(msg_id, 0.0)
         return True
+
+    def request_data_stream(self, stream: int, rate_hz: int, start: bool) -> None:
+        """REQUEST_DATA_STREAM as ArduPilot: the group's messages at ``rate_hz`` (its own
+        rate); a stop, or a rate of 0, switches them off. HEARTBEAT is in no group."""
+        groups = (
+            DATA_STREAMS.values()
+            if stream == d.MAV_DATA_STREAM_ALL
+            else (DATA_STREAMS.get(stream, ()),)
+        )
+        for ids in groups:
+            for msg_id in ids:
+                if start and rate_hz > 0:
+                    self.set_interval(msg_id, 1e6 / min(rate_hz, 50))
+                else:
+                    self.set_interval(msg_id, -1)
 
     def due(self, t: float) -> list[int]:
         out = []

@@ -6,13 +6,19 @@ import logging
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from sim_vehicle_stub.config import system_id
 from sim_vehicle_stub.events import EventLog
+from sim_vehicle_stub.fence_enforcement import FenceRules, FenceShapes
 from sim_vehicle_stub.fleet_kinematics import Fleet
 from sim_vehicle_stub.fleet_step_kernel import GROUND_ALT
+from sim_vehicle_stub.geo_frame import GeoFrame
+from sim_vehicle_stub.manual_control import Pilot, fly_sticks
+from sim_vehicle_stub.mission_flight import MissionRun
+from sim_vehicle_stub.mission_store import VehiclePlans
 from sim_vehicle_stub.params import ParamTable
 from sim_vehicle_stub.personas.base import (
     Action,
@@ -36,9 +42,13 @@ class FailsafeLimits:
     setpoint: tuple[float, Action]
     link: tuple[float, Action]
     fence: Action
+    fence_rules: FenceRules | None
+    """The vehicle's own fences besides the area (fence_enforcement.py)."""
     battery: tuple[float, Action]
     endurance: float
     fence_margin: float
+    sticks: float
+    """Sim s after the last MANUAL_CONTROL / RC override before the sticks count as released."""
     sensor: int
     """MDM_SENSOR: active sensor index, -1 when off."""
 
@@ -69,15 +79,31 @@ class Vehicle:
         fleet: Fleet,
         events: EventLog,
         now: Callable[[], float],
+        geo: GeoFrame,
     ) -> None:
         self.index = index
+        self.geo = geo
         self.sysid = system_id(index)
         self.persona = persona
         self.params = params
         self.fleet = fleet
         self.events = events
         self._now = now
-        self.home = tuple(fleet.pos[index])
+        self.origin: tuple[float, float] = (float(fleet.pos[index, 0]), float(fleet.pos[index, 1]))
+        """The local frame's origin in the profile's frame: where the vehicle booted (the EKF
+        origin of a real autopilot). LOCAL_POSITION_NED and local setpoints are metres from it."""
+        self.home: tuple[float, float] = self.origin
+        """Where RTL returns to (DO_SET_HOME moves it; the local origin stays)."""
+        self.plans = VehiclePlans()
+        self.mission_run = MissionRun(self)
+        self.outbox: list[Any] = []
+        """Messages waiting to be sent with the next tick (MISSION_CURRENT, ITEM_REACHED)."""
+        self.pilot = Pilot()
+        self.fence_shapes = FenceShapes()
+        """The uploaded fence in the local frame, rebuilt when a new one is stored."""
+        self.auto_armed = False
+        """ArduCopter's auto_armed: AUTO may leave the ground (set by a takeoff, MISSION_START
+        or throttle; cleared on disarming)."""
         self.mode: ModeSpec = persona.mode(persona.default_mode)
         self.armed = False
         self.setpoint: NeuSetpoint | None = None
@@ -125,9 +151,11 @@ class Vehicle:
             setpoint=p.setpoint_loss(params),
             link=p.link_loss(params),
             fence=p.fence_action(params),
+            fence_rules=p.fence_rules(params),
             battery=p.low_battery(params),
             endurance=params.get("MDM_BAT_ENDUR"),
             fence_margin=params.get("MDM_FENCE_MARG"),
+            sticks=p.stick_timeout(params),
             sensor=int(params.get("MDM_SENSOR")),
         )
 
@@ -151,13 +179,29 @@ class Vehicle:
             return DENIED
         if mode.behaviour is Behaviour.TAKEOFF and not (self.armed or p.takeoff_while_disarmed):
             return DENIED
+        if mode.behaviour is Behaviour.MISSION and (refusal := self._mission_refusal()):
+            self.say(4, refusal)
+            return DENIED
         if mode == self.mode:
             return ACCEPTED
+        if self.mode.behaviour is Behaviour.MISSION:
+            self.mission_run.leave()
         self.mode = mode
         self.state_changed = True
         self.events.write(self.now, "mode", vehicle=self.index, mode=mode.name, reason=reason)
         self._enter(mode)
         return ACCEPTED
+
+    def _mission_refusal(self) -> str:
+        """Why the mission mode cannot be entered now ('' when it can): ArduCopter armed on
+        the ground needs a NAV_TAKEOFF first (ModeAuto::init)."""
+        rules = self.persona.mission
+        if rules.takeoff_when_landed or not (self.armed and self.landed):
+            return ""
+        items = self.mission_run.items[self.mission_run.first :]
+        if items and items[0].command == 22:  # MAV_CMD_NAV_TAKEOFF
+            return ""
+        return "Auto: Missing Takeoff Cmd"
 
     def _enter(self, mode: ModeSpec) -> None:
         i, f = self.index, self.fleet
@@ -183,6 +227,9 @@ class Vehicle:
         elif b is Behaviour.LAND:
             f.hold(i)
             f.climb_rate(i, -self.persona.speeds(self.params)[3])
+        elif b is Behaviour.MISSION:
+            f.hold(i)
+            self.mission_run.enter()
         elif b is Behaviour.RTL:
             f.hold(i)
             self.rtl_phase = 0
@@ -199,6 +246,7 @@ class Vehicle:
         elif not (self.landed or force):
             return DENIED
         self.armed = arm
+        self.auto_armed = False
         self.state_changed = True
         self.battery_fired = False
         self.events.write(self.now, "armed" if arm else "disarmed", vehicle=self.index)
@@ -231,6 +279,7 @@ class Vehicle:
             if result != ACCEPTED:
                 return result
         if self.armed:
+            self.auto_armed = True
             self.takeoff_alt = req.altitude
             self.fleet.hold(self.index)
             self.fleet.climb_to(self.index, req.altitude)
@@ -342,8 +391,17 @@ class Vehicle:
                 self.set_mode(nxt, "takeoff complete")
         if b is Behaviour.RTL:
             self._rtl_step()
+        elif b is Behaviour.MISSION:
+            self.mission_run.step()
+        if self.mode.name in self.persona.manual_modes:
+            fly_sticks(self)
         touching = self.armed and f.alt[i] <= 0.05
-        if touching and (b is Behaviour.LAND or (b is Behaviour.RTL and self.rtl_phase == 2)):
+        ending = b is Behaviour.MISSION and self.mission_run.landing
+        if touching and ending:
+            self.mission_run.touched_down()
+        if touching and (
+            ending or b is Behaviour.LAND or (b is Behaviour.RTL and self.rtl_phase == 2)
+        ):
             self.arm(False, force=True)
             self.say(6, "Landed, disarmed")
             after = self.persona.mode_after_landing

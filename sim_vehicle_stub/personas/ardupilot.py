@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import math
 
+from sim_vehicle_stub.fence_enforcement import FenceRules
+from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.params import ParamSpec, ParamTable, ParamType
 from sim_vehicle_stub.personas.base import (
+    LACKING_CAPABILITIES,
     Action,
     Behaviour,
     ModeSpec,
@@ -14,13 +17,15 @@ from sim_vehicle_stub.personas.base import (
     TakeoffRequest,
     VehicleFacts,
 )
+from sim_vehicle_stub.personas.mission_rules import MissionRules
 
 LOCATION_ALT_MAX_M = 83000.0
 """The highest altitude ArduPilot's Location can hold (libraries/AP_Common/Location.h)."""
 
 
 class ArduCopterPersona(Persona):
-    """ArduCopter: GUIDED, LOITER, RTL, LAND, BRAKE (STABILIZE on the ground at boot, ALT_HOLD)."""
+    """ArduCopter: GUIDED, AUTO, LOITER, POSHOLD, RTL, SMART_RTL, LAND, BRAKE (STABILIZE on the
+    ground at boot, ALT_HOLD)."""
 
     name = "ardupilot"
     autopilot = 3
@@ -28,11 +33,14 @@ class ArduCopterPersona(Persona):
     modes = (
         ModeSpec("STABILIZE", 0, Behaviour.MANUAL),
         ModeSpec("ALT_HOLD", 2, Behaviour.MANUAL),
+        ModeSpec("AUTO", 3, Behaviour.MISSION, armable=False),
         ModeSpec("GUIDED", 4, Behaviour.EXTERNAL),
         ModeSpec("LOITER", 5, Behaviour.HOLD),
         ModeSpec("RTL", 6, Behaviour.RTL, armable=False),
         ModeSpec("LAND", 9, Behaviour.LAND, armable=False),
+        ModeSpec("POSHOLD", 16, Behaviour.HOLD),
         ModeSpec("BRAKE", 17, Behaviour.HOLD, armable=False),
+        ModeSpec("SMART_RTL", 21, Behaviour.RTL, armable=False),
     )
     default_mode = "STABILIZE"
     external_mode = "GUIDED"
@@ -45,6 +53,36 @@ class ArduCopterPersona(Persona):
     takeoff_refusal = 4  # MAV_RESULT_FAILED: handle_MAV_CMD_NAV_TAKEOFF when do_user_takeoff fails
     reposition_mode = "GUIDED"
     reposition_elsewhere = 2  # DENIED: handle_command_int_do_reposition outside GUIDED
+    mission_mode = "AUTO"
+    mission = MissionRules(
+        home_is_item0=True,
+        legacy_requests_only=True,
+        partial_lists=True,
+        max_items=724,
+        fence_takes_any_command=False,
+        global_frame_nav_only=False,
+        past_end_answer=d.MAV_MISSION_INVALID_SEQUENCE,
+        reports_mission_state=True,
+        acceptance_param="WPNAV_RADIUS",
+        acceptance_scale=100.0,
+        start_needs_armed=False,
+        set_current_without_mission=2,
+        takeoff_when_landed=False,
+        rtl_item_switches_mode=False,
+        auto_armable=False,
+    )
+    # ArduCopter SITL 4.7-dev: capabilities 0xfbef, flight_sw_version 0x04070000 (4.7.0 dev).
+    capabilities = 0xFBEF & ~LACKING_CAPABILITIES
+    firmware_version = 0x04070000
+    unknown_mode_result = 4  # FAILED: DO_SET_MODE FLIP/SPORT/FOLLOW on the SITL build
+    manual_modes = frozenset(("STABILIZE", "ALT_HOLD", "LOITER", "POSHOLD"))
+    data_streams = True
+    reports_geofence = True
+    flight_commands = frozenset((300, 224, 207, 179, 115, 17))
+    """MISSION_START, DO_SET_MISSION_CURRENT, DO_FENCE_ENABLE, DO_SET_HOME, CONDITION_YAW,
+    NAV_LOITER_UNLIM: all ACCEPTED by ArduCopter SITL (DO_ORBIT is UNSUPPORTED there)."""
+    fence_enable_param = "FENCE_ENABLE"
+    loiter_mode = "LOITER"
 
     def param_specs(self, facts: ProfileFacts) -> list[ParamSpec]:
         s = facts.timeout_scale
@@ -56,8 +94,13 @@ class ArduCopterPersona(Persona):
             ParamSpec("FS_GCS_ENABLE", 0, i8, 0, 7, "GCS loss: 0 off, 1/2/3/6 RTL, 4/5 land"),
             ParamSpec("FS_GCS_TIMEOUT", 5.0 * s, low=2.0, high=1e6),
             ParamSpec("FENCE_ENABLE", 1, i8, 0, 1, "search-area fence on"),
-            ParamSpec("FENCE_TYPE", 4, i8, 0, 15, "listed only: the fence is the search area"),
+            ParamSpec("FENCE_TYPE", 4, i8, 0, 15, "1 alt max, 2 circle, 4 polygons and the area"),
             ParamSpec("FENCE_ACTION", 1, i8, 0, 5, "0 report, 1/3/5 RTL, 2 land, 4 brake"),
+            ParamSpec("FENCE_ALT_MAX", 100.0, low=10.0, high=1000.0, doc="m, FENCE_TYPE bit 0"),
+            ParamSpec("FENCE_ALT_MIN", -10.0, low=-100.0, high=100.0, doc="m, FENCE_TYPE bit 3"),
+            ParamSpec("FENCE_RADIUS", 150.0, low=30.0, high=10000.0, doc="m, FENCE_TYPE bit 1"),
+            ParamSpec("FENCE_MARGIN", 2.0, low=1.0, high=10.0, doc="m inside a fence"),
+            ParamSpec("WPNAV_RADIUS", 200.0, low=5.0, high=1000.0, doc="waypoint radius, cm"),
             ParamSpec("BATT_CAPACITY", 5200, i32, 0, 1e6, "mAh"),
             ParamSpec("BATT_LOW_MAH", 800, i32, 0, 1e6, "mAh left that trigger the failsafe"),
             ParamSpec("BATT_FS_LOW_ACT", 2, i8, 0, 5, "0 none, 1 land, 2 RTL"),
@@ -73,6 +116,7 @@ class ArduCopterPersona(Persona):
             ParamSpec("WPNAV_SPEED_DN", 150.0, low=10.0, high=1e4, doc="cm/s"),
             ParamSpec("LAND_SPEED", 50.0, low=10.0, high=1e4, doc="cm/s"),
             ParamSpec("RTL_ALT", 1500.0, low=0.0, high=1e6, doc="cm"),
+            ParamSpec("RC_OVERRIDE_TIME", 3.0 * s, low=-1.0, high=1e6, doc="RC override, s"),
         ]
 
     def mode_from_command(self, p1: float, p2: float, p3: float) -> ModeSpec | None:
@@ -116,6 +160,17 @@ class ArduCopterPersona(Persona):
             act, Action.NONE
         )
 
+    def fence_rules(self, params: ParamTable) -> FenceRules | None:
+        if int(params.get("FENCE_ENABLE")) == 0:
+            return None
+        kind = int(params.get("FENCE_TYPE"))
+        return FenceRules(
+            alt_max=params.get("FENCE_ALT_MAX") if kind & 1 else 0.0,
+            radius=params.get("FENCE_RADIUS") if kind & 2 else 0.0,
+            polygons=bool(kind & 4),
+            union=False,
+        )
+
     def low_battery(self, params: ParamTable) -> tuple[float, Action]:
         capacity = params.get("BATT_CAPACITY")
         threshold = params.get("BATT_LOW_MAH") / capacity if capacity > 0 else 0.0
@@ -137,3 +192,7 @@ class ArduCopterPersona(Persona):
 
     def rtl_altitude(self, params: ParamTable) -> float:
         return params.get("RTL_ALT") / 100.0
+
+    def stick_timeout(self, params: ParamTable) -> float:
+        t = params.get("RC_OVERRIDE_TIME")
+        return math.inf if t < 0 else t

@@ -8,7 +8,18 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import ClassVar
 
+from sim_vehicle_stub.fence_enforcement import FenceRules
+from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.params import ParamSpec, ParamTable, ParamType
+from sim_vehicle_stub.personas.mission_rules import MissionRules
+
+LACKING_CAPABILITIES = (
+    d.MAV_PROTOCOL_CAPABILITY_FTP
+    | d.MAV_PROTOCOL_CAPABILITY_TERRAIN
+    | d.MAV_PROTOCOL_CAPABILITY_FLIGHT_TERMINATION
+    | d.MAV_PROTOCOL_CAPABILITY_COMPASS_CALIBRATION
+)
+"""Capabilities the real autopilots report that the emulator does not have."""
 
 
 class Behaviour(Enum):
@@ -23,6 +34,8 @@ class Behaviour(Enum):
     TAKEOFF = "takeoff"
     LAND = "land"
     RTL = "rtl"
+    MISSION = "mission"
+    """Flies the stored mission (ArduCopter AUTO, PX4 AUTO.MISSION): mission_flight.py."""
 
 
 class Action(Enum):
@@ -142,6 +155,28 @@ class Persona(ABC):
     """Mode a landing that disarmed switches to (PX4: HOLD, measured on PX4 SITL)."""
     reposition_elsewhere: ClassVar[int]
     """MAV_RESULT of a DO_REPOSITION outside that mode without the mode-change flag."""
+    mission: ClassVar[MissionRules]
+    """The mission protocol's answers and AUTO's behaviour."""
+    mission_mode: ClassVar[str]
+    """The mode that flies the stored mission (AUTO, MISSION)."""
+    capabilities: ClassVar[int]
+    """AUTOPILOT_VERSION.capabilities: the real autopilot's bits less what the emulator lacks."""
+    firmware_version: ClassVar[int]
+    """AUTOPILOT_VERSION.flight_sw_version (major<<24 | minor<<16 | patch<<8 | type)."""
+    unknown_mode_result: ClassVar[int]
+    """MAV_RESULT of DO_SET_MODE naming a mode the autopilot does not have."""
+    manual_modes: ClassVar[frozenset[str]]
+    """Modes in which pilot sticks (MANUAL_CONTROL, RC_CHANNELS_OVERRIDE) fly the vehicle."""
+    data_streams: ClassVar[bool]
+    flight_commands: ClassVar[frozenset[int]]
+    """Which of flight_commands.MISSION_COMMANDS the autopilot takes (others UNSUPPORTED)."""
+    fence_enable_param: ClassVar[str] = ""
+    """The parameter DO_FENCE_ENABLE sets."""
+    loiter_mode: ClassVar[str] = ""
+    """The mode a NAV_LOITER_UNLIM command switches to."""
+    unrequestable: ClassVar[frozenset[int]] = frozenset()
+    """Message ids REQUEST_MESSAGE is DENIED for although the autopilot streams them (PX4)."""
+    """REQUEST_DATA_STREAM sets stream rates (ArduPilot) or is ignored (PX4)."""
 
     def mode(self, name: str) -> ModeSpec:
         for m in self.modes:
@@ -202,6 +237,13 @@ class Persona(ABC):
         """Reaction to leaving the search area plus margin."""
 
     @abstractmethod
+    def fence_rules(self, params: ParamTable) -> FenceRules | None:
+        """The vehicle's own fences (altitude, radius, uploaded shapes); None: all off."""
+
+    reports_geofence: ClassVar[bool] = False
+    """SYS_STATUS carries the geofence sensor bit (ArduPilot) or not (PX4)."""
+
+    @abstractmethod
     def low_battery(self, params: ParamTable) -> tuple[float, Action]:
         """Remaining fraction below which the reaction fires."""
 
@@ -220,6 +262,10 @@ class Persona(ABC):
     def default_takeoff_alt(self, params: ParamTable) -> float:
         """Height a TAKEOFF mode entered without a takeoff command climbs to, m."""
         return params.get("MIS_TAKEOFF_ALT") if "MIS_TAKEOFF_ALT" in params else 2.5
+
+    @abstractmethod
+    def stick_timeout(self, params: ParamTable) -> float:
+        """Sim s without MANUAL_CONTROL / RC override after which the sticks are released."""
 
     @abstractmethod
     def rtl_altitude(self, params: ParamTable) -> float:

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import math
 
+from sim_vehicle_stub.fence_enforcement import FenceRules
 from sim_vehicle_stub.params import ParamSpec, ParamTable, ParamType
 from sim_vehicle_stub.personas.base import (
+    LACKING_CAPABILITIES,
     Action,
     Behaviour,
     ModeSpec,
@@ -14,6 +16,7 @@ from sim_vehicle_stub.personas.base import (
     TakeoffRequest,
     VehicleFacts,
 )
+from sim_vehicle_stub.personas.mission_rules import NO_ANSWER, MissionRules
 
 
 def px4_mode(main: int, sub: int = 0) -> int:
@@ -32,10 +35,12 @@ class Px4Persona(Persona):
     bytewise_ints = True
     modes = (
         ModeSpec("MANUAL", px4_mode(1), Behaviour.MANUAL),
+        ModeSpec("ALTCTL", px4_mode(2), Behaviour.MANUAL),
         ModeSpec("POSCTL", px4_mode(3), Behaviour.HOLD),
         ModeSpec("OFFBOARD", px4_mode(6), Behaviour.EXTERNAL),
         ModeSpec("TAKEOFF", px4_mode(_MAIN_AUTO, 2), Behaviour.TAKEOFF),
         ModeSpec("HOLD", px4_mode(_MAIN_AUTO, 3), Behaviour.HOLD),
+        ModeSpec("MISSION", px4_mode(_MAIN_AUTO, 4), Behaviour.MISSION),
         ModeSpec("RTL", px4_mode(_MAIN_AUTO, 5), Behaviour.RTL, armable=False),
         ModeSpec("LAND", px4_mode(_MAIN_AUTO, 6), Behaviour.LAND, armable=False),
     )
@@ -52,6 +57,35 @@ class Px4Persona(Persona):
     reposition_mode = "HOLD"
     mode_after_landing = "HOLD"
     reposition_elsewhere = 0  # ACCEPTED: commander switches nothing without the flag
+    mission_mode = "MISSION"
+    mission = MissionRules(
+        home_is_item0=False,
+        legacy_requests_only=False,
+        partial_lists=False,
+        max_items=65535,
+        fence_takes_any_command=True,
+        global_frame_nav_only=True,
+        past_end_answer=NO_ANSWER,
+        reports_mission_state=False,
+        acceptance_param="NAV_ACC_RAD",
+        acceptance_scale=1.0,
+        start_needs_armed=True,
+        set_current_without_mission=3,
+        takeoff_when_landed=True,
+        rtl_item_switches_mode=True,
+        auto_armable=True,
+    )
+    # PX4 SITL 1.16-dev: capabilities 0xe8ff, flight_sw_version 0x01100000 (1.16.0 dev).
+    capabilities = 0xE8FF & ~LACKING_CAPABILITIES
+    firmware_version = 0x01100000
+    unknown_mode_result = 2  # DENIED
+    manual_modes = frozenset(("MANUAL", "ALTCTL", "POSCTL"))
+    data_streams = False
+    flight_commands = frozenset((300, 224, 179))
+    """MISSION_START, DO_SET_MISSION_CURRENT, DO_SET_HOME (PX4 SITL answers DO_FENCE_ENABLE,
+    CONDITION_YAW and NAV_LOITER_UNLIM with UNSUPPORTED)."""
+    unrequestable = frozenset((42, 65, 74))
+    """MISSION_CURRENT, RC_CHANNELS, VFR_HUD: REQUEST_MESSAGE DENIED on PX4 SITL."""
 
     def param_specs(self, facts: ProfileFacts) -> list[ParamSpec]:
         s = facts.timeout_scale
@@ -64,6 +98,9 @@ class Px4Persona(Persona):
             ParamSpec("COM_DL_LOSS_T", round(10 * s), i32, 5, 1e6, "data link loss, s"),
             ParamSpec("NAV_DLL_ACT", 0, i32, 0, 6, "link loss: 0 off, 1 hold, 2 RTL, 3 land"),
             ParamSpec("GF_ACTION", 2, i32, 0, 5, "fence: 0/1 none, 2 hold, 3 RTL, 5 land"),
+            ParamSpec("GF_MAX_HOR_DIST", 0.0, low=0.0, high=1e4, doc="m from home, 0 off"),
+            ParamSpec("GF_MAX_VER_DIST", 0.0, low=0.0, high=1e4, doc="m above home, 0 off"),
+            ParamSpec("NAV_ACC_RAD", 2.0, low=0.05, high=200.0, doc="waypoint radius, m"),
             ParamSpec("BAT_CRIT_THR", 0.07, low=0.0, high=1.0),
             ParamSpec("COM_LOW_BAT_ACT", 3, i32, 0, 3, "0 warn, 2 land, 3 RTL at critical"),
             ParamSpec("MIS_TAKEOFF_ALT", 2.5, low=0.0, high=1e4),
@@ -75,6 +112,7 @@ class Px4Persona(Persona):
             ParamSpec("MPC_LAND_SPEED", 0.7, low=0.1, high=100.0),
             ParamSpec("MPC_TKO_SPEED", 1.5, low=1.0, high=5.0, doc="takeoff climb rate, m/s"),
             ParamSpec("RTL_RETURN_ALT", 30.0, low=0.0, high=1e4),
+            ParamSpec("COM_RC_LOSS_T", 0.5 * s, low=0.0, high=1e6, doc="manual control loss, s"),
         ]
 
     def mode_from_command(self, p1: float, p2: float, p3: float) -> ModeSpec | None:
@@ -117,6 +155,14 @@ class Px4Persona(Persona):
         act = int(params.get("GF_ACTION"))
         return {2: Action.HOLD, 3: Action.RTL, 5: Action.LAND}.get(act, Action.NONE)
 
+    def fence_rules(self, params: ParamTable) -> FenceRules | None:
+        return FenceRules(
+            alt_max=params.get("GF_MAX_VER_DIST"),
+            radius=params.get("GF_MAX_HOR_DIST"),
+            polygons=True,
+            union=True,
+        )
+
     def low_battery(self, params: ParamTable) -> tuple[float, Action]:
         act = int(params.get("COM_LOW_BAT_ACT"))
         action = {2: Action.LAND, 3: Action.RTL}.get(act, Action.NONE)
@@ -142,3 +188,6 @@ class Px4Persona(Persona):
 
     def rtl_altitude(self, params: ParamTable) -> float:
         return params.get("RTL_RETURN_ALT")
+
+    def stick_timeout(self, params: ParamTable) -> float:
+        return params.get("COM_RC_LOSS_T")
