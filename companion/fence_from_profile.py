@@ -4,6 +4,7 @@ builds them all at once, from one frame and one fence, for a flight."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,6 +45,19 @@ def site_geometry(profile: MissionProfile) -> SiteGeometry:
 def fence_for(profile: MissionProfile) -> Geofence:
     """Local (north, east) geofence; WGS84 vertices are converted by the link layer's frame."""
     return _fence(profile, profile_frame(profile))
+
+
+OWN_FRAME_MARGIN = 1000.0
+"""Metres beyond the area's diagonal within which a profile without ``site`` is flown in the
+profile's frame (docs/companion.md, *Frames*)."""
+
+
+def own_frame_reach(profile: MissionProfile) -> float:
+    """How far from the profile's origin a vehicle's local origin may lie for a profile
+    without ``site`` to be flown in the profile's frame (the emulator's vehicles boot at their
+    start points in the area); a vehicle farther away (a SITL booted at its default home) is
+    flown in its own frame, the area starting at its origin."""
+    return math.hypot(profile.area.north, profile.area.east) + OWN_FRAME_MARGIN
 
 
 def profile_frame(profile: MissionProfile) -> LocalFrame:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from companion.errors import InputError
-from companion.fence_from_profile import site_geometry
+from companion.fence_from_profile import own_frame_reach, site_geometry
 from companion.link.base import VehicleLink
 from companion.mission import MissionConfig, VehicleMission
 from companion.mission.core_for import is_swarm
@@ -156,6 +156,8 @@ async def fly(
             link.use_profile_frame(site.frame)
             start = start_point(profile, config.seed, vehicle, site.guidance)
             own_fence = [(p.lat, p.lon) for p in profile.site.geofence]
+        else:  # the area at the profile's origin, unless the vehicle booted far from it
+            link.use_profile_frame(site.frame, own_frame_reach(profile))
         mission = VehicleMission(
             config,
             link,

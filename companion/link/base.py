@@ -176,13 +176,21 @@ class VehicleLink(ABC):
 
     @property
     def global_position(self) -> bool:
-        """The mission also reads GLOBAL_POSITION_INT (the fence watch on the GPS position)."""
-        return self.alignment is not None
+        """The mission also reads GLOBAL_POSITION_INT (the fence watch on the GPS position of
+        a geo-referenced profile)."""
+        return self.alignment is not None and self.alignment.reach is None
 
-    def use_profile_frame(self, profile: LocalFrame) -> None:
+    def use_profile_frame(self, profile: LocalFrame, reach: float | None = None) -> None:
         """Fly in the profile's frame: positions are held back until the vehicle's origin is
-        known (:meth:`learn_origin`), then shifted; GLOBAL_POSITION_INT becomes events."""
-        self.alignment = FrameAlignment(profile)
+        known (:meth:`learn_origin`), then shifted; GLOBAL_POSITION_INT becomes events.
+        ``reach`` (a profile without ``site``): an origin farther than that from the
+        profile's is flown in the vehicle's own frame instead (a SITL booted elsewhere)."""
+        self.alignment = FrameAlignment(profile, reach)
+
+    def _profile_xy(self, x: float, y: float) -> tuple[float, float]:
+        """A point of the vehicle's local frame (a sensor contact) in the profile's."""
+        a = self.alignment
+        return (x, y) if a is None else a.to_profile(x, y)
 
     def _local(
         self,

@@ -80,7 +80,7 @@ class MavlinkDecoding(VehicleLink):
             name = text_field(raw)
             if name not in ("DET", "CNF") or not self.guard.reading(usec, x, y, z):
                 return None
-            return SensorContact(name, usec / 1e6, x, y, z)
+            return SensorContact(name, usec / 1e6, *self._profile_xy(x, y), z)
         if msg_id == fast_frames.HEARTBEAT:
             custom, kind, autopilot, base, status, _ = cast(tuple[int, ...], f)
             return self._heartbeat(frame[6], kind, autopilot, base, custom, status)
@@ -154,7 +154,8 @@ class MavlinkDecoding(VehicleLink):
         if kind == "DEBUG_VECT":
             name = text_field(msg.name)
             if name in ("DET", "CNF") and self.guard.reading(msg.time_usec, msg.x, msg.y, msg.z):
-                return SensorContact(name, msg.time_usec / 1e6, msg.x, msg.y, msg.z)
+                north, east = self._profile_xy(msg.x, msg.y)
+                return SensorContact(name, msg.time_usec / 1e6, north, east, msg.z)
             return None
         if kind == "NAMED_VALUE_FLOAT":
             if text_field(msg.name) == "SENS_SIG" and self.guard.reading(

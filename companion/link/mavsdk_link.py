@@ -212,7 +212,8 @@ class MavsdkLink(VehicleLink):
             label = str(f["name"]).rstrip("\x00")
             reading = (f["time_usec"], _number(f["x"]), _number(f["y"]), _number(f["z"]))
             if label in ("DET", "CNF") and self.guard.reading(*reading):
-                return SensorContact(label, reading[0] / 1e6, *reading[1:])
+                north, east = self._profile_xy(reading[1], reading[2])
+                return SensorContact(label, reading[0] / 1e6, north, east, reading[3])
             return None
         if name == "NAMED_VALUE_FLOAT":
             value = _number(f["value"])

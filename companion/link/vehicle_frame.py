@@ -16,11 +16,14 @@ The two tangent planes differ by a rotation of (distance between origins) / (Ear
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass
 
 from companion.link.local_frame import LocalFrame
 
 log = logging.getLogger(__name__)
+OWN = "own"
+"""VehicleOrigin.source of a vehicle flown in its own frame (origin beyond the reach)."""
 
 
 @dataclass(frozen=True)
@@ -31,14 +34,17 @@ class VehicleOrigin:
     lon: float
     alt: float
     source: str
-    """'GPS_GLOBAL_ORIGIN' or 'HOME_POSITION'."""
+    """'GPS_GLOBAL_ORIGIN' or 'HOME_POSITION'; 'own' when flown in its own frame."""
 
 
 class FrameAlignment:
     """The offset of a vehicle's local origin in the profile's frame (None until known)."""
 
-    def __init__(self, profile: LocalFrame) -> None:
+    def __init__(self, profile: LocalFrame, reach: float | None = None) -> None:
         self.profile = profile
+        self.reach = reach
+        """None: always shift (a geo-referenced profile). A distance (m): shift only an origin
+        within it of the profile's; one farther away is the vehicle's own frame (no shift)."""
         self.origin: VehicleOrigin | None = None
         self.north = 0.0
         self.east = 0.0
@@ -62,6 +68,16 @@ class FrameAlignment:
 
     def _set(self, origin: VehicleOrigin, x: float, y: float) -> None:
         n, e, _ = self.profile.to_local(origin.lat, origin.lon, origin.alt)
+        if self.reach is not None and math.hypot(n - x, e - y) > self.reach:
+            log.info(
+                "vehicle frame: local origin %.1f km from the profile origin (from %s): flown "
+                "in its own frame",
+                math.hypot(n - x, e - y) / 1000.0,
+                origin.source,
+            )
+            self.origin = VehicleOrigin(origin.lat, origin.lon, origin.alt, OWN)
+            self.north = self.east = 0.0
+            return
         self.origin = origin
         self.north, self.east = n - x, e - y
         log.info(

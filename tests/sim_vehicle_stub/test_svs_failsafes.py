@@ -116,8 +116,9 @@ def test_ardupilot_geofence_breach_runs_fence_action_rtl() -> None:
         assert c.stream_until(lambda: c.velocity(-10, 0), _heartbeat_is(AP_RTL), 10.0)
         c.pump(1.0)
         # Area starts at north 0, fence at -20 m: it turned back within a few metres of it.
-        assert min(m.x for m in c.log) < -20.0
-        assert min(m.x for m in c.log) > -35.0
+        # LOCAL_POSITION_NED is from the boot point, 60 m north of the area's edge.
+        assert min(m.x for m in c.log) + 60.0 < -20.0
+        assert min(m.x for m in c.log) + 60.0 > -35.0
 
 
 @pytest.mark.timeout(60)
