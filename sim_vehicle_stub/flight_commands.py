@@ -33,7 +33,7 @@ def run_flight_command(
     if cmd == d.MAV_CMD_MISSION_START:
         return _mission_start(v)
     if cmd == d.MAV_CMD_DO_SET_MISSION_CURRENT:
-        if not v.mission_run.items:
+        if not v.mission_run.has_items:
             return v.persona.mission.set_current_without_mission
         if not math.isfinite(p[0]):
             return DENIED
@@ -58,7 +58,7 @@ def _mission_start(v: Vehicle) -> int:
     p = v.persona
     if p.mission.start_needs_armed and not v.armed:
         return DENIED
-    if not v.mission_run.items:
+    if not v.mission_run.has_items:
         return FAILED if not p.mission.start_needs_armed else DENIED
     result = v.set_mode(p.mode(p.mission_mode), "mission start")
     if result != ACCEPTED:

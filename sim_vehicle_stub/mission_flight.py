@@ -62,6 +62,11 @@ class MissionRun:
         return self.v.plans.mission.items
 
     @property
+    def has_items(self) -> bool:
+        """Something to fly (ArduPilot's home item alone is no mission)."""
+        return len(self.items) > self.first
+
+    @property
     def first(self) -> int:
         """The first item flown: 1 on ArduPilot (item 0 is home), else 0."""
         return 1 if self.v.persona.mission.home_is_item0 else 0
@@ -71,7 +76,7 @@ class MissionRun:
         self.current = 0
         self.jumps = {}
         self.reached_sent = -1
-        self.state = NOT_STARTED if self.items else NO_MISSION
+        self.state = NOT_STARTED if self.has_items else NO_MISSION
         if self.running:
             self._begin(self._start_seq())
 
@@ -104,7 +109,7 @@ class MissionRun:
     # ----- AUTO
     def enter(self) -> None:
         """The vehicle entered the mission mode (armed, or arming in it)."""
-        if not self.items:
+        if not self.has_items:
             self.v.fleet.hold(self.v.index)
             return
         self.running = True
@@ -240,7 +245,7 @@ class MissionRun:
         """Called every telemetry tick while the vehicle is in the mission mode."""
         v = self.v
         if not self.running:
-            if v.armed and self.items and self.state != COMPLETE and self._may_start():
+            if v.armed and self.has_items and self.state != COMPLETE and self._may_start():
                 self.enter()
             return
         if not v.armed:

@@ -17,6 +17,7 @@ from sim_vehicle_stub.personas.mission_rules import (
     MISSION_FRAME,
     NAV_COMMANDS,
     NO_ANSWER,
+    POSITION_COMMANDS,
     RALLY_COMMANDS,
 )
 
@@ -135,7 +136,7 @@ class MissionProtocol:
             kind == MISSION
             and rules.global_frame_nav_only
             and frame in GLOBAL_FRAMES
-            and command not in NAV_COMMANDS
+            and command not in POSITION_COMMANDS
         ):
             return UNSUPPORTED
         return ACCEPTED
@@ -157,6 +158,7 @@ class MissionProtocol:
         store = v.plans[kind]
         if store.upload is not None and store.upload.peer == peer:
             return  # a request of our own echoed back on a shared link
+        v.plans.legacy_requests = legacy  # PX4 follows the client's last message kind
         if not 0 <= seq < len(store.items):
             answer = v.persona.mission.past_end_answer
             if answer != NO_ANSWER:
@@ -187,6 +189,9 @@ class MissionProtocol:
         v = node.vehicle
         kinds = PLAN_TYPES if kind == d.MAV_MISSION_TYPE_ALL else (kind,)
         if not set(kinds) <= set(PLAN_TYPES):
+            return
+        if kind == d.MAV_MISSION_TYPE_ALL and not v.persona.mission.clears_all_types:
+            self._ack(node, _peer(msg), UNSUPPORTED, kind)
             return
         for k in kinds:
             v.plans[k].replace([])

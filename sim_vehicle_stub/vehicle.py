@@ -18,7 +18,7 @@ from sim_vehicle_stub.fleet_step_kernel import GROUND_ALT
 from sim_vehicle_stub.geo_frame import GeoFrame
 from sim_vehicle_stub.manual_control import Pilot, fly_sticks
 from sim_vehicle_stub.mission_flight import MissionRun
-from sim_vehicle_stub.mission_store import VehiclePlans
+from sim_vehicle_stub.mission_store import MissionItem, VehiclePlans
 from sim_vehicle_stub.params import ParamTable
 from sim_vehicle_stub.personas.base import (
     Action,
@@ -95,6 +95,8 @@ class Vehicle:
         self.home: tuple[float, float] = self.origin
         """Where RTL returns to (DO_SET_HOME moves it; the local origin stays)."""
         self.plans = VehiclePlans()
+        if persona.mission.home_is_item0:  # ArduPilot boots with home as its one item
+            self.plans.mission.items = [MissionItem(16, 0, (0.0, 0.0, 0.0, 0.0), 0, 0, 0.0)]
         self.mission_run = MissionRun(self)
         self.outbox: list[Any] = []
         """Messages waiting to be sent with the next tick (MISSION_CURRENT, ITEM_REACHED)."""

@@ -166,6 +166,10 @@ class MissionClient:
 def walk(c: MissionClient) -> dict[str, Any]:
     """The whole walk; the answers by step name."""
     out: dict[str, Any] = {}
+    # ArduCopter streams MISSION_CURRENT only when asked (both take the interval).
+    out["SET_MESSAGE_INTERVAL MISSION_CURRENT"] = c.command(
+        ml.MAV_CMD_SET_MESSAGE_INTERVAL, ml.MAVLINK_MSG_ID_MISSION_CURRENT, 250_000
+    )
     out["empty download"] = c.download()
     # The first upload: how the vehicle asks before it saw any item (PX4 remembers the client's
     # last item type, ArduPilot always asks with MISSION_REQUEST).
@@ -175,12 +179,12 @@ def walk(c: MissionClient) -> dict[str, Any]:
     out["upload legacy"] = c.upload(_mission(2), legacy=True)
     out["upload int, RTL in a global frame"] = c.upload(_mission(3))
     out["upload int again"] = c.upload(_mission(2))
-    out["mission current total"] = c.recv(["MISSION_CURRENT"], 3.0).total
+    current = c.recv(["MISSION_CURRENT"], 3.0)
+    out["mission current total"] = None if current is None else current.total
     out["upload count 0"] = c.upload([], count=0)
     out["download after count 0"] = c.download()
     out["upload frame 12"] = c.upload([(0, 16, 0, 0, 0, 0, 0.0), (12, 16, 0, 0, 0, 0, 10.0)])
     out["upload command 31999"] = c.upload([(0, 16, 0, 0, 0, 0, 0.0), (3, 31999, 0, 0, 0, 0, 10.0)])
-    out["upload count 60000"] = c.upload(_mission(2), count=60000)
     c.upload(_mission(2))
     out["partial 1..2"] = c.upload(_mission(2)[1:3], partial=(1, 2))
     out["download after partial"] = c.download()
@@ -207,6 +211,8 @@ def walk(c: MissionClient) -> dict[str, Any]:
     out["NAV_WAYPOINT"] = c.command(ml.MAV_CMD_NAV_WAYPOINT)
     out["clear all"] = _clear(c)
     out["download after clear"] = c.download()
+    # Last: PX4 takes the count and waits for items (its upload then blocks other transfers).
+    out["upload count 60000"] = c.upload(_mission(2), count=60000)
     return out
 
 

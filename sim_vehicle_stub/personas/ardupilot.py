@@ -69,6 +69,7 @@ class ArduCopterPersona(Persona):
         set_current_without_mission=2,
         takeoff_when_landed=False,
         rtl_item_switches_mode=False,
+        clears_all_types=False,
         auto_armable=False,
     )
     # ArduCopter SITL 4.7-dev: capabilities 0xfbef, flight_sw_version 0x04070000 (4.7.0 dev).

@@ -25,6 +25,12 @@ NAV_COMMANDS = frozenset(
         d.MAV_CMD_NAV_SPLINE_WAYPOINT,
     )
 )
+POSITION_COMMANDS = NAV_COMMANDS - {
+    d.MAV_CMD_NAV_RETURN_TO_LAUNCH,
+    d.MAV_CMD_NAV_DELAY,
+    d.MAV_CMD_NAV_SPLINE_WAYPOINT,
+}
+"""The items PX4 takes in a global frame (its parse of a global-frame item knows no others)."""
 DO_COMMANDS = frozenset(
     (
         d.MAV_CMD_DO_JUMP,
@@ -105,3 +111,6 @@ class MissionRules:
     flies the return inside AUTO."""
     auto_armable: bool
     """PX4 arms in AUTO.MISSION; ArduCopter does not (AUTO_OPTIONS 0)."""
+    clears_all_types: bool
+    """MISSION_CLEAR_ALL of MAV_MISSION_TYPE_ALL clears every plan (PX4) or is UNSUPPORTED
+    (ArduCopter, which clears nothing then)."""

@@ -171,7 +171,10 @@ def test_do_reposition_flies_to_the_point_as_mavproxy_guided_asks(persona: str, 
         assert ack.result == ACCEPTED
         assert v.mode.name == mode
         there = c.pump(
-            20.0, lambda m: m.get_type() == "LOCAL_POSITION_NED" and abs(m.x - 1100.0) < 1.0
+            20.0,
+            lambda m: (
+                m.get_type() == "LOCAL_POSITION_NED" and abs(m.x - 100.0) < 1.0
+            ),  # from its boot point
         )
         assert there is not None
         assert c.pump(10.0, _high(14.7)) is not None

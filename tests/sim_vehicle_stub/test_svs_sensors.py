@@ -73,7 +73,8 @@ def test_only_the_selected_sensor_reports_and_false_targets_never_confirm(tmp_pa
         assert sig[-1] == pytest.approx(math.exp(-300.0 / R_DET), abs=1e-4)
         assert {v.name for v in vec} == {"DET"}
         last = vec[-1]
-        assert (last.x, last.y) == (2000.0, 2000.0)
+        # The target at (2000, 2000), from the vehicle's boot point (2000, 1700).
+        assert (last.x, last.y) == (0.0, 300.0)
         assert last.z == pytest.approx(sig[-1], abs=1e-4)
         boot_ms = real.last["LOCAL_POSITION_NED"].time_boot_ms
         assert abs(last.time_usec / 1000 - boot_ms) < 1000
@@ -96,7 +97,7 @@ def test_only_the_selected_sensor_reports_and_false_targets_never_confirm(tmp_pa
             assert false.pump(2, lambda m: m.get_type() == "HEARTBEAT") is not None
             assert false.set_param("MDM_SENSOR", 0, int_bytewise=True) is not None
             sig, vec = _readings(false, 1.0)
-            assert {(v.x, v.y) for v in vec} == {(10000.0, 10000.0)}
+            assert {(v.x, v.y) for v in vec} == {(0.0, 300.0)}  # (10000, 10000) from its boot point
             assert false.set_param("MDM_SENSOR", 1, int_bytewise=True) is not None
             false.pump(0.2)
             sig, vec = _readings(false, 1.0)

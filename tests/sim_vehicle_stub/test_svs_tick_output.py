@@ -211,10 +211,12 @@ def test_flat_out_telemetry_is_pymavlink_framing_of_the_replayed_flight() -> Non
         _check_frames(i + 1, got)
         lpn = got.of_type("LOCAL_POSITION_NED")
         assert len(lpn) >= SIM_SECONDS * cfg.telemetry_hz
+        # The local frame starts where the vehicle booted (its EKF origin), as on an autopilot.
+        on, oe = emu.vehicles[i].origin
         for m in lpn:
             s = state[m.time_boot_ms][i]
             wire = [m.x, m.y, m.z, m.vx, m.vy, m.vz]
-            expect = np.array([s[0], s[1], -s[2], s[3], s[4], -s[5]], dtype=np.float32)
+            expect = np.array([s[0] - on, s[1] - oe, -s[2], s[3], s[4], -s[5]], dtype=np.float32)
             assert wire == expect.tolist(), (i, m.time_boot_ms)
         geo = emu.geo
         for m in got.of_type("GLOBAL_POSITION_INT"):
@@ -246,7 +248,7 @@ def test_flat_out_telemetry_is_pymavlink_framing_of_the_replayed_flight() -> Non
             visible = ~(confirms[0] & spec.false_mask)
             assert m.value == np.float32(strength[0][visible].max(initial=0.0))
             hits = [
-                (float(targets[j, 0]), float(targets[j, 1]), float(strength[0, j]))
+                (float(targets[j, 0]) - on, float(targets[j, 1]) - oe, float(strength[0, j]))
                 for j in np.flatnonzero(mask[0])
             ]
             sent = [v for v in frames if v.get_type() == "DEBUG_VECT"]
