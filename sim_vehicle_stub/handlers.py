@@ -54,6 +54,7 @@ class MessageHandler:
             "MISSION_REQUEST": functools.partial(m.request, legacy=True),
             "MISSION_CLEAR_ALL": m.clear,
             "MISSION_SET_CURRENT": m.set_current,
+            "MISSION_ACK": m.ack,
             "MANUAL_CONTROL": self._manual_control,
             "RC_CHANNELS_OVERRIDE": self._rc_override,
             "REQUEST_DATA_STREAM": self._data_stream,

@@ -113,14 +113,19 @@ class MissionRun:
             self.v.fleet.hold(self.v.index)
             return
         self.running = True
+        v = self.v
+        v.fleet.speed[v.index] = v.persona.mission_speed(v.params)
         if self.state == COMPLETE:
             self.current = 0
         self.state = ACTIVE
         self._begin(self._start_seq())
 
     def leave(self) -> None:
+        """Out of the mission mode: the ordinary speed limit again."""
         self.running = False
         self.hold_until = None
+        v = self.v
+        v.fleet.speed[v.index] = v.persona.speeds(v.params)[0]
 
     def _begin(self, seq: int) -> None:
         """Start flying item ``seq`` (past the end: the mission is complete)."""

@@ -199,6 +199,23 @@ class MissionProtocol:
             v.mission_run.plan_changed()
         self._ack(node, _peer(msg), ACCEPTED, kind)
 
+    def ack(self, node: VehicleNode, msg: Any) -> None:
+        """A client's MISSION_ACK during an upload: UNSUPPORTED is a client that takes only
+        MISSION_REQUEST_INT (MAVSDK's answer to the legacy request): asked again that way
+        (PX4; ArduPilot's legacy requests are what MAVSDK expects of it)."""
+        kind = _kind(msg)
+        if kind is None:
+            return
+        v, peer = node.vehicle, _peer(msg)
+        upload = v.plans[kind].upload
+        if upload is None or upload.peer != peer or v.persona.mission.legacy_requests_only:
+            return
+        if int(msg.type) == UNSUPPORTED and v.plans.legacy_requests:
+            v.plans.legacy_requests = False
+            self._ask(node, peer, upload.next_seq, kind)
+        elif int(msg.type) != ACCEPTED:
+            v.plans[kind].upload = None  # the client gave up (OPERATION_CANCELLED, errors)
+
     def set_current(self, node: VehicleNode, msg: Any) -> None:
         """MISSION_SET_CURRENT (deprecated for DO_SET_MISSION_CURRENT): answered with
         MISSION_CURRENT at the next stream tick."""

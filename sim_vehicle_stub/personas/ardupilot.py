@@ -186,6 +186,9 @@ class ArduCopterPersona(Persona):
             params.get("LAND_SPEED") / 100.0,
         )
 
+    def mission_speed(self, params: ParamTable) -> float:
+        return params.get("WPNAV_SPEED") / 100.0
+
     def speed_limits(self, params: ParamTable) -> tuple[float, float, float, float]:
         # The upper ends of the WPNAV_SPEED / _UP / _DN and LAND_SPEED ranges (ArduCopter
         # AC_WPNav/AC_WPNav.cpp parameter docs): what the stock airframe is tuned to fly.

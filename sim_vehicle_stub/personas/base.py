@@ -252,6 +252,10 @@ class Persona(ABC):
         """Horizontal speed, climb rate, descent rate and landing speed, m/s."""
 
     @abstractmethod
+    def mission_speed(self, params: ParamTable) -> float:
+        """Horizontal speed between mission waypoints, m/s."""
+
+    @abstractmethod
     def speed_limits(self, params: ParamTable) -> tuple[float, float, float, float]:
         """The most MAV_CMD_DO_CHANGE_SPEED may set: horizontal, climb, descent, landing."""
 

@@ -108,6 +108,7 @@ class Px4Persona(Persona):
             # PX4's range is 0-20 m/s (mc_pos_control params), widened for a faster profile;
             # the profile's speed is the companion's to set (DO_CHANGE_SPEED, this parameter).
             ParamSpec("MPC_XY_VEL_MAX", 12.0, low=0.1, high=max(20.0, facts.speed)),
+            ParamSpec("MPC_XY_CRUISE", 5.0, low=1.0, high=max(20.0, facts.speed), doc="AUTO m/s"),
             ParamSpec("MPC_Z_VEL_MAX_UP", 3.0, low=0.1, high=100.0),
             ParamSpec("MPC_Z_VEL_MAX_DN", 1.5, low=0.1, high=100.0),
             ParamSpec("MPC_LAND_SPEED", 0.7, low=0.1, high=100.0),
@@ -176,6 +177,10 @@ class Px4Persona(Persona):
             params.get("MPC_Z_VEL_MAX_DN"),
             params.get("MPC_LAND_SPEED"),
         )
+
+    def mission_speed(self, params: ParamTable) -> float:
+        # FlightTaskAuto: waypoints at MPC_XY_CRUISE, capped at MPC_XY_VEL_MAX.
+        return min(params.get("MPC_XY_CRUISE"), params.get("MPC_XY_VEL_MAX"))
 
     def speed_limits(self, params: ParamTable) -> tuple[float, float, float, float]:
         # FlightTaskAuto caps the cruise speed at MPC_XY_VEL_MAX, and the position controller

@@ -1,0 +1,241 @@
+"""Flights flown through MAVSDK 4's own plugins, the same way against the emulator and against a
+SITL autopilot: a QGroundControl plan (mission_raw's QGC import, with its fence and rally
+point), offboard position setpoints ending in a landing, the pilot's sticks (manual_control).
+Written here from the plugins' API; each returns what the tests compare."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import pymap3d
+from mavsdk.asyncio import Configuration, Mavsdk
+from mavsdk.asyncio.plugins.action import ActionAsync
+from mavsdk.asyncio.plugins.manual_control import ManualControlAsync
+from mavsdk.asyncio.plugins.mission_raw import MissionRawAsync
+from mavsdk.asyncio.plugins.offboard import OffboardAsync, PositionNedYaw
+from mavsdk.asyncio.plugins.param import ParamAsync
+from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
+
+
+@dataclass
+class PlanFlight:
+    """What a flown plan left: the mission items in the order the vehicle reported them as
+    current, the path (north, east, up from home, every sample), how it ended."""
+
+    uploaded: tuple[int, int, int] = (0, 0, 0)
+    """Mission, fence and rally items uploaded (ArduPilot's home item included)."""
+    downloaded: int = 0
+    progress: list[int] = field(default_factory=list)
+    total: int = 0
+    path: list[tuple[float, float, float]] = field(default_factory=list)
+    landed_at: tuple[float, float] | None = None
+    """Where it disarmed, north and east of home."""
+
+
+async def autopilot(mavsdk: Mavsdk, url: str, seconds: float = 30.0) -> Any:
+    await mavsdk.add_any_connection(url)
+    system = await mavsdk.first_autopilot(seconds)
+    if system is None:
+        raise TimeoutError(f"no autopilot on {url} in {seconds:.0f} s")
+    return system
+
+
+async def _ready(tel: TelemetryAsync, seconds: float) -> tuple[float, float, float]:
+    """Wait for a global position and home; (lat, lon, AMSL) of home."""
+
+    async def wait() -> tuple[float, float, float]:
+        async for health in tel.subscribe_health():
+            if health.is_global_position_ok and health.is_home_position_ok:
+                break
+        async for home in tel.subscribe_home():
+            return home.latitude_deg, home.longitude_deg, home.absolute_altitude_m
+        raise RuntimeError("home stream ended")
+
+    return await asyncio.wait_for(wait(), seconds)
+
+
+def _local(home: tuple[float, float, float], lat: float, lon: float) -> tuple[float, float]:
+    n, e, _ = pymap3d.geodetic2ned(lat, lon, home[2], *home)
+    return float(n), float(e)
+
+
+async def _sample(tel: TelemetryAsync, home: tuple[float, float, float], out: list[Any]) -> None:
+    async for pos in tel.subscribe_position():
+        n, e = _local(home, pos.latitude_deg, pos.longitude_deg)
+        out.append((n, e, pos.relative_altitude_m))
+
+
+async def _until_disarmed(tel: TelemetryAsync, seconds: float) -> None:
+    async def wait() -> None:
+        seen_armed = False
+        async for armed in tel.subscribe_armed():
+            seen_armed |= armed
+            if seen_armed and not armed:
+                return
+
+    await asyncio.wait_for(wait(), seconds)
+
+
+async def fly_plan(
+    url: str,
+    plan: str,
+    *,
+    ardupilot: bool,
+    speed: float,
+    ready_s: float = 90.0,
+    flight_s: float = 300.0,
+) -> PlanFlight:
+    """Import ``plan`` with mission_raw, upload mission, fence and rally points, read the
+    mission back, fly it at ``speed`` m/s to its RTL and touch-down."""
+    rec = PlanFlight()
+    async with Mavsdk(Configuration.create_manual(245, 190, True)) as mavsdk:
+        system = await autopilot(mavsdk, url)
+        tel, act, mr = TelemetryAsync(system), ActionAsync(system), MissionRawAsync(system)
+        param = ParamAsync(system)
+        home = await _ready(tel, ready_s)
+        await tel.set_rate_position(10.0)
+        if ardupilot:
+            await param.set_param_float("WPNAV_SPEED", speed * 100.0)
+        else:
+            await param.set_param_float("MPC_XY_CRUISE", speed)
+        data = await mr.import_qgroundcontrol_mission_from_string(plan)
+        await mr.upload_mission(data.mission_items)
+        await mr.upload_geofence(data.geofence_items)
+        await mr.upload_rally_points(data.rally_items)
+        rec.uploaded = (len(data.mission_items), len(data.geofence_items), len(data.rally_items))
+        rec.downloaded = len(await mr.download_mission())
+        sampler = asyncio.create_task(_sample(tel, home, rec.path))
+        watcher = asyncio.create_task(_progress(mr, rec))
+        try:
+            await _arm_when_ready(act, ready_s)
+            if ardupilot:  # ArduCopter's AUTO leaves the ground after a takeoff (auto_armed)
+                await act.set_takeoff_altitude(5.0)
+                await act.takeoff()
+                await asyncio.sleep(1.0)
+            await mr.start_mission()
+            await _until_disarmed(tel, flight_s)
+        finally:
+            for task in (sampler, watcher):
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
+        if rec.path:
+            rec.landed_at = rec.path[-1][:2]
+    return rec
+
+
+async def _progress(mr: MissionRawAsync, rec: PlanFlight) -> None:
+    async for p in mr.subscribe_mission_progress():
+        rec.total = p.total
+        if not rec.progress or rec.progress[-1] != p.current:
+            rec.progress.append(p.current)
+
+
+async def _arm_when_ready(act: ActionAsync, seconds: float) -> None:
+    """Arm, retried while the autopilot still refuses (a SITL's EKF settling)."""
+    deadline = asyncio.get_running_loop().time() + seconds
+    while True:
+        try:
+            await act.arm()
+            return
+        except Exception:
+            if asyncio.get_running_loop().time() > deadline:
+                raise
+            await asyncio.sleep(1.0)
+
+
+@dataclass
+class OffboardLanding:
+    corners: list[tuple[float, float]] = field(default_factory=list)
+    """Where the vehicle was after each position setpoint (north, east from home)."""
+    landed_at: tuple[float, float] = (math.nan, math.nan)
+
+
+async def fly_offboard_square(
+    url: str, side: float, alt: float, *, ardupilot: bool, settle_s: float
+) -> OffboardLanding:
+    """Take off, fly a square of ``side`` m over the take-off point with offboard
+    PositionNedYaw setpoints (LOCAL_POSITION_NED from the vehicle's origin), come back to its
+    centre, land there: where it touched down."""
+    rec = OffboardLanding()
+    async with Mavsdk(Configuration.create_manual(245, 190, True)) as mavsdk:
+        system = await autopilot(mavsdk, url)
+        tel, act, off = TelemetryAsync(system), ActionAsync(system), OffboardAsync(system)
+        home = await _ready(tel, 90.0)
+        await tel.set_rate_position(10.0)
+        await _arm_when_ready(act, 60.0)
+        await act.set_takeoff_altitude(alt)
+        await act.takeoff()
+        async for pos in tel.subscribe_position():
+            if pos.relative_altitude_m > alt - 0.5:
+                break
+        await off.set_position_ned(PositionNedYaw(0.0, 0.0, -alt, 0.0))
+        await off.start()
+        for n, e in ((side, 0.0), (side, side), (0.0, side), (0.0, 0.0)):
+            await off.set_position_ned(PositionNedYaw(n, e, -alt, 0.0))
+            await asyncio.sleep(settle_s)
+            pos = await tel.position()
+            rec.corners.append(_local(home, pos.latitude_deg, pos.longitude_deg))
+        await off.stop()
+        await act.land()
+        await _until_disarmed(tel, 120.0)
+        pos = await tel.position()
+        rec.landed_at = _local(home, pos.latitude_deg, pos.longitude_deg)
+    return rec
+
+
+@dataclass
+class StickFlight:
+    mode: str = ""
+    moved: tuple[float, float] = (0.0, 0.0)
+    """North, east flown while the pitch stick was forward."""
+    drift_after_release: float = math.nan
+
+
+async def fly_sticks(url: str, *, seconds: float) -> StickFlight:
+    """Take off, then the pilot's sticks (manual_control position control): pitch forward for
+    ``seconds``, then centred for as long: how far it flew, how far it drifted once centred."""
+    rec = StickFlight()
+    async with Mavsdk(Configuration.create_manual(245, 190, True)) as mavsdk:
+        system = await autopilot(mavsdk, url)
+        tel, act = TelemetryAsync(system), ActionAsync(system)
+        manual = ManualControlAsync(system)
+        home = await _ready(tel, 90.0)
+        await tel.set_rate_position(10.0)
+        await _arm_when_ready(act, 60.0)
+        await act.set_takeoff_altitude(10.0)
+        await act.takeoff()
+        async for pos in tel.subscribe_position():
+            if pos.relative_altitude_m > 9.5:
+                break
+        for _ in range(10):
+            await manual.set_manual_control_input(0.0, 0.0, 0.5, 0.0)
+            await asyncio.sleep(0.05)
+        await manual.start_position_control()
+        rec.mode = str(await tel.flight_mode())
+        start = await tel.position()
+        before = _local(home, start.latitude_deg, start.longitude_deg)
+
+        async def hold_sticks(x: float, duration: float) -> None:
+            end = asyncio.get_running_loop().time() + duration
+            while asyncio.get_running_loop().time() < end:
+                await manual.set_manual_control_input(x, 0.0, 0.5, 0.0)
+                await asyncio.sleep(0.05)
+
+        await hold_sticks(1.0, seconds)
+        pos = await tel.position()
+        after = _local(home, pos.latitude_deg, pos.longitude_deg)
+        rec.moved = (after[0] - before[0], after[1] - before[1])
+        await hold_sticks(0.0, seconds / 2)
+        pos = await tel.position()
+        mid = _local(home, pos.latitude_deg, pos.longitude_deg)
+        await hold_sticks(0.0, seconds / 2)
+        pos = await tel.position()
+        end = _local(home, pos.latitude_deg, pos.longitude_deg)
+        rec.drift_after_release = math.hypot(end[0] - mid[0], end[1] - mid[1])
+        await act.land()
+    return rec
