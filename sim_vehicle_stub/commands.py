@@ -78,6 +78,8 @@ class CommandHandler:
             msg_id = int(p[0])
             if msg_id not in self.telemetry.builders:
                 return DENIED
+            if msg_id in v.persona.fixed_intervals:
+                return FAILED
             low, high = _HEARTBEAT_US
             if msg_id == d.MAVLINK_MSG_ID_HEARTBEAT and p[1] != 0 and not low <= p[1] <= high:
                 # PX4 answers FAILED and keeps its heartbeat (measured on PX4 SITL); a vehicle

@@ -170,6 +170,9 @@ def walk(c: MissionClient) -> dict[str, Any]:
     out["SET_MESSAGE_INTERVAL MISSION_CURRENT"] = c.command(
         ml.MAV_CMD_SET_MESSAGE_INTERVAL, ml.MAVLINK_MSG_ID_MISSION_CURRENT, 250_000
     )
+    out["SET_MESSAGE_INTERVAL SYS_STATUS"] = c.command(
+        ml.MAV_CMD_SET_MESSAGE_INTERVAL, ml.MAVLINK_MSG_ID_SYS_STATUS, 500_000
+    )
     out["empty download"] = c.download()
     # The first upload: how the vehicle asks before it saw any item (PX4 remembers the client's
     # last item type, ArduPilot always asks with MISSION_REQUEST).

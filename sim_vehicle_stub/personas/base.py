@@ -174,6 +174,8 @@ class Persona(ABC):
     """The parameter DO_FENCE_ENABLE sets."""
     loiter_mode: ClassVar[str] = ""
     """The mode a NAV_LOITER_UNLIM command switches to."""
+    fixed_intervals: ClassVar[frozenset[int]] = frozenset()
+    """Message ids whose SET_MESSAGE_INTERVAL the autopilot answers FAILED (PX4)."""
     unrequestable: ClassVar[frozenset[int]] = frozenset()
     """Message ids REQUEST_MESSAGE is DENIED for although the autopilot streams them (PX4)."""
     """REQUEST_DATA_STREAM sets stream rates (ArduPilot) or is ignored (PX4)."""

@@ -101,7 +101,7 @@ class MissionRules:
     start_needs_armed: bool
     """MISSION_START while disarmed: PX4 DENIED, ArduPilot switches to AUTO (ACCEPTED)."""
     set_current_without_mission: int
-    """DO_SET_MISSION_CURRENT with no mission: PX4 UNSUPPORTED, ArduPilot DENIED."""
+    """DO_SET_MISSION_CURRENT with no mission (ArduPilot: DENIED)."""
     takeoff_when_landed: bool
     """PX4 climbs to the first waypoint's altitude (a takeoff of its own) when a mission
     without a NAV_TAKEOFF starts on the ground; ArduCopter refuses AUTO armed on the ground

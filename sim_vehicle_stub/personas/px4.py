@@ -82,9 +82,11 @@ class Px4Persona(Persona):
     unknown_mode_result = 2  # DENIED
     manual_modes = frozenset(("MANUAL", "ALTCTL", "POSCTL"))
     data_streams = False
-    flight_commands = frozenset((300, 224, 179))
-    """MISSION_START, DO_SET_MISSION_CURRENT, DO_SET_HOME (PX4 SITL answers DO_FENCE_ENABLE,
-    CONDITION_YAW and NAV_LOITER_UNLIM with UNSUPPORTED)."""
+    flight_commands = frozenset((300, 179))
+    """MISSION_START, DO_SET_HOME (PX4 SITL answers DO_SET_MISSION_CURRENT, DO_FENCE_ENABLE,
+    CONDITION_YAW and NAV_LOITER_UNLIM with UNSUPPORTED, a mission loaded or not)."""
+    fixed_intervals = frozenset((42,))
+    """MISSION_CURRENT: SET_MESSAGE_INTERVAL answered FAILED on PX4 SITL."""
     unrequestable = frozenset((42, 65, 74))
     """MISSION_CURRENT, RC_CHANNELS, VFR_HUD: REQUEST_MESSAGE DENIED on PX4 SITL."""
 

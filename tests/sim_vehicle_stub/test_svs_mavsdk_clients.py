@@ -49,7 +49,7 @@ def test_mavsdk_flies_a_qgroundcontrol_survey_plan(persona: str) -> None:
     assert rec.progress == sorted(rec.progress)
     assert rec.progress[-1] >= items - 1
     # The survey, before PX4's RTL climbs to RTL_RETURN_ALT (30 m) to fly home.
-    climb = next((k for k, (_, _, a) in enumerate(rec.path) if a > 16.0), len(rec.path))
+    climb = next((k for k, (_, _, a) in enumerate(rec.path) if a > 15.5), len(rec.path))
     survey = rec.path[:climb]
     for n, e in SURVEY:
         miss, alt = min((math.hypot(pn - n, pe - e), pa) for pn, pe, pa in survey)
