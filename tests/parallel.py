@@ -26,6 +26,7 @@ MEASURED_S: dict[str, float] = {
     "tests/companion/test_sensor_sources_sitl.py": 134.0,
     "tests/sim_vehicle_stub/test_svs_differential.py": 119.0,
     "tests/sim_vehicle_stub/test_svs_mission_differential.py": 150.0,
+    "tests/sim_vehicle_stub/test_svs_plan_differential.py": 240.0,
     "tests/companion/test_lying_link_sitl.py": 58.0,
     "tests/companion/test_plan_fence_sitl.py": 53.0,
     "tests/companion/test_field_mission_sitl.py": 47.0,
