@@ -16,14 +16,14 @@ import numpy as np
 import pytest
 
 from companion.link.address import parse_address
-from tests.emulator_harness import free_udp_base, make_config, running_emulator
+from tests.emulator_harness import PROFILE, free_udp_base, make_config, running_emulator
 from tests.mavsdk_flights import PlanFlight, fly_plan
 from tests.qgc_plan import lawnmower, plan_text, survey_plan
 from tests.sitl import SitlInstance
 
 log = logging.getLogger(__name__)
 PERSONA = {"arducopter": "ardupilot", "px4": "px4"}
-HOME = (47.397742, 8.545594, 488.0)
+HOME = (PROFILE.origin.lat, PROFILE.origin.lon, PROFILE.origin.alt)
 SPEEDUP = {"arducopter": 5.0, "px4": 4.0}
 SURVEY = lawnmower(3, 80.0, 25.0, (20.0, -20.0))
 ALT = 15.0
@@ -61,7 +61,14 @@ def test_a_qgc_plan_is_flown_like_the_real_autopilot_flies_it(
     autopilot: str, sitl_start: Callable[..., SitlInstance], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     base = free_udp_base(1)
-    cfg = make_config(1, base, personas=(PERSONA[autopilot],), speedup=SPEEDUP[autopilot])
+    # Booted at the profile origin, which is HOME (the SITL's home too).
+    cfg = make_config(
+        1,
+        base,
+        personas=(PERSONA[autopilot],),
+        speedup=SPEEDUP[autopilot],
+        start_positions=((0.0, 0.0),),
+    )
     with running_emulator(cfg):
         emulated = _fly(f"udpin://127.0.0.1:{base}", autopilot)
     home = ",".join(f"{x:g}" for x in HOME)
