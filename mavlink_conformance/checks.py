@@ -12,11 +12,14 @@ from __future__ import annotations
 import contextlib
 import itertools
 import logging
+import math
 import struct
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
+
+import pymap3d
 
 from mavlink_conformance.session import LinkClosedError, Session, mavutil
 
@@ -456,6 +459,172 @@ def check_fence(s: Session) -> CheckResult:
     return CheckResult("fence", True, f"4 vertices read back equal; {len(before)} put back")
 
 
+_PLAN_CAPABILITIES = (
+    ml.MAV_PROTOCOL_CAPABILITY_MISSION_INT
+    | ml.MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
+    | ml.MAV_PROTOCOL_CAPABILITY_MISSION_RALLY
+)
+
+
+def check_plan_capabilities(s: Session) -> CheckResult:
+    """AUTOPILOT_VERSION says the mission protocol takes INT items, fences and rally points:
+    without these bits MAVSDK refuses missions and geofences before sending anything."""
+    ack = s.command(ml.MAV_CMD_REQUEST_MESSAGE, ml.MAVLINK_MSG_ID_AUTOPILOT_VERSION)
+    m = s.recv({"AUTOPILOT_VERSION"}, s.timeout) if ack is not None else None
+    if m is None:
+        return CheckResult("plan_capabilities", False, "no AUTOPILOT_VERSION")
+    missing = [
+        e.name.removeprefix("MAV_PROTOCOL_CAPABILITY_")
+        for bit, e in ml.enums["MAV_PROTOCOL_CAPABILITY"].items()
+        if bit & _PLAN_CAPABILITIES and not m.capabilities & bit
+    ]
+    detail = f"capabilities {m.capabilities:#x}" + (
+        f", lacks {', '.join(missing)}" if missing else ""
+    )
+    return CheckResult("plan_capabilities", not missing, detail)
+
+
+def _plan_download(s: Session, kind: int) -> list[Any] | None:
+    """Every item of plan ``kind`` (MISSION_ITEM_INT), None where the vehicle did not answer."""
+    assert s.sysid is not None
+    s.mav.mission_request_list_send(s.sysid, s.compid, kind)
+    count = s.recv({"MISSION_COUNT"}, s.timeout, lambda m: m.mission_type == kind)
+    if count is None:
+        return None
+    items = []
+    for seq in range(count.count):
+        s.mav.mission_request_int_send(s.sysid, s.compid, seq, kind)
+        item = s.recv(
+            {"MISSION_ITEM_INT"},
+            s.timeout,
+            lambda m, seq=seq: m.mission_type == kind and m.seq == seq,
+        )
+        if item is None:
+            return None
+        items.append(item)
+    s.mav.mission_ack_send(s.sysid, s.compid, ml.MAV_MISSION_ACCEPTED, kind)
+    return items
+
+
+def _plan_upload(s: Session, kind: int, items: list[tuple[Any, ...]]) -> str:
+    """Upload items (MISSION_ITEM_INT fields after seq) of plan ``kind``; '' when accepted,
+    else why not. An empty list clears the plan."""
+    assert s.sysid is not None
+    if not items:
+        s.mav.mission_clear_all_send(s.sysid, s.compid, kind)
+    else:
+        s.mav.mission_count_send(s.sysid, s.compid, len(items), kind)
+    while True:
+        m = s.recv(
+            {"MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK"},
+            s.timeout,
+            lambda m: m.mission_type == kind,
+        )
+        if m is None:
+            return "no answer"
+        if m.get_type() == "MISSION_ACK":
+            name = ml.enums["MAV_MISSION_RESULT"][m.type].name
+            return "" if m.type == ml.MAV_MISSION_ACCEPTED else name
+        if not 0 <= m.seq < len(items):
+            return f"asked for item {m.seq} of {len(items)}"
+        s.mav.mission_item_int_send(s.sysid, s.compid, m.seq, *items[m.seq], kind)
+
+
+def _home(s: Session) -> Any:
+    return next((m for _, m in reversed(s.seen.get("HOME_POSITION", []))), None)
+
+
+def check_mission(s: Session) -> CheckResult:
+    """A three-item mission (a waypoint at home, a takeoff, a waypoint 50 m north, frame
+    GLOBAL_RELATIVE_ALT) is taken and read back with the same commands and positions (item 0
+    aside: ArduPilot keeps home there), MISSION_CURRENT reports it, and the vehicle's own
+    mission is put back."""
+    home = _home(s)
+    if home is None:
+        return CheckResult("mission", False, "no HOME_POSITION to plan around")
+    mission = ml.MAV_MISSION_TYPE_MISSION
+    before = _plan_download(s, mission)
+    if before is None:
+        return CheckResult("mission", False, "no mission download (MISSION_REQUEST_LIST)")
+    lat, lon = home.latitude, home.longitude
+    north = lat + 4_500  # about 50 m
+    rel = ml.MAV_FRAME_GLOBAL_RELATIVE_ALT
+    items = [
+        (ml.MAV_FRAME_GLOBAL, ml.MAV_CMD_NAV_WAYPOINT, 0, 1, 0, 0, 0, 0, lat, lon, 0.0),
+        (rel, ml.MAV_CMD_NAV_TAKEOFF, 0, 1, 0, 0, 0, 0, lat, lon, 10.0),
+        (rel, ml.MAV_CMD_NAV_WAYPOINT, 0, 1, 0, 0, 0, 0, north, lon, 10.0),
+    ]
+    refused = _plan_upload(s, mission, items)
+    back = _plan_download(s, mission) if not refused else None
+    _set_interval(s, ml.MAVLINK_MSG_ID_MISSION_CURRENT, 500_000)
+    current = s.recv({"MISSION_CURRENT"}, s.timeout) if not refused else None
+    restored = _plan_upload(s, mission, [_fields(m) for m in before])
+    if refused:
+        return CheckResult("mission", False, f"upload of 3 items: {refused}")
+    got = [(m.command, m.x, m.y) for m in (back or [])[1:]]
+    want = [(cmd, x, y) for _, cmd, *_, x, y, _ in items[1:]]
+    if got != want:
+        return CheckResult("mission", False, f"read back {got}, sent {want}")
+    if current is None:
+        return CheckResult("mission", False, "3 items read back equal; no MISSION_CURRENT")
+    if restored:
+        return CheckResult("mission", False, f"3 items read back equal; restore: {restored}")
+    return CheckResult(
+        "mission", True, f"3 items read back equal, MISSION_CURRENT total {current.total}"
+    )
+
+
+def check_rally(s: Session) -> CheckResult:
+    """A rally point is taken and read back; the vehicle's own rally points put back."""
+    home = _home(s)
+    if home is None:
+        return CheckResult("rally", False, "no HOME_POSITION to place it")
+    rally = ml.MAV_MISSION_TYPE_RALLY
+    before = _plan_download(s, rally)
+    if before is None:
+        return CheckResult("rally", False, "no rally download (MISSION_REQUEST_LIST, RALLY)")
+    point = (ml.MAV_FRAME_GLOBAL_RELATIVE_ALT, ml.MAV_CMD_NAV_RALLY_POINT, 0, 1, 0, 0, 0, 0,
+             home.latitude + 4_500, home.longitude, 20.0)  # fmt: skip
+    refused = _plan_upload(s, rally, [point])
+    back = _plan_download(s, rally) if not refused else None
+    restored = _plan_upload(s, rally, [_fields(m) for m in before])
+    if refused:
+        return CheckResult("rally", False, f"upload of 1 point: {refused}")
+    got = [(m.command, m.x, m.y) for m in back or []]
+    if got != [point[1:2] + point[8:10]]:
+        return CheckResult("rally", False, f"read back {got}")
+    if restored:
+        return CheckResult("rally", False, f"restore: {restored}")
+    return CheckResult("rally", True, f"1 point read back equal; {len(before)} put back")
+
+
+_FRAME_TOLERANCE = 3.0
+"""Metres between LOCAL_POSITION_NED and GLOBAL_POSITION_INT expressed about the local origin."""
+
+
+def check_local_frame(s: Session) -> CheckResult:
+    """LOCAL_POSITION_NED is metres from the local origin GPS_GLOBAL_ORIGIN names (where the
+    vehicle booted, on PX4 and ArduPilot): the global position put in that frame is where the
+    local position says, and home lies near it (a vehicle is where it booted)."""
+    ack = s.command(ml.MAV_CMD_REQUEST_MESSAGE, ml.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN)
+    origin = s.recv({"GPS_GLOBAL_ORIGIN"}, s.timeout) if ack is not None else None
+    if origin is None:
+        return CheckResult("local_frame", False, "no GPS_GLOBAL_ORIGIN on REQUEST_MESSAGE")
+    _set_interval(s, ml.MAVLINK_MSG_ID_LOCAL_POSITION_NED, 200_000)
+    _set_interval(s, ml.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 200_000)
+    lpn = s.recv({"LOCAL_POSITION_NED"}, s.timeout)
+    gpi = s.recv({"GLOBAL_POSITION_INT"}, s.timeout)
+    if lpn is None or gpi is None:
+        return CheckResult("local_frame", False, "no LOCAL_POSITION_NED or GLOBAL_POSITION_INT")
+    n, e, _ = pymap3d.geodetic2ned(
+        gpi.lat * 1e-7, gpi.lon * 1e-7, origin.altitude * 1e-3,
+        origin.latitude * 1e-7, origin.longitude * 1e-7, origin.altitude * 1e-3,
+    )  # fmt: skip
+    off = math.hypot(float(n) - lpn.x, float(e) - lpn.y)
+    detail = f"local ({lpn.x:.1f}, {lpn.y:.1f}) m, global about the origin ({n:.1f}, {e:.1f}) m"
+    return CheckResult("local_frame", off < _FRAME_TOLERANCE, detail)
+
+
 def check_ftp(s: Session) -> CheckResult:
     assert s.sysid is not None
     path = b"/mdm-conformance-no-such-file"
@@ -493,7 +662,11 @@ CHECKS: tuple[Callable[[Session], CheckResult | list[CheckResult]], ...] = (
     check_requests,
     check_params,
     check_mission_count,
+    check_plan_capabilities,
+    check_mission,
     check_fence,
+    check_rally,
+    check_local_frame,
     check_ftp,
     check_timesync,
 )

@@ -40,7 +40,11 @@ EXPECTED = {
     "params_read",
     "params_set",
     "mission_count",
+    "plan_capabilities",
+    "mission",
     "fence",
+    "rally",
+    "local_frame",
     "ftp_nak",
     "timesync",
 }
@@ -120,7 +124,7 @@ def test_emulator_ardupilot_over_tcp_passes_via_the_cli(capsys: pytest.CaptureFi
         code = conformance_main([f"tcp:127.0.0.1:{tcp}", "--timeout", "5"])
     out = capsys.readouterr().out
     assert code == 0, out
-    assert "19/19 checks passed" in out
+    assert "23/23 checks passed" in out
     assert "custom_mode 0x0 = STABILIZE" in out
 
 

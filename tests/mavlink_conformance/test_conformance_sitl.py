@@ -71,7 +71,7 @@ def test_conformance_passes_stock_sitl_and_leaves_it_running_as_it_was(
     out = capsys.readouterr().out
     print(out)
     assert code == 0, out + inst.log()
-    assert "19/19 checks passed" in out
+    assert "23/23 checks passed" in out
     assert inst.process.poll() is None, inst.log()  # still running
     after = _streams(url, inst.sysid, 3.0)
     assert "HEARTBEAT" in after
