@@ -301,8 +301,9 @@ class MissionRun:
             return
         if phase == "rtl-climb" and alt >= float(f.v_target[i]) - 0.5:
             self.phase = "rtl-home"
-            f.go_to(i, *v.home)
-        elif phase == "rtl-home" and np.hypot(*(pos - v.home)) < 1.0:
+            self._goal = return_point(v)
+            f.go_to(i, *self._goal)
+        elif phase == "rtl-home" and np.hypot(*(pos - self._goal)) < 1.0:
             self.phase = "rtl-land"
             f.climb_rate(i, -v.persona.speeds(v.params)[3])
 
@@ -322,3 +323,19 @@ class MissionRun:
         before AUTO moves it; PX4 starts on arming."""
         v = self.v
         return not v.landed or v.auto_armed or v.persona.mission.auto_armable
+
+
+def return_point(v: Vehicle) -> tuple[float, float]:
+    """Where RTL goes: the nearest of home and the stored rally points (ArduCopter with
+    RALLY_INCL_HOME 1, PX4 with RTL_TYPE 0, both stock), in the profile's frame."""
+    f, i = v.fleet, v.index
+    here = (float(f.pos[i, 0]), float(f.pos[i, 1]))
+    best, dist = v.home, math.hypot(here[0] - v.home[0], here[1] - v.home[1])
+    for it in v.plans.rally.items:
+        if it.frame not in GLOBAL_FRAMES:
+            continue
+        n, e, _ = v.geo.to_local(it.x * 1e-7, it.y * 1e-7, v.geo.alt)
+        d = math.hypot(here[0] - n, here[1] - e)
+        if d < dist:
+            best, dist = (n, e), d
+    return best

@@ -17,7 +17,7 @@ from sim_vehicle_stub.fleet_kinematics import Fleet
 from sim_vehicle_stub.fleet_step_kernel import GROUND_ALT
 from sim_vehicle_stub.geo_frame import GeoFrame
 from sim_vehicle_stub.manual_control import Pilot, fly_sticks
-from sim_vehicle_stub.mission_flight import MissionRun
+from sim_vehicle_stub.mission_flight import MissionRun, return_point
 from sim_vehicle_stub.mission_store import MissionItem, VehiclePlans
 from sim_vehicle_stub.params import ParamTable
 from sim_vehicle_stub.personas.base import (
@@ -114,6 +114,8 @@ class Vehicle:
         self.pending_takeoff: float | None = None
         """Altitude of a takeoff accepted while disarmed (PX4), flown once armed."""
         self.rtl_phase = 0
+        self.rtl_target: tuple[float, float] = self.home
+        """Where the RTL in progress lands: home or the nearest rally point."""
         self.last_gcs_heartbeat: float | None = None
         self.link_lost = False
         self.fence_breached = False
@@ -414,7 +416,8 @@ class Vehicle:
         i, f = self.index, self.fleet
         if self.rtl_phase == 0 and f.alt[i] >= f.v_target[i] - 0.5:
             self.rtl_phase = 1
-            f.go_to(i, *self.home)
-        elif self.rtl_phase == 1 and np.hypot(*(f.pos[i] - self.home)) < 1.0:
+            self.rtl_target = return_point(self)
+            f.go_to(i, *self.rtl_target)
+        elif self.rtl_phase == 1 and np.hypot(*(f.pos[i] - self.rtl_target)) < 1.0:
             self.rtl_phase = 2
             f.climb_rate(i, -self.persona.speeds(self.params)[3])

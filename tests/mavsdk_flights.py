@@ -45,16 +45,17 @@ async def autopilot(mavsdk: Mavsdk, url: str, seconds: float = 30.0) -> Any:
 
 
 async def _ready(tel: TelemetryAsync, seconds: float) -> tuple[float, float, float]:
-    """Wait for a global position and home; (lat, lon, AMSL) of home."""
+    """Wait for home (streamed at 1 Hz on request: ArduCopter sends it only when asked, and
+    has none before its GPS fix); (lat, lon, AMSL) of home."""
 
     async def wait() -> tuple[float, float, float]:
-        async for health in tel.subscribe_health():
-            if health.is_global_position_ok and health.is_home_position_ok:
-                break
         async for home in tel.subscribe_home():
-            return home.latitude_deg, home.longitude_deg, home.absolute_altitude_m
+            if home.latitude_deg != 0.0 and math.isfinite(home.latitude_deg):
+                return home.latitude_deg, home.longitude_deg, home.absolute_altitude_m
         raise RuntimeError("home stream ended")
 
+    await tel.set_rate_position(10.0)
+    await tel.set_rate_home(1.0)
     return await asyncio.wait_for(wait(), seconds)
 
 
@@ -97,7 +98,6 @@ async def fly_plan(
         tel, act, mr = TelemetryAsync(system), ActionAsync(system), MissionRawAsync(system)
         param = ParamAsync(system)
         home = await _ready(tel, ready_s)
-        await tel.set_rate_position(10.0)
         if ardupilot:
             await param.set_param_float("WPNAV_SPEED", speed * 100.0)
         else:
@@ -166,7 +166,6 @@ async def fly_offboard_square(
         system = await autopilot(mavsdk, url)
         tel, act, off = TelemetryAsync(system), ActionAsync(system), OffboardAsync(system)
         home = await _ready(tel, 90.0)
-        await tel.set_rate_position(10.0)
         await _arm_when_ready(act, 60.0)
         await act.set_takeoff_altitude(alt)
         await act.takeoff()
@@ -205,7 +204,6 @@ async def fly_sticks(url: str, *, seconds: float) -> StickFlight:
         tel, act = TelemetryAsync(system), ActionAsync(system)
         manual = ManualControlAsync(system)
         home = await _ready(tel, 90.0)
-        await tel.set_rate_position(10.0)
         await _arm_when_ready(act, 60.0)
         await act.set_takeoff_altitude(10.0)
         await act.takeoff()

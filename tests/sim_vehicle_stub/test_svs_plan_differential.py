@@ -28,8 +28,11 @@ SPEEDUP = {"arducopter": 5.0, "px4": 4.0}
 SURVEY = lawnmower(3, 80.0, 25.0, (20.0, -20.0))
 ALT = 15.0
 SPEED = 8.0
-PASS_RADIUS = 3.0
-"""m: each survey point is passed this close by both (acceptance radii 2 m)."""
+PASS_RADIUS = {"emulator": 2.5, "sitl": 6.0}
+"""m: each survey point is passed this close (acceptance radii 2 m; PX4 SITL turns early,
+passing up to 4.2 m off in the first run)."""
+LANDING_AGREEMENT = 6.0
+"""m between where the two touched down (the rally point 50 m north, nearer than home)."""
 PATH_TOLERANCE = {"arducopter": 6.0, "px4": 8.0}
 """m: the largest distance from a point of one survey path to the other path (measured: see
 docs/protocol.md; ArduCopter's S-curves and PX4's acceptance-radius turns round the corners
@@ -92,12 +95,16 @@ def test_a_qgc_plan_is_flown_like_the_real_autopilot_flies_it(
     print(
         f"\n{autopilot}: progress emulator {emulated.progress} sitl {real.progress}; survey "
         f"point misses emulator {np.round(misses['emulator'], 2).tolist()} sitl "
-        f"{np.round(misses['sitl'], 2).tolist()}; path distance {path:.2f} m; landed from home "
-        f"{ {k: round(v, 2) for k, v in landed.items()} }; samples {len(e)} / {len(r)}"
+        f"{np.round(misses['sitl'], 2).tolist()}; path distance {path:.2f} m; landed at "
+        f"{landed}; samples {len(e)} / {len(r)}"
     )
     assert emulated.uploaded == real.uploaded
     assert emulated.downloaded == real.downloaded
     assert emulated.progress == real.progress
-    assert max(misses["emulator"]) < PASS_RADIUS
-    assert max(misses["sitl"]) < PASS_RADIUS
+    assert max(misses["emulator"]) < PASS_RADIUS["emulator"]
+    assert max(misses["sitl"]) < PASS_RADIUS["sitl"]
+    assert emulated.landed_at is not None
+    assert real.landed_at is not None
+    landing = math.dist(emulated.landed_at, real.landed_at)
+    assert landing < LANDING_AGREEMENT, (emulated.landed_at, real.landed_at)
     assert path < PATH_TOLERANCE[autopilot], inst.log()[-1500:]
