@@ -13,7 +13,8 @@ import numpy as np
 from sim_vehicle_stub.mavlink import dialect as d
 
 _NASTY = (math.nan, math.inf, -math.inf, 1e38, -1e38, 1e9, -1e9, 0.0, -1.0, 21196.0, 3.4e38)
-_COMMANDS = (400, 176, 22, 21, 20, 178, 192, 511, 512, 410, 520, 31999, 246, 183)
+_COMMANDS = (400, 176, 22, 21, 20, 178, 192, 511, 512, 410, 520, 31999, 246, 183, 300, 224,
+             207, 179, 115, 17)  # fmt: skip
 _PARAMS = (b"MDM_SENSOR", b"MDM_SENS_R0", b"MDM_TAU", b"MPC_XY_VEL_MAX", b"WPNAV_SPEED",
            b"COM_OF_LOSS_T", b"GUID_TIMEOUT", b"MIS_TAKEOFF_ALT", b"NO_SUCH_PARAM", b"")  # fmt: skip
 _MODES = (0, 2, 4, 5, 6, 9, 17, 0x10000, 0x30000, 0x60000, 0x2040000, 0x3040000, 0x5040000,
@@ -81,6 +82,43 @@ def _mission(rng: np.random.Generator, target: int) -> Any:
     return d.MAVLink_mission_clear_all_message(target, 1, int(rng.integers(0, 256)))
 
 
+def _plan_item(rng: np.random.Generator, target: int) -> Any:
+    """An item of an upload (INT or legacy float), a partial list or a request, any plan."""
+    k = int(rng.integers(4))
+    seq, kind = int(rng.integers(0, 8)), int(rng.integers(0, 3))
+    cmd = int(rng.choice((16, 17, 19, 20, 21, 22, 177, 178, 5001, 5003, 5100, 31999)))
+    p = [_f32(_value(rng)) for _ in range(4)]
+    frame = int(rng.choice((0, 2, 3, 6, 12)))
+    if k == 0:
+        x, y = _int32(_value(rng)), _int32(_value(rng))
+        return d.MAVLink_mission_item_int_message(
+            target, 1, seq, frame, cmd, 0, 1, *p, x, y, _f32(_value(rng)), kind
+        )
+    if k == 1:
+        xy = (_f32(_value(rng)), _f32(_value(rng)))
+        return d.MAVLink_mission_item_message(
+            target, 1, seq, frame, cmd, 0, 1, *p, *xy, _f32(_value(rng)), kind
+        )
+    if k == 2:
+        start, end = (int(rng.integers(-2, 10)) for _ in range(2))
+        return d.MAVLink_mission_write_partial_list_message(target, 1, start, end, kind)
+    return d.MAVLink_mission_request_message(target, 1, seq, kind)
+
+
+def _pilot(rng: np.random.Generator, target: int) -> Any:
+    """Sticks (MANUAL_CONTROL, RC_CHANNELS_OVERRIDE) or REQUEST_DATA_STREAM, any value."""
+    k = int(rng.integers(3))
+    if k == 0:
+        axes = (int(rng.integers(-32768, 32768)) for _ in range(4))
+        return d.MAVLink_manual_control_message(target, *axes, 0)
+    if k == 1:
+        chans = [int(rng.integers(0, 65536)) for _ in range(8)]
+        return d.MAVLink_rc_channels_override_message(target, 1, *chans)
+    return d.MAVLink_request_data_stream_message(
+        target, 1, int(rng.integers(0, 256)), int(rng.integers(0, 65536)), int(rng.integers(0, 2))
+    )
+
+
 def _other(rng: np.random.Generator, target: int) -> Any:
     k = int(rng.integers(4))
     if k == 0:
@@ -99,7 +137,7 @@ def _other(rng: np.random.Generator, target: int) -> Any:
 
 _MAKERS: tuple[Callable[[np.random.Generator, int], Any], ...] = (
     _command, _command, _command, _local_target, _local_target, _global_target, _param_set,
-    _set_mode, _mission, _other,
+    _set_mode, _mission, _plan_item, _pilot, _other,
 )  # fmt: skip
 
 

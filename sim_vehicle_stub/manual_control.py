@@ -102,15 +102,18 @@ def fly_sticks(v: Vehicle) -> None:
     """One tick of a pilot mode: the sticks' velocity, climb and turn, or a hold once they are
     centred or timed out. On the ground only a climb (throttle up) starts anything."""
     pilot = v.pilot
-    sticks = pilot.current(v.now, v.limits.sticks)
     i, f = v.index, v.fleet
+    if not v.armed:
+        pilot.flying = False  # motors off: the vehicle falls (Vehicle._fall), no hold
+        return
+    sticks = pilot.current(v.now, v.limits.sticks)
     if sticks is None or sticks.centred:
         if pilot.flying:
             pilot.flying = False
             f.hold(i)
             f.yaw_rate[i] = math.nan
         return
-    if not v.armed or (v.landed and sticks.up <= 0):
+    if v.landed and sticks.up <= 0:
         return
     v.auto_armed = True
     pilot.flying = True

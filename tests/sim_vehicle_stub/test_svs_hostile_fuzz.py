@@ -148,7 +148,7 @@ def _fly(c: Client, emu: Emulator, i: int) -> None:
     if v.persona.name == "px4":
         c.stream(lambda: c.velocity(5.0, 0.0), 0.5)
         assert c.command(176, 1, 6, 0) == 0  # OFFBOARD
-    start = float(emu.fleet.pos[i, 0])
+    start = float(emu.fleet.pos[i, 0]) - v.origin[0]  # LOCAL_POSITION_NED: from its boot point
     moved = c.stream_until(
         lambda: c.velocity(5.0, 0.0),
         lambda m: m.get_type() == "LOCAL_POSITION_NED" and m.x > start + 20.0,
