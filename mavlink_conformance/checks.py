@@ -459,6 +459,17 @@ def check_fence(s: Session) -> CheckResult:
     return CheckResult("fence", True, f"4 vertices read back equal; {len(before)} put back")
 
 
+def _requested(s: Session, msg_id: int, kind: str) -> Any:
+    """The message REQUEST_MESSAGE asked for: it may come before the COMMAND_ACK (read while
+    waiting for it), or after; None when it did not come."""
+    since = time.monotonic()
+    ack = s.command(ml.MAV_CMD_REQUEST_MESSAGE, msg_id)
+    if ack is None or ack.result != 0:
+        return None
+    early = [m for t, m in s.seen.get(kind, []) if t >= since]
+    return early[-1] if early else s.recv({kind}, s.timeout)
+
+
 _PLAN_CAPABILITIES = (
     ml.MAV_PROTOCOL_CAPABILITY_MISSION_INT
     | ml.MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
@@ -469,8 +480,7 @@ _PLAN_CAPABILITIES = (
 def check_plan_capabilities(s: Session) -> CheckResult:
     """AUTOPILOT_VERSION says the mission protocol takes INT items, fences and rally points:
     without these bits MAVSDK refuses missions and geofences before sending anything."""
-    ack = s.command(ml.MAV_CMD_REQUEST_MESSAGE, ml.MAVLINK_MSG_ID_AUTOPILOT_VERSION)
-    m = s.recv({"AUTOPILOT_VERSION"}, s.timeout) if ack is not None else None
+    m = _requested(s, ml.MAVLINK_MSG_ID_AUTOPILOT_VERSION, "AUTOPILOT_VERSION")
     if m is None:
         return CheckResult("plan_capabilities", False, "no AUTOPILOT_VERSION")
     missing = [
@@ -606,8 +616,7 @@ def check_local_frame(s: Session) -> CheckResult:
     """LOCAL_POSITION_NED is metres from the local origin GPS_GLOBAL_ORIGIN names (where the
     vehicle booted, on PX4 and ArduPilot): the global position put in that frame is where the
     local position says, and home lies near it (a vehicle is where it booted)."""
-    ack = s.command(ml.MAV_CMD_REQUEST_MESSAGE, ml.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN)
-    origin = s.recv({"GPS_GLOBAL_ORIGIN"}, s.timeout) if ack is not None else None
+    origin = _requested(s, ml.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN, "GPS_GLOBAL_ORIGIN")
     if origin is None:
         return CheckResult("local_frame", False, "no GPS_GLOBAL_ORIGIN on REQUEST_MESSAGE")
     _set_interval(s, ml.MAVLINK_MSG_ID_LOCAL_POSITION_NED, 200_000)

@@ -31,6 +31,8 @@ ALLOWED = {
     "DEBUG_VECT",
     "COMMAND_ACK",
     "STATUSTEXT",
+    "MISSION_CURRENT",
+    "VFR_HUD",  # the vehicle's own speed, heading and altitude, as GLOBAL_POSITION_INT
 }
 
 
