@@ -111,9 +111,10 @@ async def fly_plan(
         sampler = asyncio.create_task(_sample(tel, home, rec.path))
         watcher = asyncio.create_task(_progress(mr, rec))
         try:
-            await _arm_when_ready(act, ready_s)
             if ardupilot:  # ArduCopter's AUTO leaves the ground after a takeoff (auto_armed)
                 await act.set_takeoff_altitude(5.0)
+            await _arm_when_ready(act, ready_s)
+            if ardupilot:  # at once: ArduCopter disarms on the ground after DISARM_DELAY
                 await act.takeoff()
                 await asyncio.sleep(1.0)
             await mr.start_mission()

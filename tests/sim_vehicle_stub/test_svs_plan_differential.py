@@ -24,7 +24,9 @@ from tests.sitl import SitlInstance
 log = logging.getLogger(__name__)
 PERSONA = {"arducopter": "ardupilot", "px4": "px4"}
 HOME = (PROFILE.origin.lat, PROFILE.origin.lon, PROFILE.origin.alt)
-SPEEDUP = {"arducopter": 5.0, "px4": 4.0}
+SPEEDUP = {"arducopter": 3.0, "px4": 4.0}
+"""ArduCopter's DISARM_DELAY (10 s on the ground) must not pass between MAVSDK's arm and its
+takeoff (a mode change and a command, in wall time)."""
 SURVEY = lawnmower(3, 80.0, 25.0, (20.0, -20.0))
 ALT = 15.0
 SPEED = 8.0
