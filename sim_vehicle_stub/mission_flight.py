@@ -97,6 +97,10 @@ class MissionRun:
 
     # ----- MISSION_CURRENT
     def current_message(self) -> Any:
+        return d.MAVLink_mission_current_message(*self.current_args())
+
+    def current_args(self) -> tuple[int, int, int, int]:
+        """MISSION_CURRENT's seq, total, mission_state, mission_mode."""
         rules = self.v.persona.mission
         n = len(self.items)
         total = max(n - 1, 0) if rules.home_is_item0 else (n or 65535)
@@ -104,7 +108,7 @@ class MissionRun:
         if rules.reports_mission_state:
             state = self.state
             mode = 1 if self.v.mode.behaviour.value == "mission" else 2
-        return d.MAVLink_mission_current_message(self.current, total, state, mode)
+        return self.current, total, state, mode
 
     # ----- AUTO
     def enter(self) -> None:

@@ -141,6 +141,7 @@ class Telemetry:
             d.MAVLINK_MSG_ID_GPS_RAW_INT: self.gps_raw_int_args,
             d.MAVLINK_MSG_ID_HOME_POSITION: self.home_position_args,
             d.MAVLINK_MSG_ID_VFR_HUD: self.vfr_hud_args,
+            d.MAVLINK_MSG_ID_MISSION_CURRENT: self.mission_current_args,
             d.MAVLINK_MSG_ID_RC_CHANNELS: self.rc_channels_args,
             d.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW: self.servo_output_raw_args,
         }
@@ -156,7 +157,6 @@ class Telemetry:
                 d.MAVLINK_MSG_ID_LOCAL_POSITION_NED: self.local_position_ned,
                 d.MAVLINK_MSG_ID_ATTITUDE: self.attitude,
                 d.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
-                d.MAVLINK_MSG_ID_MISSION_CURRENT: self.mission_current,
                 d.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN: self.gps_global_origin,
             }
         )
@@ -271,8 +271,8 @@ class Telemetry:
             int(lat * 1e7), int(lon * 1e7), round(self.geo.alt * 1000), self.clock.usec
         )
 
-    def mission_current(self, v: Vehicle) -> Any:
-        return v.mission_run.current_message()
+    def mission_current_args(self, v: Vehicle) -> tuple[Any, ...]:
+        return v.mission_run.current_args()
 
     def vfr_hud_args(self, v: Vehicle) -> tuple[Any, ...]:
         i, f = v.index, self.fleet
