@@ -49,7 +49,13 @@ def test_a_wrong_frame_is_caught_at_the_fence_and_flown_home(tmp_path: Path) -> 
             return await asyncio.wait_for(flight.ended(), 120.0)
 
     config = make_config(1, base, profile=FIELD, speedup=50.0, start_positions=((600.0, 1000.0),))
-    with running_emulator(config):
+    with running_emulator(config) as emu:
+        # The vehicle's own fence action off (GF_ACTION 0): this is about the companion's watch.
+        # With PX4's stock HOLD the emulated vehicle, as a real PX4, would itself stop at the
+        # line of the fence the companion uploaded, racing the watch.
+        v = emu.vehicles[0]
+        v.params.set("GF_ACTION", 0.0)
+        v.apply_params()
         reason = asyncio.run(main())
     assert reason.startswith("outside the fence: "), reason
     records = read_records(tmp_path / "mission-0.jsonl")
