@@ -102,6 +102,10 @@ class ArduCopterPersona(Persona):
             ParamSpec("FENCE_RADIUS", 150.0, low=30.0, high=10000.0, doc="m, FENCE_TYPE bit 1"),
             ParamSpec("FENCE_MARGIN", 2.0, low=1.0, high=10.0, doc="m inside a fence"),
             ParamSpec("WPNAV_RADIUS", 200.0, low=5.0, high=1000.0, doc="waypoint radius, cm"),
+            # Listed only (stock values read from ArduCopter SITL), so a preflight can set them.
+            ParamSpec("FS_OPTIONS", 16, i32, 0, 1023, "listed only"),
+            ParamSpec("WP_YAW_BEHAVIOR", 2, i8, 0, 3, "listed only"),
+            ParamSpec("RTL_ALT_FINAL", 0, i32, 0, 1000, "listed only, cm"),
             ParamSpec("BATT_CAPACITY", 5200, i32, 0, 1e6, "mAh"),
             ParamSpec("BATT_LOW_MAH", 800, i32, 0, 1e6, "mAh left that trigger the failsafe"),
             ParamSpec("BATT_FS_LOW_ACT", 2, i8, 0, 5, "0 none, 1 land, 2 RTL"),

@@ -104,6 +104,11 @@ class Px4Persona(Persona):
             ParamSpec("GF_MAX_HOR_DIST", 0.0, low=0.0, high=1e4, doc="m from home, 0 off"),
             ParamSpec("GF_MAX_VER_DIST", 0.0, low=0.0, high=1e4, doc="m above home, 0 off"),
             ParamSpec("NAV_ACC_RAD", 2.0, low=0.05, high=200.0, doc="waypoint radius, m"),
+            # Listed only (stock values read from PX4 SITL), so a preflight can set them.
+            ParamSpec("GF_SOURCE", 0, i32, 0, 1, "listed only"),
+            ParamSpec("GF_PREDICT", 0, i32, 0, 1, "listed only"),
+            ParamSpec("NAV_RCL_ACT", 2, i32, 0, 6, "listed only: no RC link is emulated"),
+            ParamSpec("COM_RCL_EXCEPT", 0, i32, 0, 7, "listed only"),
             ParamSpec("BAT_CRIT_THR", 0.07, low=0.0, high=1.0),
             ParamSpec("COM_LOW_BAT_ACT", 3, i32, 0, 3, "0 warn, 2 land, 3 RTL at critical"),
             ParamSpec("MIS_TAKEOFF_ALT", 2.5, low=0.0, high=1e4),
