@@ -3,8 +3,10 @@
 Flies 3 vehicles of a small profile (seed 7, 300 sim s, pymavlink, lockstep at 100x) against the
 emulator and reads from each vehicle's .tlog and mission log what is deterministic:
 
-- ``waypoints``: the sequence of targets (x, y, z of SET_POSITION_TARGET_LOCAL_NED, exact
-  float32 values) in the search phase, each with the search time it was first sent;
+- ``waypoints``: the sequence of targets (x, y, z of SET_POSITION_TARGET_LOCAL_NED) in the
+  search phase, in the profile's frame (x, y plus the vehicle's local origin from the mission
+  log's ``frame`` event: 0 for records made when the emulator's local frame was the profile's),
+  each with the search time it was first sent;
 - ``velocities``: the horizontal velocity setpoint (vn, ve) at every whole search second;
 - ``decisions``: the mission log's detections, confirmations, fall-backs, levels and its end,
   with the search time.
@@ -78,6 +80,9 @@ DECISIONS = ("detection", "confirmation", "fallback", "level", "end")
 TIME_TOLERANCE = 0.25
 """Search seconds a waypoint or decision may move: the millisecond of a timestamp, rounding, one
 missed lockstep tick (0.1 s) on a loaded host."""
+WAYPOINT_TOLERANCE = 0.01
+"""m: a target in the profile's frame is the float32 on the wire plus the origin the mission log
+gives to the centimetre."""
 VELOCITY_TOLERANCE = 0.01
 """m/s: float32 noise of the same velocity computed from positions a few ms of flight apart."""
 MISSING_SAMPLES = 5
@@ -114,6 +119,8 @@ def vehicle_record(run: Path, vehicle: int) -> dict[str, Any]:
     if not starts:
         raise RuntimeError(f"vehicle {vehicle} of {run} never started its search")
     start = float(starts[0])
+    frames = [r for r in records if r.get("event") == "frame"]
+    north, east = (float(frames[-1]["north"]), float(frames[-1]["east"])) if frames else (0.0, 0.0)
     waypoints: list[list[float]] = []
     velocities: dict[str, list[float]] = {}
     log = mavutil.mavlink_connection(str(run / f"vehicle-{vehicle}.tlog"), dialect="ardupilotmega")
@@ -121,7 +128,7 @@ def vehicle_record(run: Path, vehicle: int) -> dict[str, Any]:
         t = msg.time_boot_ms / 1000.0 - start
         if t < -0.0005:
             continue
-        target = [msg.x, msg.y, msg.z]
+        target = [msg.x + north, msg.y + east, msg.z]
         if not waypoints or waypoints[-1][1:] != target:
             waypoints.append([round(t, 3), *target])
         tenth = round(t * 10)
@@ -162,7 +169,7 @@ def _upto(vehicle: dict[str, Any], end: float) -> dict[str, Any]:
 
 def _vehicle_differences(b: dict[str, Any], a: dict[str, Any]) -> list[str]:
     out: list[str] = []
-    if [w[1:] for w in b["waypoints"]] != [w[1:] for w in a["waypoints"]]:
+    if not _same_targets(b["waypoints"], a["waypoints"]):
         out.append(f"waypoints {b['waypoints']} became {a['waypoints']}")
     else:
         out += [
@@ -188,6 +195,14 @@ def _vehicle_differences(b: dict[str, Any], a: dict[str, Any]) -> list[str]:
         if not _close(vb[s], va[s])
     ]
     return out
+
+
+def _same_targets(before: list[list[float]], after: list[list[float]]) -> bool:
+    return len(before) == len(after) and all(
+        math.isclose(x, y, abs_tol=WAYPOINT_TOLERANCE)
+        for wb, wa in zip(before, after, strict=True)
+        for x, y in zip(wb[1:], wa[1:], strict=True)
+    )
 
 
 def _close(before: list[float], after: list[float]) -> bool:
