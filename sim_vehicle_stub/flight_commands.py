@@ -9,6 +9,7 @@ import math
 
 from sim_vehicle_stub.geo_frame import GeoFrame
 from sim_vehicle_stub.mavlink import dialect as d
+from sim_vehicle_stub.orbit import orbit_about
 from sim_vehicle_stub.vehicle import ACCEPTED, DENIED, FAILED, UNSUPPORTED, Vehicle
 
 MISSION_COMMANDS = frozenset(
@@ -19,6 +20,7 @@ MISSION_COMMANDS = frozenset(
         d.MAV_CMD_DO_SET_HOME,
         d.MAV_CMD_CONDITION_YAW,
         d.MAV_CMD_NAV_LOITER_UNLIM,
+        d.MAV_CMD_DO_ORBIT,
     )
 )
 
@@ -49,6 +51,8 @@ def run_flight_command(
         return _set_home(v, p, frame, geo)
     if cmd == d.MAV_CMD_CONDITION_YAW:
         return _condition_yaw(v, p)
+    if cmd == d.MAV_CMD_DO_ORBIT:
+        return _orbit(v, p, frame, geo)
     # NAV_LOITER_UNLIM as a command: ArduCopter switches to LOITER where it is.
     return v.set_mode(v.persona.mode(v.persona.loiter_mode))
 
@@ -82,6 +86,33 @@ def _set_home(v: Vehicle, p: tuple[float, ...], frame: int | None, geo: GeoFrame
     north, east, _ = geo.to_local(lat, lon, geo.alt)
     v.home = (north, east)
     return ACCEPTED
+
+
+_ORBIT_RADIUS, _ORBIT_SPEED = 10.0, 1.0
+"""PX4's DO_ORBIT defaults for NaN radius and speed (m, m/s)."""
+
+
+def _orbit(v: Vehicle, p: tuple[float, ...], frame: int | None, geo: GeoFrame) -> int:
+    """PX4 DO_ORBIT: p1 radius (negative: counter-clockwise), p2 speed, p5/p6 centre (NaN:
+    here), p7 altitude AMSL (NaN: kept). ACCEPTED on the ground too, as PX4 SITL; flown once
+    airborne in ORBIT."""
+    radius = p[0] if math.isfinite(p[0]) and p[0] != 0 else _ORBIT_RADIUS
+    speed = p[1] if math.isfinite(p[1]) and p[1] > 0 else _ORBIT_SPEED
+    if abs(radius) > 1e5 or speed > 100.0:
+        return DENIED
+    f, i = v.fleet, v.index
+    here = (float(f.pos[i, 0]), float(f.pos[i, 1]))
+    north, east = here
+    if math.isfinite(p[4]) and math.isfinite(p[5]):
+        scale = 1e-7 if frame is not None else 1.0
+        lat, lon = p[4] * scale, p[5] * scale
+        if abs(lat) > 90 or abs(lon) > 180:
+            return DENIED
+        north, east, _ = geo.to_local(lat, lon, geo.alt)
+    v.orbit = orbit_about(north, east, here, radius, speed)
+    if math.isfinite(p[6]) and abs(p[6] - geo.alt) < 1e5:
+        f.climb_to(i, max(p[6] - geo.alt, 0.0))
+    return v.set_mode(v.persona.mode("ORBIT"), "orbit")
 
 
 def _condition_yaw(v: Vehicle, p: tuple[float, ...]) -> int:

@@ -19,6 +19,7 @@ from sim_vehicle_stub.geo_frame import GeoFrame
 from sim_vehicle_stub.manual_control import Pilot, fly_sticks
 from sim_vehicle_stub.mission_flight import MissionRun, return_point
 from sim_vehicle_stub.mission_store import MissionItem, VehiclePlans
+from sim_vehicle_stub.orbit import Orbit
 from sim_vehicle_stub.params import ParamTable
 from sim_vehicle_stub.personas.base import (
     Action,
@@ -101,6 +102,9 @@ class Vehicle:
         self.outbox: list[Any] = []
         """Messages waiting to be sent with the next tick (MISSION_CURRENT, ITEM_REACHED)."""
         self.pilot = Pilot()
+        self.orbit: Orbit | None = None
+        """The circle being flown in the orbit mode (CIRCLE, ORBIT)."""
+        self._orbit_t = 0.0
         self.fence_shapes = FenceShapes()
         """The uploaded fence in the local frame, rebuilt when a new one is stored."""
         self.auto_armed = False
@@ -190,6 +194,8 @@ class Vehicle:
             return ACCEPTED
         if self.mode.behaviour is Behaviour.MISSION:
             self.mission_run.leave()
+        if mode.behaviour is not Behaviour.ORBIT:
+            self.orbit = None
         self.mode = mode
         self.state_changed = True
         self.events.write(self.now, "mode", vehicle=self.index, mode=mode.name, reason=reason)
@@ -234,6 +240,13 @@ class Vehicle:
         elif b is Behaviour.MISSION:
             f.hold(i)
             self.mission_run.enter()
+        elif b is Behaviour.ORBIT:
+            f.hold(i)
+            if self.orbit is None:
+                self.orbit = self.persona.orbit_entered(
+                    self.params, float(f.pos[i, 0]), float(f.pos[i, 1]), float(f.yaw[i])
+                )
+            self._orbit_t = self.now
         elif b is Behaviour.RTL:
             f.hold(i)
             self.rtl_phase = 0
@@ -397,6 +410,10 @@ class Vehicle:
             self._rtl_step()
         elif b is Behaviour.MISSION:
             self.mission_run.step()
+        elif b is Behaviour.ORBIT and self.orbit is not None and self.armed and not self.landed:
+            now = self.now
+            f.go_to(i, *self.orbit.advance(now - self._orbit_t))
+            self._orbit_t = now
         if self.mode.name in self.persona.manual_modes:
             fly_sticks(self)
         touching = self.armed and f.alt[i] <= 0.05

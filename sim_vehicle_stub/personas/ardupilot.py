@@ -6,6 +6,7 @@ import math
 
 from sim_vehicle_stub.fence_enforcement import FenceRules
 from sim_vehicle_stub.mavlink import dialect as d
+from sim_vehicle_stub.orbit import Orbit, circle_ahead
 from sim_vehicle_stub.params import ParamSpec, ParamTable, ParamType
 from sim_vehicle_stub.personas.base import (
     LACKING_CAPABILITIES,
@@ -24,8 +25,8 @@ LOCATION_ALT_MAX_M = 83000.0
 
 
 class ArduCopterPersona(Persona):
-    """ArduCopter: GUIDED, AUTO, LOITER, POSHOLD, RTL, SMART_RTL, LAND, BRAKE (STABILIZE on the
-    ground at boot, ALT_HOLD)."""
+    """ArduCopter: GUIDED, AUTO, LOITER, POSHOLD, CIRCLE, RTL, SMART_RTL, LAND, BRAKE (STABILIZE
+    on the ground at boot, ALT_HOLD)."""
 
     name = "ardupilot"
     autopilot = 3
@@ -37,6 +38,7 @@ class ArduCopterPersona(Persona):
         ModeSpec("GUIDED", 4, Behaviour.EXTERNAL),
         ModeSpec("LOITER", 5, Behaviour.HOLD),
         ModeSpec("RTL", 6, Behaviour.RTL, armable=False),
+        ModeSpec("CIRCLE", 7, Behaviour.ORBIT, armable=False),
         ModeSpec("LAND", 9, Behaviour.LAND, armable=False),
         ModeSpec("POSHOLD", 16, Behaviour.HOLD),
         ModeSpec("BRAKE", 17, Behaviour.HOLD, armable=False),
@@ -121,6 +123,8 @@ class ArduCopterPersona(Persona):
             ParamSpec("WPNAV_SPEED_DN", 150.0, low=10.0, high=1e4, doc="cm/s"),
             ParamSpec("LAND_SPEED", 50.0, low=10.0, high=1e4, doc="cm/s"),
             ParamSpec("RTL_ALT", 1500.0, low=0.0, high=1e6, doc="cm"),
+            ParamSpec("CIRCLE_RADIUS", 1000.0, low=0.0, high=2e5, doc="cm"),
+            ParamSpec("CIRCLE_RATE", 20.0, low=-90.0, high=90.0, doc="deg/s, + clockwise"),
             ParamSpec("RC_OVERRIDE_TIME", 3.0 * s, low=-1.0, high=1e6, doc="RC override, s"),
         ]
 
@@ -200,6 +204,11 @@ class ArduCopterPersona(Persona):
 
     def rtl_altitude(self, params: ParamTable) -> float:
         return params.get("RTL_ALT") / 100.0
+
+    def orbit_entered(self, params: ParamTable, north: float, east: float, yaw: float) -> Orbit:
+        # ModeCircle: the centre CIRCLE_RADIUS ahead, turning at CIRCLE_RATE.
+        radius = params.get("CIRCLE_RADIUS") / 100.0
+        return circle_ahead(north, east, yaw, radius, params.get("CIRCLE_RATE"))
 
     def stick_timeout(self, params: ParamTable) -> float:
         t = params.get("RC_OVERRIDE_TIME")

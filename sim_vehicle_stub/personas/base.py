@@ -10,6 +10,7 @@ from typing import ClassVar
 
 from sim_vehicle_stub.fence_enforcement import FenceRules
 from sim_vehicle_stub.mavlink import dialect as d
+from sim_vehicle_stub.orbit import Orbit, orbit_about
 from sim_vehicle_stub.params import ParamSpec, ParamTable, ParamType
 from sim_vehicle_stub.personas.mission_rules import MissionRules
 
@@ -36,6 +37,8 @@ class Behaviour(Enum):
     RTL = "rtl"
     MISSION = "mission"
     """Flies the stored mission (ArduCopter AUTO, PX4 AUTO.MISSION): mission_flight.py."""
+    ORBIT = "orbit"
+    """Circles a point (ArduCopter CIRCLE, PX4 ORBIT): orbit.py."""
 
 
 class Action(Enum):
@@ -272,6 +275,10 @@ class Persona(ABC):
     @abstractmethod
     def stick_timeout(self, params: ParamTable) -> float:
         """Sim s without MANUAL_CONTROL / RC override after which the sticks are released."""
+
+    def orbit_entered(self, params: ParamTable, north: float, east: float, yaw: float) -> Orbit:
+        """The circle flown when the orbit mode is entered without a DO_ORBIT."""
+        return orbit_about(north, east, (north - 10.0, east), 10.0, 1.0)
 
     @abstractmethod
     def rtl_altitude(self, params: ParamTable) -> float:

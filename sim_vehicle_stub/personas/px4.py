@@ -25,6 +25,7 @@ def px4_mode(main: int, sub: int = 0) -> int:
 
 
 _MAIN_AUTO = 4
+_MAIN_POSCTL = 3
 
 
 class Px4Persona(Persona):
@@ -37,6 +38,7 @@ class Px4Persona(Persona):
         ModeSpec("MANUAL", px4_mode(1), Behaviour.MANUAL),
         ModeSpec("ALTCTL", px4_mode(2), Behaviour.MANUAL),
         ModeSpec("POSCTL", px4_mode(3), Behaviour.HOLD),
+        ModeSpec("ORBIT", px4_mode(3, 1), Behaviour.ORBIT, armable=False),
         ModeSpec("OFFBOARD", px4_mode(6), Behaviour.EXTERNAL),
         ModeSpec("TAKEOFF", px4_mode(_MAIN_AUTO, 2), Behaviour.TAKEOFF),
         ModeSpec("HOLD", px4_mode(_MAIN_AUTO, 3), Behaviour.HOLD),
@@ -82,9 +84,10 @@ class Px4Persona(Persona):
     unknown_mode_result = 2  # DENIED
     manual_modes = frozenset(("MANUAL", "ALTCTL", "POSCTL"))
     data_streams = False
-    flight_commands = frozenset((300, 179))
-    """MISSION_START, DO_SET_HOME (PX4 SITL answers DO_SET_MISSION_CURRENT, DO_FENCE_ENABLE,
-    CONDITION_YAW and NAV_LOITER_UNLIM with UNSUPPORTED, a mission loaded or not)."""
+    flight_commands = frozenset((300, 179, 34))
+    """MISSION_START, DO_SET_HOME, DO_ORBIT (PX4 SITL answers DO_SET_MISSION_CURRENT,
+    DO_FENCE_ENABLE, CONDITION_YAW and NAV_LOITER_UNLIM with UNSUPPORTED, a mission loaded or
+    not)."""
     fixed_intervals = frozenset((42,))
     """MISSION_CURRENT: SET_MESSAGE_INTERVAL answered FAILED on PX4 SITL."""
     unrequestable = frozenset((42, 65, 74))
@@ -128,9 +131,9 @@ class Px4Persona(Persona):
         if not (math.isfinite(p2) and math.isfinite(p3)):
             return None
         main, sub = int(p2), int(p3)
-        if main != _MAIN_AUTO:
+        if main not in (_MAIN_AUTO, _MAIN_POSCTL):
             sub = 0
-        return self.mode_by_custom(px4_mode(main, sub))
+        return self.mode_by_custom(px4_mode(main, sub)) or self.mode_by_custom(px4_mode(main))
 
     def takeoff(self, p7: float, params: ParamTable, vehicle: VehicleFacts) -> TakeoffRequest | str:
         # PX4 reads param7 as AMSL; below home + MIS_TAKEOFF_ALT (or NaN) it climbs to

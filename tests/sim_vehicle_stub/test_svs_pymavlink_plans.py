@@ -194,3 +194,42 @@ def test_an_uploaded_fence_is_enforced_and_reported_in_sys_status() -> None:
         assert status.onboard_control_sensors_present & 0x100000
         assert emu.vehicles[0].mode.name == "RTL"
         assert c.pump(30.0, lambda m: m.get_type() == "HEARTBEAT" and not m.base_mode & 128)
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("persona", ["ardupilot", "px4"])
+def test_circle_and_do_orbit_fly_round_a_point(persona: str) -> None:
+    base = free_udp_base(1)
+    with (
+        running_emulator(make_config(1, base, personas=(persona,), speedup=10.0)) as emu,
+        Client(base, 1) as c,
+    ):
+        assert c.pump(5.0, lambda m: m.get_type() == "HEARTBEAT") is not None
+        v = emu.vehicles[0]
+        if persona == "ardupilot":
+            assert c.command(176, 1, 4) == 0
+            assert c.command(400, 1) == 0
+            assert c.command(22, 0, 0, 0, 0, 0, 0, 10.0) == 0
+        else:
+            assert c.command(400, 1) == 0
+            assert c.command(22, 0, 0, 0, 0, 0, 0, 488.0 + 10.0) == 0
+        assert c.pump(
+            20.0, lambda m: m.get_type() == "GLOBAL_POSITION_INT" and m.relative_alt > 9500
+        )
+        start = v.fleet.pos[0].copy()
+        if persona == "ardupilot":
+            assert c.command(176, 1, 7) == 0  # CIRCLE: CIRCLE_RADIUS 10 m ahead, 20 deg/s
+        else:  # DO_ORBIT: 15 m radius, 3 m/s, about here
+            nan = math.nan
+            assert c.command(34, 15.0, 3.0, nan, nan, nan, nan, nan) == 0
+        assert v.orbit is not None
+        centre = (v.orbit.north, v.orbit.east)
+        radius = v.orbit.radius
+        distances = []
+        for _ in range(30):
+            c.pump(0.2)
+            distances.append(math.dist(v.fleet.pos[0], centre))
+        assert v.mode.name == ("CIRCLE" if persona == "ardupilot" else "ORBIT")
+        moved = math.dist(v.fleet.pos[0], start)
+        assert moved > 5.0  # it went round
+        assert all(abs(r - radius) < 0.25 * radius for r in distances[10:]), distances
