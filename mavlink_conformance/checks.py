@@ -15,7 +15,7 @@ import logging
 import math
 import struct
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -459,6 +459,22 @@ def check_fence(s: Session) -> CheckResult:
     return CheckResult("fence", True, f"4 vertices read back equal; {len(before)} put back")
 
 
+@contextlib.contextmanager
+def _streamed(s: Session, kinds: tuple[str, ...], interval_us: float) -> Iterator[None]:
+    """The streams ``kinds`` at ``interval_us`` for the block, then set back: to their default
+    if they were streaming just before (seen within 1.5 s), off if not."""
+    recent = time.monotonic()
+    s.collect(1.5)  # what streams now, at 1 Hz or more
+    before = {k for k in kinds if any(t >= recent for t, _ in s.seen.get(k, []))}
+    for kind in kinds:
+        _set_interval(s, getattr(ml, f"MAVLINK_MSG_ID_{kind}"), interval_us)
+    try:
+        yield
+    finally:
+        for kind in kinds:
+            _set_interval(s, getattr(ml, f"MAVLINK_MSG_ID_{kind}"), 0 if kind in before else -1)
+
+
 def _requested(s: Session, msg_id: int, kind: str) -> Any:
     """The message REQUEST_MESSAGE asked for: it may come before the COMMAND_ACK (read while
     waiting for it), or after; None when it did not come."""
@@ -566,8 +582,8 @@ def check_mission(s: Session) -> CheckResult:
     ]
     refused = _plan_upload(s, mission, items)
     back = _plan_download(s, mission) if not refused else None
-    _set_interval(s, ml.MAVLINK_MSG_ID_MISSION_CURRENT, 500_000)
-    current = s.recv({"MISSION_CURRENT"}, s.timeout) if not refused else None
+    with _streamed(s, ("MISSION_CURRENT",), 500_000):
+        current = s.recv({"MISSION_CURRENT"}, s.timeout) if not refused else None
     restored = _plan_upload(s, mission, [_fields(m) for m in before])
     if refused:
         return CheckResult("mission", False, f"upload of 3 items: {refused}")
@@ -619,10 +635,9 @@ def check_local_frame(s: Session) -> CheckResult:
     origin = _requested(s, ml.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN, "GPS_GLOBAL_ORIGIN")
     if origin is None:
         return CheckResult("local_frame", False, "no GPS_GLOBAL_ORIGIN on REQUEST_MESSAGE")
-    _set_interval(s, ml.MAVLINK_MSG_ID_LOCAL_POSITION_NED, 200_000)
-    _set_interval(s, ml.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 200_000)
-    lpn = s.recv({"LOCAL_POSITION_NED"}, s.timeout)
-    gpi = s.recv({"GLOBAL_POSITION_INT"}, s.timeout)
+    with _streamed(s, ("LOCAL_POSITION_NED", "GLOBAL_POSITION_INT"), 200_000):
+        lpn = s.recv({"LOCAL_POSITION_NED"}, s.timeout)
+        gpi = s.recv({"GLOBAL_POSITION_INT"}, s.timeout)
     if lpn is None or gpi is None:
         return CheckResult("local_frame", False, "no LOCAL_POSITION_NED or GLOBAL_POSITION_INT")
     n, e, _ = pymap3d.geodetic2ned(
