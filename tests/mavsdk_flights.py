@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -19,6 +20,7 @@ from mavsdk.asyncio.plugins.mission_raw import MissionRawAsync
 from mavsdk.asyncio.plugins.offboard import OffboardAsync, PositionNedYaw
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
+from mavsdk.plugins.mavlink_direct import MavlinkDirect, MavlinkMessage
 
 
 @dataclass
@@ -111,13 +113,19 @@ async def fly_plan(
         sampler = asyncio.create_task(_sample(tel, home, rec.path))
         watcher = asyncio.create_task(_progress(mr, rec))
         try:
-            if ardupilot:  # ArduCopter's AUTO leaves the ground after a takeoff (auto_armed)
-                await act.set_takeoff_altitude(5.0)
             await _arm_when_ready(act, ready_s)
-            if ardupilot:  # at once: ArduCopter disarms on the ground after DISARM_DELAY
-                await act.takeoff()
-                await asyncio.sleep(1.0)
-            await mr.start_mission()
+            if ardupilot:
+                # ArduCopter's AUTO leaves the ground only once auto_armed: MISSION_START (AUTO
+                # and auto_armed, as a ground station starts it; MAVSDK's own start_mission only
+                # switches the mode), at once (DISARM_DELAY disarms it on the ground).
+                await asyncio.get_running_loop().run_in_executor(
+                    None,
+                    _mission_start,
+                    MavlinkDirect(system._system),
+                    await system.get_system_id(),
+                )
+            else:
+                await mr.start_mission()
             await _until_disarmed(tel, flight_s)
         finally:
             for task in (sampler, watcher):
@@ -127,6 +135,17 @@ async def fly_plan(
         if rec.path:
             rec.landed_at = rec.path[-1][:2]
     return rec
+
+
+def _mission_start(direct: MavlinkDirect, sysid: int) -> None:
+    """COMMAND_LONG MISSION_START (first item 0, last 0) through MAVSDK's MavlinkDirect."""
+    fields: dict[str, float] = {f"param{i}": 0.0 for i in range(1, 8)}
+    fields.update({"target_system": sysid, "target_component": 1, "command": 300})
+    fields["confirmation"] = 0
+    msg = MavlinkMessage("COMMAND_LONG", 245, 190, sysid, 1, json.dumps(fields))
+    ack = json.loads(direct.send_command(msg).fields_json)
+    if ack.get("result") != 0:
+        raise RuntimeError(f"MISSION_START: result {ack.get('result')}")
 
 
 async def _progress(mr: MissionRawAsync, rec: PlanFlight) -> None:
