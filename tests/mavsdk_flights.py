@@ -113,18 +113,15 @@ async def fly_plan(
         sampler = asyncio.create_task(_sample(tel, home, rec.path))
         watcher = asyncio.create_task(_progress(mr, rec))
         try:
-            await _arm_when_ready(act, ready_s)
             if ardupilot:
                 # ArduCopter's AUTO leaves the ground only once auto_armed: MISSION_START (AUTO
                 # and auto_armed, as a ground station starts it; MAVSDK's own start_mission only
-                # switches the mode), at once (DISARM_DELAY disarms it on the ground).
-                await asyncio.get_running_loop().run_in_executor(
-                    None,
-                    _mission_start,
-                    MavlinkDirect(system._system),
-                    await system.get_system_id(),
-                )
+                # switches the mode), right after arming (DISARM_DELAY disarms it on the
+                # ground), both again while the SITL still lacks a position ("requires
+                # position").
+                await _start_ardupilot_mission(act, MavlinkDirect(system._system), system, ready_s)
             else:
+                await _arm_when_ready(act, ready_s)
                 await mr.start_mission()
             await _until_disarmed(tel, flight_s)
         finally:
@@ -137,15 +134,30 @@ async def fly_plan(
     return rec
 
 
-def _mission_start(direct: MavlinkDirect, sysid: int) -> None:
-    """COMMAND_LONG MISSION_START (first item 0, last 0) through MAVSDK's MavlinkDirect."""
+def _mission_start(direct: MavlinkDirect, sysid: int) -> int:
+    """COMMAND_LONG MISSION_START (first item 0, last 0) through MAVSDK's MavlinkDirect; its
+    MAV_RESULT."""
     fields: dict[str, float] = {f"param{i}": 0.0 for i in range(1, 8)}
     fields.update({"target_system": sysid, "target_component": 1, "command": 300})
     fields["confirmation"] = 0
     msg = MavlinkMessage("COMMAND_LONG", 245, 190, sysid, 1, json.dumps(fields))
-    ack = json.loads(direct.send_command(msg).fields_json)
-    if ack.get("result") != 0:
-        raise RuntimeError(f"MISSION_START: result {ack.get('result')}")
+    return int(json.loads(direct.send_command(msg).fields_json).get("result", -1))
+
+
+async def _start_ardupilot_mission(
+    act: ActionAsync, direct: MavlinkDirect, system: Any, seconds: float
+) -> None:
+    """Arm and MISSION_START, both again until MISSION_START is ACCEPTED."""
+    sysid = await system.get_system_id()
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + seconds
+    while True:
+        await _arm_when_ready(act, seconds)
+        if await loop.run_in_executor(None, _mission_start, direct, sysid) == 0:
+            return
+        if loop.time() > deadline:
+            raise RuntimeError(f"MISSION_START refused for {seconds:.0f} s")
+        await asyncio.sleep(1.0)
 
 
 async def _progress(mr: MissionRawAsync, rec: PlanFlight) -> None:
