@@ -33,12 +33,13 @@ SPEED = 8.0
 PASS_RADIUS = {"emulator": 2.5, "sitl": 6.0}
 """m: each survey point is passed this close (acceptance radii 2 m; PX4 SITL turns early,
 passing up to 4.2 m off in the first run)."""
-LANDING_AGREEMENT = 6.0
-"""m between where the two touched down (the rally point 50 m north, nearer than home)."""
-PATH_TOLERANCE = {"arducopter": 6.0, "px4": 8.0}
-"""m: the largest distance from a point of one survey path to the other path (measured: see
-docs/protocol.md; ArduCopter's S-curves and PX4's acceptance-radius turns round the corners
-the lag loop flies square)."""
+LANDING_AGREEMENT = 8.0
+"""m between where the two touched down (the rally point 50 m north, nearer than home; PX4 SITL
+touched down 3.8-5.5 m past it in three runs)."""
+PATH_TOLERANCE = {"arducopter": 6.0, "px4": 9.0}
+"""m: the largest distance from a point of one survey path to the other path (PX4: 6.3-7.1 m
+in three runs; ArduCopter's S-curves and PX4's acceptance-radius turns round the corners the
+lag loop flies square; figures in benchmarks/README.md, "AUTO against SITL")."""
 
 
 def _survey(path: list[tuple[float, float, float]]) -> np.ndarray:
@@ -90,7 +91,7 @@ def test_a_qgc_plan_is_flown_like_the_real_autopilot_flies_it(
     }
     path = max(_distance(e, r), _distance(r, e))
     landed = {
-        k: math.hypot(*rec.landed_at)
+        k: tuple(round(x, 2) for x in rec.landed_at)
         for k, rec in (("emulator", emulated), ("sitl", real))
         if rec.landed_at
     }
