@@ -16,6 +16,7 @@ import pymap3d
 from mavsdk.asyncio import Configuration, Mavsdk
 from mavsdk.asyncio.plugins.action import ActionAsync
 from mavsdk.asyncio.plugins.manual_control import ManualControlAsync
+from mavsdk.asyncio.plugins.mission import MissionAsync, MissionItem, MissionPlan
 from mavsdk.asyncio.plugins.mission_raw import MissionRawAsync
 from mavsdk.asyncio.plugins.offboard import OffboardAsync, PositionNedYaw
 from mavsdk.asyncio.plugins.param import ParamAsync
@@ -269,3 +270,49 @@ async def fly_sticks(url: str, *, seconds: float) -> StickFlight:
         rec.drift_after_release = math.hypot(end[0] - mid[0], end[1] - mid[1])
         await act.land()
     return rec
+
+
+async def fly_mission_plugin(
+    url: str, points: list[tuple[float, float]], alt: float, *, ardupilot: bool
+) -> tuple[list[int], int, tuple[float, float]]:
+    """MAVSDK's mission plugin (not raw): waypoints (north, east from home) at ``alt``, the
+    return to launch after the mission on; (mission progress in order, items, landed at)."""
+    progress: list[int] = []
+    async with Mavsdk(Configuration.create_manual(245, 190, True)) as mavsdk:
+        system = await autopilot(mavsdk, url)
+        tel, act, mission = TelemetryAsync(system), ActionAsync(system), MissionAsync(system)
+        home = await _ready(tel, 90.0)
+        items = []
+        for n, e in points:
+            lat, lon, _ = pymap3d.ned2geodetic(n, e, 0.0, *home)
+            items.append(
+                MissionItem(float(lat), float(lon), alt, 5.0, True, acceptance_radius_m=2.0)
+            )
+        await mission.set_return_to_launch_after_mission(True)
+        await mission.upload_mission(MissionPlan(items))
+
+        async def watch() -> None:
+            async for p in mission.subscribe_mission_progress():
+                if not progress or progress[-1] != p.current:
+                    progress.append(p.current)
+
+        watcher = asyncio.create_task(watch())
+        try:
+            if ardupilot:
+                await act.set_takeoff_altitude(alt)
+                await _arm_when_ready(act, 60.0)
+                await act.takeoff()  # MAVSDK's mission plugin has no takeoff item for ArduPilot
+                async for pos in tel.subscribe_position():
+                    if pos.relative_altitude_m > 2.0:
+                        break
+            else:
+                await _arm_when_ready(act, 60.0)
+            await mission.start_mission()
+            await _until_disarmed(tel, 180.0)
+        finally:
+            watcher.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await watcher
+        pos = await tel.position()
+        landed = _local(home, pos.latitude_deg, pos.longitude_deg)
+    return progress, len(items), landed

@@ -14,7 +14,13 @@ from mavsdk.asyncio import Configuration, Mavsdk
 from mavsdk.asyncio.plugins.geofence import FenceType, GeofenceAsync, GeofenceData, Point, Polygon
 
 from tests.emulator_harness import free_udp_base, make_config, running_emulator
-from tests.mavsdk_flights import autopilot, fly_offboard_square, fly_plan, fly_sticks
+from tests.mavsdk_flights import (
+    autopilot,
+    fly_mission_plugin,
+    fly_offboard_square,
+    fly_plan,
+    fly_sticks,
+)
 from tests.qgc_plan import lawnmower, plan_text, survey_plan
 
 PERSONAS = ["ardupilot", "px4"]
@@ -119,3 +125,18 @@ def test_mavsdk_manual_control_flies_in_position_mode_and_holds_when_centred(
     assert north > 50.0  # about 10 sim s of full pitch forward, heading north
     assert abs(east) < 1.0
     assert rec.drift_after_release < 1.0
+
+
+@pytest.mark.timeout(90)
+@pytest.mark.parametrize("persona", PERSONAS)
+def test_mavsdk_mission_plugin_flies_waypoints_and_returns(persona: str) -> None:
+    base = free_udp_base(1)
+    points = [(40.0, 0.0), (40.0, 40.0), (0.0, 40.0)]
+    with running_emulator(make_config(1, base, personas=(persona,), speedup=10.0)):
+        progress, count, landed = asyncio.run(
+            fly_mission_plugin(_url(base), points, 12.0, ardupilot=persona == "ardupilot")
+        )
+    assert count == 3
+    assert progress == sorted(progress)
+    assert progress[-1] == count - 1  # the last waypoint, then the return (MAVSDK's RTL item)
+    assert math.hypot(*landed) < LAND_ERROR  # the return to launch after the mission
