@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from companion.fence_from_profile import fence_for
+from mdm_ground.live_web.event_log import LOG_KEPT
 from mdm_ground.live_web.fleet_state import TRACK_KEPT
 from mdm_profiles import MissionProfile
 
@@ -38,6 +39,7 @@ def scene(
         "sensors": [{"name": s.name, "radius": s.radius} for s in profile.sensors],
         "ceiling": ceiling(profile),
         "track_kept": TRACK_KEPT,
+        "log_kept": LOG_KEPT,
         "tiles": tiles,
     }
 
