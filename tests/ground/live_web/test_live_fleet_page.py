@@ -67,7 +67,9 @@ def _stale_rows(driver: WebDriver) -> list[str]:
 
 
 def _view_box(driver: WebDriver) -> list[float]:
-    return [float(v) for v in driver.find_element("id", "map").get_attribute("viewBox").split()]
+    box = driver.find_element("id", "map").get_attribute("viewBox")
+    assert box is not None, "the map has no view box"
+    return [float(v) for v in box.split()]
 
 
 def _log(driver: WebDriver, kind: str) -> list[str]:
