@@ -55,8 +55,8 @@ class SitlVehicle:
                 self.process.wait(timeout=5)
 
 
-def sitl_folder(kind: Autopilot) -> Path:
-    """The folder holding ``kind``'s start script; FleetInputError naming where it looked."""
+def _sitl_folder(kind: Autopilot) -> Path | str:
+    """The folder holding ``kind``'s start script, or a line saying where it looked."""
     where = os.environ.get(_ENV[kind])
     candidates = (
         [Path(where)]
@@ -70,9 +70,16 @@ def sitl_folder(kind: Autopilot) -> Path:
         if (folder / _SCRIPT[kind]).is_file():
             return folder
     looked = ", ".join(str(c) for c in candidates)
-    raise FleetInputError(
-        f"--sitl: no {kind} SITL ({_SCRIPT[kind]}) in {looked}; set {_ENV[kind]} to its folder"
-    )
+    return f"no {kind} SITL ({_SCRIPT[kind]}) in {looked}; set {_ENV[kind]} to its folder"
+
+
+def sitl_folders(kinds: set[Autopilot]) -> dict[Autopilot, Path]:
+    """The folder of each kind's build; one refusal naming every build that is missing."""
+    found = {kind: _sitl_folder(kind) for kind in sorted(kinds)}
+    missing = [why for why in found.values() if isinstance(why, str)]
+    if missing:
+        raise FleetInputError("--sitl: " + "; ".join(missing))
+    return {kind: folder for kind, folder in found.items() if isinstance(folder, Path)}
 
 
 def kinds_for(sitl: str, vehicles: list[int]) -> dict[int, Autopilot]:
@@ -148,10 +155,10 @@ def start_team(
     across ArduCopter and PX4); on any failure the ones started are stopped again."""
     first = instance_base()
     kinds = kinds_for(sitl, vehicles)
-    folders = {k: sitl_folder(k) for k in set(kinds.values())}
-    homes = boot_points(profile, seed, vehicles)
+    homes = boot_points(profile, seed, vehicles)  # what was asked first, then this machine
     if not speedup > 0:
         raise FleetInputError(f"--sitl-speedup {speedup:g}: must be > 0")
+    folders = sitl_folders(set(kinds.values()))
     team: list[SitlVehicle] = []
     index = first - 1
     try:

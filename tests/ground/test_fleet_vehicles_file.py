@@ -160,7 +160,9 @@ def test_sitl_without_a_build_is_refused_naming_the_variable(
                  "--out", str(tmp_path / "run")])  # fmt: skip
     err = capsys.readouterr().err
     assert code == 2, err
-    assert f"--sitl: no px4 SITL (start-px4) in {tmp_path / 'nowhere'}; set MDM_PX4_SITL to " \
+    # whether this machine has an ArduCopter build or not (then the refusal names both)
+    assert err.startswith("companion: --sitl: no "), err
+    assert f"no px4 SITL (start-px4) in {tmp_path / 'nowhere'}; set MDM_PX4_SITL to " \
            "its folder" in err  # fmt: skip
 
 
@@ -175,3 +177,19 @@ def test_a_sitl_instance_base_outside_0_to_9_is_refused_naming_the_variable(
     assert code == 2, err
     assert f"MDM_SITL_INSTANCE_BASE={base!r}: expected an instance index 0..9" in err
     assert not list((tmp_path / "run").glob("sitl-*.log")), "an instance was started"
+
+
+def test_sitl_without_either_build_is_refused_naming_both_variables(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("MDM_ARDUCOPTER_SITL", str(tmp_path / "no-ardupilot"))
+    monkeypatch.setenv("MDM_PX4_SITL", str(tmp_path / "no-px4"))
+    code = main(["fleet", "--quiet", "--profile", "field-duebendorf", "--sitl", "mixed",
+                 "--out", str(tmp_path / "run")])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert err == (
+        f"companion: --sitl: no arducopter SITL (start-arducopter) in {tmp_path / 'no-ardupilot'}; "
+        "set MDM_ARDUCOPTER_SITL to its folder; "
+        f"no px4 SITL (start-px4) in {tmp_path / 'no-px4'}; set MDM_PX4_SITL to its folder\n"
+    )

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import asyncio
+import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -15,7 +17,26 @@ from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 from tests.emulator_harness import free_udp_base, make_config, running_emulator
 
 
-@pytest.mark.timeout(90)
+def _wait_forwarded(port: int, proc: subprocess.Popen[bytes], log: Path, wait_s: float) -> None:
+    """Until MAVProxy forwards the vehicle's packets to ``port``: its start-up (imports, modules,
+    the first heartbeat) took over 30 s on a loaded 2-core host, which is not what the test is
+    about, so the client's own waits start only once the route carries packets."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", port))
+        sock.settimeout(1.0)
+        end = time.monotonic() + wait_s
+        while time.monotonic() < end:
+            if proc.poll() is not None:
+                pytest.fail(f"MAVProxy exited {proc.returncode}: {log.read_text()[-2000:]}")
+            try:
+                if sock.recv(1024):
+                    return
+            except TimeoutError:
+                continue
+    pytest.fail(f"MAVProxy forwarded nothing within {wait_s:g} s: {log.read_text()[-2000:]}")
+
+
+@pytest.mark.timeout(240)
 def test_mavproxy_routes_a_vehicle_to_mavsdk_which_arms_and_takes_off(tmp_path: Path) -> None:
     mavproxy = Path(sys.executable).parent / "mavproxy.py"
     vehicle_port = free_udp_base(2)  # the emulator sends to it; MAVProxy forwards to the next
@@ -48,15 +69,13 @@ def test_mavproxy_routes_a_vehicle_to_mavsdk_which_arms_and_takes_off(tmp_path: 
                     return float(pos.relative_altitude_m)
         return 0.0
 
-    with running_emulator(make_config(1, vehicle_port, speedup=5.0)) as emu:
+    log = tmp_path / "mavproxy.log"
+    with running_emulator(make_config(1, vehicle_port, speedup=5.0)) as emu, log.open("wb") as out:
         proc = subprocess.Popen(
-            cmd,
-            stdin=subprocess.PIPE,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-            cwd=tmp_path,
+            cmd, stdin=subprocess.PIPE, stdout=out, stderr=subprocess.STDOUT, cwd=tmp_path
         )
         try:
+            _wait_forwarded(client_port, proc, log, 150.0)
             altitude = asyncio.run(asyncio.wait_for(client(), 60))
         finally:
             proc.terminate()
