@@ -67,9 +67,8 @@ def _stale_rows(driver: WebDriver) -> list[str]:
 
 
 def _view_box(driver: WebDriver) -> list[float]:
-    box = driver.find_element("id", "map").get_attribute("viewBox")
-    assert box is not None, "the map has no view box"
-    return [float(v) for v in box.split()]
+    box = driver.execute_script("return document.getElementById('map').getAttribute('viewBox')")
+    return [float(v) for v in str(box).split()]
 
 
 def _log(driver: WebDriver, kind: str) -> list[str]:
