@@ -8,7 +8,7 @@ const LABELS = { pause: "Pause", resume: "Resume", abort: "Abort (RTL)", land: "
 const ZOOM_STEP = 1.5; // per button click; the wheel zooms by 1.2 a notch
 // How far inside the map's border (px: left, top, right, bottom) an off-view marker stays:
 // clear of the zoom buttons' column, the fence note and the scale bar.
-const EDGE_PX = [64, 34, 14, 40];
+const EDGE_PX = [64, 34, 14, 50];
 let scene = null;
 let socket = null;
 let view = null; // [x, y, w, h] of the SVG viewBox
