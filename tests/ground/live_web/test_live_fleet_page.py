@@ -71,6 +71,18 @@ def _view_box(driver: WebDriver) -> list[float]:
     return [float(v) for v in str(box).split()]
 
 
+def _scale(driver: WebDriver) -> tuple[float, float]:
+    """The scale bar: the metres its label says, and the metres its length covers on the map."""
+    text, bar_px, per_px = driver.execute_script(
+        "const m = document.getElementById('map'); const v = m.getAttribute('viewBox').split(' ');"
+        "return [document.getElementById('scale-text').textContent,"
+        " parseFloat(document.getElementById('scale-bar').style.width),"
+        " Math.max(Number(v[2]) / m.clientWidth, Number(v[3]) / m.clientHeight)];"
+    )
+    number, unit = str(text).split()
+    return float(number) * (1000.0 if unit == "km" else 1.0), float(bar_px) * float(per_px)
+
+
 def _log(driver: WebDriver, kind: str) -> list[str]:
     """The event log's lines of ``kind`` shown now (newest first)."""
     return list(driver.execute_script(
@@ -116,14 +128,18 @@ def test_live_page_without_a_broker_shows_the_team_and_an_abort_is_flown_and_log
         )
         screenshot(chromium, tmp_path, "live-fleet-searching")
 
-        # zoom: the buttons scale the view box about its centre, fit brings the area back
-        fitted = _view_box(chromium)
+        # zoom: the buttons scale the view box about its centre, fit brings the area back;
+        # the scale bar says what its length is on the map at each zoom
+        fitted, fitted_scale = _view_box(chromium), _scale(chromium)
         chromium.find_element("id", "zoom-in").click()
         chromium.find_element("id", "zoom-in").click()
         zoomed = _view_box(chromium)
         assert zoomed[2] == pytest.approx(fitted[2] / 2.25, rel=1e-3)
         assert zoomed[0] + zoomed[2] / 2 == pytest.approx(fitted[0] + fitted[2] / 2, abs=1.0)
-        assert "200 m" in chromium.find_element("id", "scale-text").text
+        zoomed_scale = _scale(chromium)
+        assert zoomed_scale[0] < fitted_scale[0]
+        for said, shown in (fitted_scale, zoomed_scale):
+            assert shown == pytest.approx(said, rel=0.02)
         chromium.find_element("css selector", '#team tbody tr[data-vehicle="1"] td').click()
         chromium.find_element("id", "centre").click()
         centred = _view_box(chromium)
