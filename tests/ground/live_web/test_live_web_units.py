@@ -234,3 +234,23 @@ def test_an_event_delivered_twice_counts_once() -> None:
         feed._on_message(Received("mdm/units/uav2/event", payload, retained=False))
     assert len(s.detections) == 1
     assert feed.refused == 2
+
+
+def test_watchs_embedded_broker_flags_are_refused_with_a_broker_and_a_taken_port_named(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    import socket
+
+    from companion import cli
+
+    assert cli.main(["watch", "--mqtt", "127.0.0.1", "--broker-bind", "1884"]) == 2
+    assert (
+        "--broker-bind and --broker-accounts are the embedded broker's" in capsys.readouterr().err
+    )
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        assert cli.main(["watch", "--web", "0", "--broker-bind", f"127.0.0.1:{port}"]) == 2
+    said = capsys.readouterr().err
+    assert f"embedded MQTT broker: cannot listen on 127.0.0.1:{port}" in said, said
