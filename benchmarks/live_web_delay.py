@@ -1,18 +1,21 @@
 """The live page's delay and its server's CPU share during a fleet run.
 
-    .venv/bin/python benchmarks/live_web_delay.py [--vehicles 12] [--speedup 1] [--seconds 120]
+    .venv/bin/python benchmarks/live_web_delay.py [--broker embedded|mosquitto] [--vehicles 12]
+        [--speedup 1] [--seconds 120]
 
-Needs Mosquitto on 127.0.0.1:1883 and Debian's chromium + chromedriver. Runs `companion fleet
---web 127.0.0.1:0 --mqtt 127.0.0.1:1883` on paper-fixed, opens the page in headless Chromium
-and, beside it, subscribes to the team's state topic with paho (independent of the page's own
-MQTT code). Printed:
+Needs Debian's chromium + chromedriver, and for ``--broker mosquitto`` (the default) Mosquitto on
+127.0.0.1:1883. Runs `companion fleet --web 127.0.0.1:0` on paper-fixed, with
+``--mqtt 127.0.0.1:1883`` or without (the page's embedded broker; the subscriber below takes the
+run's ``monitor`` account), opens the page in headless Chromium and, beside it, subscribes to
+the team's state topic with paho (independent of the page's own MQTT code). Printed:
 
 - per vehicle position change seen on the page: the wall time since the state message carrying
   that position reached the independent subscriber (MQTT -> server -> WebSocket -> DOM), as
   median, 95th percentile and maximum; and the interval between two state messages of a
   vehicle (how old a position can already be when it leaves the companion);
 - the `companion watch` process's CPU seconds over the measured window and its share of one
-  core, beside the whole fleet's (emulator, companions, page server).
+  core (with the embedded broker: the page server and the broker), beside the whole fleet's
+  (emulator, companions, page server).
 
 Wall-clock figures on a shared host: print `uptime` beside them.
 """
@@ -38,6 +41,7 @@ from selenium import webdriver
 from selenium.webdriver.chrome.service import Service
 
 _URL = re.compile(r"live page (http://\S+)")
+_BROKER = re.compile(r"embedded MQTT broker (\S+):(\d+) ")
 _WATCH_JS = """
 window.__moves = [];
 const shown = {};
@@ -94,8 +98,11 @@ def main() -> int:
     ap.add_argument("--vehicles", type=int, default=12)
     ap.add_argument("--speedup", type=float, default=1.0)
     ap.add_argument("--seconds", type=float, default=120.0, help="measured wall window")
+    ap.add_argument("--broker", choices=("mosquitto", "embedded"), default="mosquitto")
     args = ap.parse_args()
-    prefix = f"mdm/bench-liveweb-{os.getpid()}"
+    embedded = args.broker == "embedded"
+    # the embedded broker is the run's own: the default prefix, as its ACL wants
+    prefix = "mdm/paper-fixed" if embedded else f"mdm/bench-liveweb-{os.getpid()}"
     work = Path(tempfile.mkdtemp(prefix="live-web-bench-"))
     arrivals: dict[tuple[int, float, float], float] = {}
     intervals: list[float] = []
@@ -115,9 +122,6 @@ def main() -> int:
 
     sub = mqtt.Client(CallbackAPIVersion.VERSION2)
     sub.on_message = on_message
-    sub.connect("127.0.0.1", 1883)
-    sub.subscribe(f"{prefix}/+/state")
-    sub.loop_start()
     duration = args.seconds * args.speedup + 600.0
     out = work / "fleet.out"
     with out.open("wb") as f:
@@ -125,7 +129,8 @@ def main() -> int:
             [sys.executable, "-m", "companion.cli", "fleet", "--profile", "paper-fixed",
              "--vehicles", str(args.vehicles), "--speedup", str(args.speedup),
              "--duration", str(duration), "--out", str(work / "run"), "--quiet",
-             "--web", "127.0.0.1:0", "--mqtt", "127.0.0.1:1883", "--mqtt-prefix", prefix],
+             "--web", "127.0.0.1:0",
+             *([] if embedded else ["--mqtt", "127.0.0.1:1883", "--mqtt-prefix", prefix])],
             stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
         )  # fmt: skip
     driver = None
@@ -135,11 +140,21 @@ def main() -> int:
             if time.monotonic() > deadline or fleet.poll() is not None:
                 raise SystemExit(f"no live page:\n{out.read_text()}")
             time.sleep(0.5)
+        if embedded:
+            host, port = _BROKER.search(out.read_text()).groups()  # type: ignore[union-attr]
+            monitor = (work / "run" / "broker-accounts" / "monitor.pw").read_text().strip()
+            sub.username_pw_set("monitor", monitor)
+            sub.connect(host, int(port))
+        else:
+            sub.connect("127.0.0.1", 1883)
+        sub.subscribe(f"{prefix}/+/state")
+        sub.loop_start()
         driver = _chromium(work / "chromium")
         driver.get(m.group(1))
         time.sleep(5)
         driver.execute_script(_WATCH_JS)
-        team = _pids(prefix) | _pids(str(work / "run"))
+        # the page names the run (its broker's accounts) or the prefix (--mqtt-prefix)
+        team = _pids(str(work / "run")) | ({} if embedded else _pids(prefix))
         (watch,) = [p for p, cmd in team.items() if "companion.cli watch" in cmd]
         cpu0 = {p: _cpu_s(p) for p in team}
         t0 = time.monotonic()
@@ -155,15 +170,17 @@ def main() -> int:
             time.sleep(5)
             os.killpg(fleet.pid, signal.SIGINT)
             fleet.wait(60)
-        for i in range(args.vehicles):  # leave no retained status on the broker
-            sub.publish(f"{prefix}/uav{i}/status", b"", qos=1, retain=True).wait_for_publish(5)
+        if not embedded:
+            for i in range(args.vehicles):  # leave no retained status on the broker
+                sub.publish(f"{prefix}/uav{i}/status", b"", qos=1, retain=True).wait_for_publish(5)
         sub.loop_stop()
     with lock:
         delays = [t - arrivals[(v, n, e)] for t, v, n, e in moves if (v, n, e) in arrivals]
     delays.sort()
     load = os.getloadavg()
     print(
-        f"{args.vehicles} vehicles, speed-up {args.speedup:g}, window {window:.0f} s wall; "
+        f"broker {args.broker}: {args.vehicles} vehicles, speed-up {args.speedup:g}, "
+        f"window {window:.0f} s wall; "
         f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"
     )
     print(f"page position updates {len(moves)}, matched to a state message {len(delays)}")

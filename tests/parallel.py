@@ -24,6 +24,7 @@ MEASURED_S: dict[str, float] = {
     "tests/companion/test_sitl_flights.py": 498.0,
     "tests/ground/test_fleet_file_sitl.py": 145.0,
     "tests/companion/test_sensor_sources_sitl.py": 134.0,
+    "tests/ground/live_web/test_sitl_team_page.py": 96.0,
     "tests/sim_vehicle_stub/test_svs_differential.py": 119.0,
     "tests/sim_vehicle_stub/test_svs_mission_differential.py": 150.0,
     "tests/sim_vehicle_stub/test_svs_plan_differential.py": 240.0,

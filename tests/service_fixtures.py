@@ -19,6 +19,7 @@ from selenium import webdriver
 from selenium.webdriver.chrome.options import Options
 from selenium.webdriver.chrome.service import Service
 
+from tests import sitl
 from tests.fleet_cli import processes_naming
 from tests.mqtt_harness import Broker
 from tests.services import (
@@ -58,6 +59,15 @@ def mosquitto(tmp_path: Path) -> Iterator[Callable[..., Broker]]:
     yield make
     for broker in made:
         broker.stop()
+
+
+@pytest.fixture
+def sitl_both() -> None:
+    """Both SITL builds (ArduCopter and PX4) are needed (a mixed team); skips with the
+    variable to set."""
+    for kind in ("arducopter", "px4"):
+        if sitl.sitl_dir(kind) is None:
+            missing(sitl.skip_reason(kind))
 
 
 @pytest.fixture

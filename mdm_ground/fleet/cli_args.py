@@ -100,7 +100,8 @@ def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
     p.add_argument(
         "--web",
         metavar="[HOST:]PORT",
-        help="serve the live page of the run there (needs MQTT: --mqtt; docs/live_web.md)",
+        help="serve the live page of the run there (with --mqtt over that broker, else over "
+        "an embedded one the page runs; docs/live_web.md)",
     )
     add_web_arguments(p)
     p.add_argument(

@@ -22,12 +22,13 @@ def fleet_command(args: argparse.Namespace) -> int:
     out = args.out or Path("runs") / time.strftime("fleet-%Y%m%d-%H%M%S")
     profile = load_profile(args.profile)
     # Bad --mqtt* flags, or a swarm kind without a broker, fail here, not N times.
-    if mqtt_spec(args, profile.mqtt) is None and profile.policy.kind in VARIANTS:
+    external = mqtt_spec(args, profile.mqtt) is not None
+    if not external and profile.policy.kind in VARIANTS:
         raise ValueError(
             f"profile {profile.name!r}: policy.kind {profile.policy.kind!r} shares the swarm's "
             "bests over MQTT; configure a broker (--mqtt HOST[:PORT] or the profile's mqtt:)"
         )
-    web = _web_argv(args, mqtt_spec(args, profile.mqtt) is not None)
+    web = _web_argv(args)
     if args.gcs is not None:
         parse_gcs(args.gcs)
         if args.vehicles_file is not None or args.sitl is not None:
@@ -58,6 +59,7 @@ def fleet_command(args: argparse.Namespace) -> int:
         sitl_speedup=args.sitl_speedup,
         link_timeout=args.link_timeout,
         web=web,
+        embedded_broker=bool(web) and not external,
         gcs=args.gcs,
     )
     started = time.perf_counter()
@@ -70,7 +72,7 @@ def fleet_command(args: argparse.Namespace) -> int:
     return exit_status(result)
 
 
-def _web_argv(args: argparse.Namespace, mqtt: bool) -> tuple[str, ...]:
+def _web_argv(args: argparse.Namespace) -> tuple[str, ...]:
     """The `companion watch` flags of --web (checked here, before anything starts)."""
     if args.web is None:
         if args.web_read_only or args.web_token_file or args.web_tiles:
@@ -80,9 +82,4 @@ def _web_argv(args: argparse.Namespace, mqtt: bool) -> tuple[str, ...]:
         return ()
     parse_web(args.web)
     check_tiles(args.web_tiles)
-    if not mqtt:
-        raise ValueError(
-            "--web shows the team from its MQTT topics and commands it over them: "
-            "give --mqtt HOST[:PORT] (or a profile with an mqtt: section)"
-        )
     return ("--web", args.web, *web_argv(args))

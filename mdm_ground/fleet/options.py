@@ -51,6 +51,9 @@ class FleetOptions:
     web: tuple[str, ...] = ()
     """The `companion watch` flags of the live page started beside the run (--web ...); empty:
     none."""
+    embedded_broker: bool = False
+    """The page runs the embedded MQTT broker for the run (--web without --mqtt or a profile's
+    mqtt:); the companions connect to it with accounts of their own (mdm_ground.broker)."""
     gcs: str | None = None
     """``udpout:HOST:PORT``: the emulator also sends every vehicle's MAVLink there (a ground
     station); the companions then leave the vehicles' streams on."""

@@ -6,6 +6,7 @@ import contextlib
 import json
 import logging
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -33,7 +34,7 @@ from mdm_ground.fleet.progress import (
 from mdm_ground.fleet.scoring import EMULATOR_EVENTS, FleetResult, score
 from mdm_ground.fleet.team import Team, is_real, open_team, team_size
 from mdm_ground.fleet.vehicles_file import VehicleEntry
-from mdm_ground.fleet.web_page import start_page
+from mdm_ground.fleet.web_page import WebPage, start_page
 from mdm_ground.run_map.cli_args import map_after_run
 from mdm_profiles import MissionProfile, load_profile
 from mdm_provenance import collect
@@ -162,9 +163,11 @@ def _fly(
     o: FleetOptions, profile: MissionProfile, plan: FleetPlan, team: Team | None
 ) -> FleetResult:
     started = time.perf_counter()  # results.json's provenance: the flight's wall time
-    _write_run_file(o, profile, plan, team)
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     page = start_page(o, plan.vehicles, emulated=plan.ports is not None, env=env)
+    if page is not None and page.broker is not None:
+        o = replace(o, mqtt_args=page.broker.companion_args())
+    _write_run_file(o, profile, plan, team, page)
     emulator = None
     if plan.ports is not None:
         # present from the start, so a run whose emulator never wrote is scored (nothing in range)
@@ -199,12 +202,18 @@ def _fly(
             if emulator is not None:
                 processes.stop(emulator, 10.0)
             if page is not None:
-                processes.stop(page, 5.0)
+                processes.stop(page.process, 5.0)
+                if page.broker is not None:  # its passwords served this run alone
+                    shutil.rmtree(page.broker.accounts, ignore_errors=True)
     return _finish(o, profile, plan, companions, emulator, stopped, started)
 
 
 def _write_run_file(
-    o: FleetOptions, profile: MissionProfile, plan: FleetPlan, team: Team | None
+    o: FleetOptions,
+    profile: MissionProfile,
+    plan: FleetPlan,
+    team: Team | None,
+    page: WebPage | None,
 ) -> None:
     run = {
         "profile": profile.name,
@@ -218,6 +227,7 @@ def _write_run_file(
         "base_port": plan.ports.base if plan.ports else None,
         "started": time.time(),
         "resumed_vehicles": list(plan.start) if o.resume else None,
+        "mqtt": _broker_record(o, profile, page),
     }
     if team is not None:
         run |= {
@@ -233,6 +243,22 @@ def _write_run_file(
         earlier = json.loads((o.out / RUN_FILE).read_text(encoding="utf-8"))
         run = earlier | {"resumes": [*earlier.get("resumes", []), run]}
     (o.out / RUN_FILE).write_text(json.dumps(run, indent=2))
+
+
+def _broker_record(
+    o: FleetOptions, profile: MissionProfile, page: WebPage | None
+) -> dict[str, str] | None:
+    """Which broker the run used (None: no MQTT): the page's embedded one, or the one given."""
+    if page is not None and page.broker is not None:
+        b = page.broker
+        return {"broker": "embedded", "server": b.server, "address": f"{b.host}:{b.port}"}
+    if "--mqtt" in o.mqtt_args:
+        address = o.mqtt_args[o.mqtt_args.index("--mqtt") + 1]
+    elif profile.mqtt is not None:
+        address = f"{profile.mqtt.host}:{profile.mqtt.port}"
+    else:
+        return None
+    return {"broker": "external", "address": address}
 
 
 def _watch(

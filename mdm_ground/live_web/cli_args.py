@@ -9,19 +9,20 @@ from pathlib import Path
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments
 
 DEFAULT_WEB = "127.0.0.1:8765"
+DEFAULT_BROKER = "127.0.0.1:0"
 STALE_AFTER_S = 5.0
 
 
-def parse_web(value: str) -> tuple[str, int]:
+def parse_web(value: str, flag: str = "--web") -> tuple[str, int]:
     """``PORT``, ``HOST:PORT`` or ``[IPV6]:PORT`` -> (host, port); host 127.0.0.1 if not given."""
     host, sep, port = value.rpartition(":")
     if not sep:
         host = "127.0.0.1"
     host = host.strip("[]") if host.startswith("[") else host
     if not host or (":" in host and not value.startswith("[")):
-        raise ValueError(f"--web {value!r}: expected PORT, HOST:PORT or [IPV6]:PORT")
+        raise ValueError(f"{flag} {value!r}: expected PORT, HOST:PORT or [IPV6]:PORT")
     if not port.isdigit() or not 0 <= int(port) <= 65535:
-        raise ValueError(f"--web {value!r}: the port must be a number 0-65535 (0: any free one)")
+        raise ValueError(f"{flag} {value!r}: the port must be a number 0-65535 (0: any free one)")
     return host, int(port)
 
 
@@ -94,4 +95,18 @@ def add_watch_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
         help="wall s without a message after which a vehicle is shown stale",
     )
     add_web_arguments(p)
+    g = p.add_argument_group("the embedded MQTT broker (without --mqtt or the profile's mqtt:)")
+    g.add_argument(
+        "--broker-bind",
+        metavar="[HOST:]PORT",
+        help=f"where it listens (default {DEFAULT_BROKER}: loopback, a free port, printed)",
+    )
+    g.add_argument(
+        "--broker-accounts",
+        type=Path,
+        metavar="DIR",
+        help="write its accounts there: the password file and each account's password in "
+        "NAME.pw, uav0.pw ... operator.pw monitor.pw (default: a private temporary folder, "
+        "removed at exit)",
+    )
     add_mqtt_arguments(p)

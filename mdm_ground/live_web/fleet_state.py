@@ -14,10 +14,14 @@ from typing import Any
 
 import numpy as np
 
+from mdm_ground.live_web.event_log import EventLog
 from mdm_profiles import MissionProfile
 
 TRACK_STEP_M = 5.0
 """A track point is kept when the vehicle has moved this far from the last one kept."""
+TRACK_KEPT = 2000
+"""Track points kept per vehicle, the newest (10 km of flight at TRACK_STEP_M): the page's
+history is bounded, the mission log on disk has the whole flight."""
 ACKS_KEPT = 50
 """Command outcomes the page lists (newest first)."""
 
@@ -50,12 +54,27 @@ class VehicleState:
     online: bool | None = None
     """Its retained MQTT status (None: not heard)."""
     end: str | None = None
+    sensor: int | None = None
+    """The index of the sensor switched on (its level's)."""
+    stale: bool = False
+    """Shown stale at the last snapshot (its change goes to the event log)."""
     track: list[tuple[float, float]] = field(default_factory=list)
+    """The newest TRACK_KEPT points (up to twice that before old ones are dropped)."""
+    track_base: int = 0
+    """The number of ``track[0]`` among every point this vehicle has had."""
 
     def move_to(self, north: float, east: float) -> None:
         self.north, self.east = round(north, 1), round(east, 1)
         if not self.track or math.dist(self.track[-1], (north, east)) >= TRACK_STEP_M:
             self.track.append((self.north, self.east))
+            if len(self.track) >= 2 * TRACK_KEPT:  # dropped in blocks: not a copy per point
+                del self.track[:TRACK_KEPT]
+                self.track_base += TRACK_KEPT
+
+    @property
+    def track_end(self) -> int:
+        """The number of points this vehicle has had (the next one's number)."""
+        return self.track_base + len(self.track)
 
 
 @dataclass(frozen=True)
@@ -67,6 +86,15 @@ class Mark:
     north: float
     east: float
     level: int
+
+
+@dataclass
+class Sent:
+    """What one page already holds: each vehicle's track points and the log entries, by
+    number (the next snapshot sends what comes after)."""
+
+    tracks: dict[int, int] = field(default_factory=dict)
+    log: int = 0
 
 
 @dataclass
@@ -95,6 +123,7 @@ class FleetState:
         self.detections: list[Mark] = []
         self.confirmations: list[Mark] = []
         self.commands: deque[CommandOutcome] = deque(maxlen=ACKS_KEPT)
+        self.log = EventLog()
         real = [t for t in profile.targets if not t.false_target]
         self._real = np.array([[t.north, t.east] for t in real], dtype=float).reshape(-1, 2)
         self._radius = profile.sensors[-1].radius
@@ -124,9 +153,10 @@ class FleetState:
                 setattr(v, key, value[:32])
         if isinstance(payload.get("armed"), bool):
             v.armed = payload["armed"]
-        level = payload.get("level")
-        if isinstance(level, int) and not isinstance(level, bool):
-            v.level = level
+        for key in ("level", "sensor"):
+            value = payload.get(key)
+            if isinstance(value, int) and not isinstance(value, bool):
+                setattr(v, key, value)
         if "ci" in payload:  # null on level 0: no index there
             v.ci = _number(payload["ci"])
         battery = _number(payload.get("battery"))
@@ -138,7 +168,16 @@ class FleetState:
     def on_status(self, i: int, payload: dict[str, Any], wall: float) -> None:
         """A retained ``status`` message: online or offline."""
         v = self.vehicle(i)
-        v.online = payload.get("state") == "online"
+        online = payload.get("state") == "online"
+        if online != v.online:
+            if online:
+                self.log.add(v.t, i, "status", "companion online (MQTT)", "info")
+            elif payload.get("clean") is False:
+                text = "companion gone without a goodbye (the broker's last will)"
+                self.log.add(v.t, i, "status", text, "alert")
+            else:
+                self.log.add(v.t, i, "status", "companion offline (it ended)", "info")
+        v.online = online
         if v.online:
             v.heard = wall
 
@@ -166,6 +205,8 @@ class FleetState:
             v.mode = record["mode"]
         elif kind == "level" and isinstance(record.get("level"), int):
             v.level = record["level"]
+            if isinstance(record.get("sensor"), int):
+                v.sensor = record["sensor"]
         elif kind in ("detection", "confirmation"):
             north, east = _number(record.get("north")), _number(record.get("east"))
             level = record.get("level")
@@ -181,13 +222,30 @@ class FleetState:
             self._answer(i, record.get("id"), "accepted")
         elif kind == "error" and record.get("source") == "command":
             self._answer(i, _payload_id(record.get("payload")), f"refused: {record.get('error')}")
+        self.log.record(i, record)
 
-    def on_armed(self, i: int, armed: bool) -> None:
+    def on_armed(self, i: int, armed: bool, t: float) -> None:
         """The emulator's ``armed`` / ``disarmed`` event (replays)."""
         self.vehicle(i).armed = armed
+        self.log.add(t, i, "armed", "armed (emulator)" if armed else "disarmed (emulator)", "info")
+
+    def clock(self) -> float:
+        """The mission clock: the latest mission time any vehicle reported."""
+        return max((v.t for v in self.vehicles.values()), default=0.0)
 
     def sent(self, outcome: CommandOutcome) -> None:
+        """A command the page publishes now."""
         self.commands.appendleft(outcome)
+        vehicle = None if outcome.target == "all" else int(outcome.target.removeprefix("uav"))
+        text = f"operator sent {outcome.command} to {outcome.target} (id {outcome.id})"
+        self.log.add(round(self.clock(), 1), vehicle, "sent", text, "info")
+
+    def not_sent(self, outcome: CommandOutcome, error: str) -> None:
+        """The broker did not take ``outcome``'s command."""
+        outcome.error = f"not sent: {error}"
+        vehicle = None if outcome.target == "all" else int(outcome.target.removeprefix("uav"))
+        text = f"{outcome.command} to {outcome.target} not sent: {error}"
+        self.log.add(round(self.clock(), 1), vehicle, "sent", text, "alert")
 
     def _answer(self, i: int, ref: Any, answer: str) -> None:
         for c in self.commands:
@@ -208,15 +266,23 @@ class FleetState:
         gaps = np.linalg.norm(self._real[:, None, :] - where[None, :, :], axis=2)
         return int((gaps.min(axis=1) <= self._radius).sum())
 
-    def snapshot(self, now: float, sent_track: dict[int, int]) -> dict[str, Any]:
-        """Everything the page draws; each vehicle's track only from ``sent_track[i]`` on
-        (updated: what the receiver now holds)."""
+    def snapshot(self, now: float, sent: Sent | None = None) -> dict[str, Any]:
+        """Everything the page draws; each vehicle's track and the log only from what ``sent``
+        says the page holds (updated: what it holds once it has this one)."""
+        sent = Sent() if sent is None else sent
         vehicles = []
         for i in sorted(self.vehicles):
             v = self.vehicles[i]
-            start = sent_track.get(i, 0)
-            sent_track[i] = len(v.track)
+            start = max(sent.tracks.get(i, 0), v.track_base)
+            sent.tracks[i] = v.track_end
             age = None if v.heard is None else max(0.0, now - v.heard)
+            stale = math.isfinite(self.stale_after) and (
+                v.online is False or age is None or age > self.stale_after
+            )
+            if stale != v.stale and v.online is not False and age is not None:
+                text = f"silent for {age:.0f} s (stale)" if stale else "heard again"
+                self.log.add(v.t, i, "stale", text, "alert" if stale else "info")
+            v.stale = stale
             vehicles.append(
                 {
                     "vehicle": i,
@@ -233,16 +299,18 @@ class FleetState:
                     "battery": v.battery,
                     "age": None if age is None else round(age, 1),
                     "online": v.online,
-                    "stale": math.isfinite(self.stale_after)
-                    and (v.online is False or age is None or age > self.stale_after),
+                    "stale": stale,
                     "end": v.end,
+                    "sensor": v.sensor,
                     "track_from": start,
-                    "track": v.track[start:],
+                    "track": v.track[start - v.track_base :],
                 }
             )
+        log = self.log.since(sent.log)
+        sent.log = self.log.total
         return {
             "type": "snapshot",
-            "clock": round(max((v.t for v in self.vehicles.values()), default=0.0), 1),
+            "clock": round(self.clock(), 1),
             "tnc": self.tnc(),
             "vehicles": vehicles,
             "detections": [_mark(m) for m in self.detections],
@@ -257,6 +325,7 @@ class FleetState:
                 }
                 for c in self.commands
             ],
+            "log": [e.as_json() for e in log],
         }
 
 

@@ -73,5 +73,5 @@ class MqttFeed:
         try:
             await self.channel.publish(f"{self.prefix}/{target}/cmd", body, qos=1)
         except aiomqtt.MqttError as exc:
-            outcome.error = f"not sent: {exc}"
+            self.state.not_sent(outcome, str(exc))
             raise

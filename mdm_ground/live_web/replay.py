@@ -43,7 +43,7 @@ class Replay:
         for r in read_records(run_dir / EMULATOR_EVENTS):
             if r.get("event") in ("armed", "disarmed") and isinstance(r.get("t"), int | float):
                 records.append(_Record(float(r["t"]), int(r["vehicle"]), r))
-        records.sort(key=lambda r: r.t)
+        records.sort(key=lambda r: r.t)  # stable: a vehicle's records stay in their order
         self._records = records
         self._times = [r.t for r in records]
         self.end = self._times[-1] if records else 0.0
@@ -58,7 +58,7 @@ class Replay:
         for r in self._records[:upto]:
             kind = r.record.get("event")
             if kind in ("armed", "disarmed"):
-                state.on_armed(r.vehicle, kind == "armed")
+                state.on_armed(r.vehicle, kind == "armed", r.t)
             else:
                 state.on_event(r.vehicle, r.record, None)
         for i in self.vehicles:

@@ -20,7 +20,7 @@ from aiohttp import web
 
 from companion.telemetry.mqtt.commands import COMMANDS
 from mdm_ground.live_web.access import Access, AccessError
-from mdm_ground.live_web.fleet_state import FleetState
+from mdm_ground.live_web.fleet_state import FleetState, Sent
 from mdm_ground.live_web.mqtt_feed import MqttFeed
 from mdm_ground.live_web.replay import Replay
 
@@ -166,7 +166,7 @@ async def _live_socket(page: LivePage, ws: web.WebSocketResponse) -> None:
     state, clock = page.state, page.clock
     assert state is not None, "a live page has a state"
     assert clock is not None, "a live page has a clock"
-    sent: dict[int, int] = {}
+    sent = Sent()
     loop = asyncio.get_running_loop()
     try:
         while not ws.closed:
@@ -193,5 +193,5 @@ async def _replay_socket(replay: Replay, ws: web.WebSocketResponse) -> None:
                 json.dumps({"type": "error", "error": f'expected {{"seek": t}}: {exc}'})
             )
             continue
-        snap = replay.state_at(min(max(t, 0.0), replay.end)).snapshot(0.0, {})
+        snap = replay.state_at(min(max(t, 0.0), replay.end)).snapshot(0.0)
         await ws.send_str(json.dumps(snap | {"reset": True, "at": t}))

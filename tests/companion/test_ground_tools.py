@@ -3,6 +3,8 @@ ground subcommand says what to install (exit 2) while `companion run` keeps its 
 
 from __future__ import annotations
 
+import argparse
+
 import pytest
 
 from companion import cli, ground_tools
@@ -11,8 +13,10 @@ from companion import cli, ground_tools
 def test_the_installed_entry_point_gives_the_ground_commands() -> None:
     tools = ground_tools.load()
     assert not isinstance(tools, str), tools
-    choices = cli.build_parser(tools)._subparsers._group_actions[0].choices  # type: ignore[union-attr]
-    assert set(ground_tools.COMMANDS) | {"run"} == set(choices)
+    (sub,) = (
+        a for a in cli.build_parser(tools)._actions if isinstance(a, argparse._SubParsersAction)
+    )
+    assert set(ground_tools.COMMANDS) | {"run"} == set(sub.choices)
 
 
 @pytest.mark.parametrize("command", sorted(ground_tools.COMMANDS))

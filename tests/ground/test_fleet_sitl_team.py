@@ -12,11 +12,8 @@ import signal
 import time
 from pathlib import Path
 
-import pytest
-
 from mdm_ground.fleet.sitl_team import boot_points
 from mdm_profiles import load_profile
-from tests import sitl
 from tests.companion.sitl_observer import Observer
 from tests.companion.sitl_team import (
     ON_GROUND,
@@ -30,7 +27,6 @@ from tests.companion.sitl_team import (
 )
 from tests.fleet_cli import processes_naming, start_fleet
 from tests.ground.live_web.page import page_command, page_state, page_url
-from tests.services import missing
 from tests.waiting import wait_until
 
 SPEEDUP = 2.0
@@ -38,14 +34,6 @@ SPEEDUP = 2.0
 setpoints on a loaded 2-core host (benchmarks/sitl_team_speed.py)."""
 SEED = 3
 RTL = {"arducopter": 6, "px4": (4 << 16) | (5 << 24)}  # ArduCopter RTL; PX4 AUTO.RTL
-
-
-@pytest.fixture
-def sitl_both() -> None:
-    """Both SITL builds (ArduCopter and PX4) are needed; skips with the variable to set."""
-    for kind in ("arducopter", "px4"):
-        if sitl.sitl_dir(kind) is None:
-            missing(sitl.skip_reason(kind))
 
 
 def _close(observers: dict[int, Observer]) -> None:

@@ -1,8 +1,11 @@
-"""`companion fleet --web` in headless Chromium: the emulator's team live on the page, and an
-abort clicked on the page flown by that vehicle alone."""
+"""`companion fleet --web` without any broker (the page runs the embedded one) in headless
+Chromium: the emulator's team live on the page, the map zoomed and panned, an abort clicked on
+the page flown by that vehicle alone, and the event log showing the command's answer and a
+confirmation."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 from pathlib import Path
@@ -21,7 +24,6 @@ from tests.ground.live_web.page import (
     page_url,
     screenshot,
 )
-from tests.mqtt_harness import retained_topics
 from tests.profile_files import sensors, write_profile_with
 from tests.waiting import wait_until
 
@@ -64,17 +66,41 @@ def _stale_rows(driver: WebDriver) -> list[str]:
     )
 
 
+def _view_box(driver: WebDriver) -> list[float]:
+    box = driver.execute_script("return document.getElementById('map').getAttribute('viewBox')")
+    return [float(v) for v in str(box).split()]
+
+
+def _scale(driver: WebDriver) -> tuple[float, float]:
+    """The scale bar: the metres its label says, and the metres its length covers on the map."""
+    text, bar_px, per_px = driver.execute_script(
+        "const m = document.getElementById('map'); const v = m.getAttribute('viewBox').split(' ');"
+        "return [document.getElementById('scale-text').textContent,"
+        " parseFloat(document.getElementById('scale-bar').style.width),"
+        " Math.max(Number(v[2]) / m.clientWidth, Number(v[3]) / m.clientHeight)];"
+    )
+    number, unit = str(text).split()
+    return float(number) * (1000.0 if unit == "km" else 1.0), float(bar_px) * float(per_px)
+
+
+def _log(driver: WebDriver, kind: str) -> list[str]:
+    """The event log's lines of ``kind`` shown now (newest first)."""
+    return list(driver.execute_script(
+        f"return [...document.querySelectorAll('#log li[data-kind=\"{kind}\"]')]"
+        ".filter(li => !li.hidden).map(li => li.textContent)"
+    ))  # fmt: skip
+
+
 @pytest.mark.timeout(300)
-def test_live_page_shows_the_team_moving_and_confirming_and_one_abort_flies_rtl(
-    chromium: WebDriver, mqtt_broker: int, fleet_processes: Path
+def test_live_page_without_a_broker_shows_the_team_and_an_abort_is_flown_and_logged(
+    chromium: WebDriver, fleet_processes: Path
 ) -> None:
     tmp_path = fleet_processes
-    prefix = f"mdm/test-{os.getpid()}-liveweb"
     run, output = tmp_path / "run", tmp_path / "fleet.out"
     fleet = start_fleet(
         "--profile", str(_profile(tmp_path)), "--out", str(run), "--speedup", "10",
         "--duration", "900", "--seed", "3", "--land-wait", "100", "--web", "127.0.0.1:0",
-        "--mqtt", f"127.0.0.1:{mqtt_broker}", "--mqtt-prefix", prefix, output=output,
+        output=output,
     )  # fmt: skip
     try:
         open_page(chromium, page_url(output, fleet))
@@ -87,6 +113,7 @@ def test_live_page_shows_the_team_moving_and_confirming_and_one_abort_flies_rtl(
         assert count(chromium, "#team tbody tr") == VEHICLES
         assert count(chromium, "#area #fence") == 1
         assert count(chromium, "#targets text") == 3
+        assert "embedded amqtt" in chromium.find_element("id", "broker").text
         wait_until(
             lambda: markers(chromium),
             60,
@@ -100,6 +127,31 @@ def test_live_page_shows_the_team_moving_and_confirming_and_one_abort_flies_rtl(
             until=lambda p: p == ["search"] * VEHICLES,
         )
         screenshot(chromium, tmp_path, "live-fleet-searching")
+
+        # zoom: the buttons scale the view box about its centre, fit brings the area back;
+        # the scale bar says what its length is on the map at each zoom
+        fitted, fitted_scale = _view_box(chromium), _scale(chromium)
+        chromium.find_element("id", "zoom-in").click()
+        chromium.find_element("id", "zoom-in").click()
+        zoomed = _view_box(chromium)
+        assert zoomed[2] == pytest.approx(fitted[2] / 2.25, rel=1e-3)
+        assert zoomed[0] + zoomed[2] / 2 == pytest.approx(fitted[0] + fitted[2] / 2, abs=1.0)
+        zoomed_scale = _scale(chromium)
+        assert zoomed_scale[0] < fitted_scale[0]
+        for said, shown in (fitted_scale, zoomed_scale):
+            assert shown == pytest.approx(said, rel=0.02)
+        chromium.find_element("css selector", '#team tbody tr[data-vehicle="1"] td').click()
+        chromium.find_element("id", "centre").click()
+        centred = _view_box(chromium)
+        north, east = markers(chromium)[1]
+        # on the vehicle as it was then (it flies on: 20 m/s x 10 for a fraction of a second)
+        assert centred[0] + centred[2] / 2 == pytest.approx(east, abs=60.0)
+        assert centred[1] + centred[3] / 2 == pytest.approx(-north, abs=60.0)
+        assert count(chromium, '#vehicles g.selected[data-vehicle="1"]') == 1
+        assert count(chromium, '#team tr.selected[data-vehicle="1"]') == 1
+        screenshot(chromium, tmp_path, "live-fleet-zoomed-uav1")
+        chromium.find_element("id", "fit").click()
+        assert _view_box(chromium) == pytest.approx(fitted)
 
         command(chromium, 0, "abort")
         wait_until(
@@ -120,11 +172,19 @@ def test_live_page_shows_the_team_moving_and_confirming_and_one_abort_flies_rtl(
             "RTL shown for vehicle 0",
             until=lambda mode: mode == "RTL",
         )
+        (sent,) = _log(chromium, "sent")
+        assert "uav0 operator sent abort to uav0" in sent
+        (answer,) = _log(chromium, "command")
+        assert "uav0 command abort accepted" in answer
         screenshot(chromium, tmp_path, "live-fleet-after-abort")
 
         wait_until(
             lambda: count(chromium, "#marks .confirmation"), 120, "a confirmation on the page"
         )
+        confirmed = wait_until(
+            lambda: _log(chromium, "confirmation"), 10, "the confirmation in the event log"
+        )
+        assert all(" confirmation at N " in line for line in confirmed), confirmed
         # the others searched on: neither went home, both are still in the search
         for i in range(1, VEHICLES):
             assert "RTL" not in _emulator_modes(run, i), _emulator_modes(run, i)
@@ -137,7 +197,13 @@ def test_live_page_shows_the_team_moving_and_confirming_and_one_abort_flies_rtl(
             "uav0 shown stale, alone",
             until=lambda rows: rows == ["0"],
         )
-        screenshot(chromium, tmp_path, "live-fleet-confirmation")
+        # one vehicle's log: uav2's lines and those to all only
+        from selenium.webdriver.support.ui import Select
+
+        Select(chromium.find_element("id", "log-filter")).select_by_value("2")
+        assert _log(chromium, "sent") == []
+        assert all("uav2" in line for line in _log(chromium, "phase"))
+        screenshot(chromium, tmp_path, "live-fleet-confirmation-log-uav2")
     finally:
         if fleet.poll() is None:
             os.killpg(fleet.pid, signal.SIGINT)
@@ -146,4 +212,7 @@ def test_live_page_shows_the_team_moving_and_confirming_and_one_abort_flies_rtl(
             except Exception:
                 os.killpg(fleet.pid, signal.SIGKILL)
                 raise
-        retained_topics(mqtt_broker, f"{prefix}/#", remove=True)
+    broker = json.loads((run / "run.json").read_text())["mqtt"]
+    assert broker["broker"] == "embedded"
+    assert broker["server"].startswith("amqtt ")
+    assert not (run / "broker-accounts").exists(), "the run's broker passwords left on disk"
