@@ -375,7 +375,10 @@ class Emulator:
             if HEARTBEAT in due:
                 v.state_changed = False
                 node.last_heartbeat = t
-            frames = []
+            # What the vehicle's logic queued this tick (MISSION_CURRENT, ITEM_REACHED) goes
+            # before the streams, which carry the state after it.
+            frames = [enc.pack(msg) for msg in v.outbox]
+            v.outbox.clear()
             for m in due:
                 if m in POSITION_STREAMS:
                     frames.append(frame(m, CRC_EXTRA[m], batch[m][v.index]))
@@ -397,9 +400,6 @@ class Emulator:
                 for severity, text in v.status:
                     frames.append(enc.pack(d.MAVLink_statustext_message(severity, text.encode())))
                 v.status.clear()
-            if v.outbox:
-                frames += [enc.pack(msg) for msg in v.outbox]
-                v.outbox.clear()
             node.send_frames(frames)
 
     def _sensor_frames(self, enc: Encoder, r: Reading, origin: tuple[float, float]) -> list[bytes]:

@@ -146,10 +146,10 @@ class MissionRun:
                 v.outbox.append(self.current_message())
                 return
             self.current = seq
-            v.outbox.append(self.current_message())
             item = self.items[seq]
             nxt = self._start(seq, item)
             if nxt is None:
+                v.outbox.append(self.current_message())  # one, for the item now flown
                 return
             seq = nxt
         f.hold(i)
