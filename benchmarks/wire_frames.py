@@ -20,7 +20,8 @@ from collections.abc import Callable
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.link import fast_frames
-from mavlink_signing import SigningState, passphrase_to_secret
+from mavlink_wire import SigningState, passphrase_to_secret
+from mavlink_wire import frames as wire
 from sim_vehicle_stub.encoder import Encoder
 from sim_vehicle_stub.framing import FrameDecoder, LinkStats
 
@@ -52,16 +53,15 @@ def main() -> None:
     nvf = mav.named_value_float_encode(1000, b"SENS_SIG", 0.25)
     tick = bytes(lpn.pack(mav)) + bytes(nvf.pack(mav))
     sp_datagram = b"".join(bytes(setpoint.pack(mav)) for _ in range(3))
-    lpn_id, sp_id, extra = lpn.id, setpoint.id, setpoint.crc_extra
+    lpn_id, sp_id = lpn.id, setpoint.id
 
     plain = Encoder(1)
     signed = Encoder(1, signing=SigningState(passphrase_to_secret("benchmark-key")))
     decoder = FrameDecoder(LinkStats())
-    wire = setpoint.pack(mav)[10:-2]
 
     def emu_frame() -> None:
         for _ in range(n):
-            plain.frame(sp_id, extra, wire)
+            plain.frame(sp_id, sp_payload)
 
     def emu_pack() -> None:
         for _ in range(n):
@@ -77,7 +77,7 @@ def main() -> None:
 
     def comp_read() -> None:
         for _ in range(n // 2):
-            for msg_id, _, frame in fast_frames.split(tick) or ():
+            for msg_id, _, frame in wire.split(tick) or ():
                 if msg_id == lpn_id:
                     fast_frames.unpack(msg_id, frame)
 
