@@ -22,7 +22,7 @@ from companion.mission import MissionConfig
 from companion.mission.mission_exit import MissionExit
 from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
-from mavlink_signing import ENV_VAR, load_signing_key
+from mavlink_wire import ENV_VAR, load_signing_key
 from mdm_core.ports import VEHICLE_UDP_BASE
 from mdm_profiles import ProfileError, SensorSourceKind, load_profile
 from mdm_profiles.mqtt_spec import MqttSpec
