@@ -24,7 +24,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import linear_sum_assignment
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -106,6 +105,10 @@ def corners(boxes: FloatArray) -> FloatArray:
 def assign(boxes: FloatArray, starts: FloatArray) -> tuple[IntArray, IntArray]:
     """Which cell each start point (vehicles, 2) sweeps, and from which of its corners: the
     assignment of least total distance from each start to the nearest corner of its cell."""
+    # Imported here: scipy.optimize loads scipy.special, which the Monte-Carlo CLI keeps out
+    # of its start-up until the workers have started (tests/montecarlo/test_cli.py).
+    from scipy.optimize import linear_sum_assignment
+
     gaps = np.linalg.norm(corners(boxes)[None, :, :, :] - starts[:, None, None, :], axis=-1)
     nearest = gaps.min(axis=-1)  # (vehicles, cells)
     vehicle, cell = linear_sum_assignment(nearest)
@@ -164,3 +167,25 @@ def lane_spacing(radius: float, overlap: float) -> float:
     if not 0.0 <= overlap < 1.0:
         raise ValueError(f"lane overlap must be in [0, 1), got {overlap}")
     return 2.0 * radius * (1.0 - overlap)
+
+
+def spiral(radius: float, spacing: float, chords_per_turn: int, inward: bool) -> FloatArray:
+    """The confirmation search of a two-sensor lawnmower (offsets (points, 2) from the point
+    of detection, starting straight ahead, +north; the flier rotates them to its heading):
+    a full circle of radius ``radius - spacing / 4``, then an Archimedean spiral from it to the
+    centre whose turns are ``spacing`` (2 r2) apart, in chords of 1 / ``chords_per_turn`` turn;
+    ``inward`` False flies the same path from the centre out. The circle passes half a
+    confirmation radius inside the detection disc's rim, where a fixed target detected on
+    entering the disc lies: a ring at r1 - r2 would pass it at exactly r2, its chords outside
+    r2, never confirming it; and a spiral alone is at its outer radius only where it starts."""
+    outer = max(radius - spacing / 4.0, 0.0)
+    turns = outer / spacing
+    count = max(1, math.ceil(turns * chords_per_turn))
+    theta = np.linspace(0.0, 2.0 * math.pi * turns, count + 1)
+    rho = outer - spacing * theta / (2.0 * math.pi)
+    rho[-1] = 0.0
+    ring = np.linspace(0.0, 2.0 * math.pi, chords_per_turn + 1)
+    circle = np.stack([outer * np.cos(ring), outer * np.sin(ring)], axis=-1)
+    inner = np.stack([rho * np.cos(theta), rho * np.sin(theta)], axis=-1)
+    points = np.concatenate([circle[:-1], inner])
+    return np.asarray(points if inward else points[::-1].copy())

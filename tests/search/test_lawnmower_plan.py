@@ -94,3 +94,28 @@ def test_grid_is_the_shortest_sweep_paper_area() -> None:
     assert grid.rows * grid.cols == 12
     strips = lawnmower.Grid(12, 1, 1, 3, (20000.0 / 12, 20000.0))
     assert grid.sweep_length < strips.sweep_length
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    detect=st.floats(100.0, 5000.0),
+    share=st.floats(0.05, 0.5),
+    chords=st.integers(8, 64),
+    inward=st.booleans(),
+    seed=st.integers(0, 2**31),
+)
+def test_spiral_covers_the_detection_disc(
+    detect: float, share: float, chords: int, inward: bool, seed: int
+) -> None:
+    """Every point of the detection disc (r1) is within r2 of the confirmation search (less the
+    chords' sagitta), the rim included: where a fixed target detected on entry lies."""
+    confirm = detect * share
+    path = lawnmower.spiral(detect, 2 * confirm, chords, inward)
+    assert np.linalg.norm(path, axis=-1).max() <= detect
+    rng = np.random.default_rng(seed)
+    angle = rng.uniform(0, 2 * np.pi, 500)
+    rho = detect * np.sqrt(rng.uniform(0, 1, 500))
+    rho[:100] = detect  # on the rim
+    points = np.stack([rho * np.cos(angle), rho * np.sin(angle)], -1)
+    sagitta = detect * (1 - np.cos(np.pi / chords))
+    assert _distance_to_path(points, path).max() <= confirm + sagitta + 1e-6
