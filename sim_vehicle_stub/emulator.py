@@ -37,12 +37,12 @@ from sim_vehicle_stub.geo_frame import GeoFrame
 from sim_vehicle_stub.handlers import MessageHandler
 from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.mission_protocol import MissionProtocol
-from sim_vehicle_stub.node import VehicleNode
+from sim_vehicle_stub.node import MISSION_CURRENT_ID, VehicleNode
 from sim_vehicle_stub.personas import ProfileFacts, create_persona
 from sim_vehicle_stub.personas.base import Behaviour
 from sim_vehicle_stub.sensing import Reading, SensorWorld
 from sim_vehicle_stub.sim_clock import SimClock
-from sim_vehicle_stub.telemetry import Telemetry
+from sim_vehicle_stub.telemetry import StreamSchedule, Telemetry
 from sim_vehicle_stub.vehicle import Vehicle
 
 log = logging.getLogger(__name__)
@@ -114,7 +114,10 @@ class Emulator:
                 self.geo,
             )  # fmt: skip
             signing = SigningState(config.signing_key) if config.signing_key else None
-            self.nodes.append(VehicleNode(vehicle, Encoder(vehicle.sysid, signing=signing)))
+            off = frozenset(() if persona.mission.current_unasked else (MISSION_CURRENT_ID,))
+            self.nodes.append(
+                VehicleNode(vehicle, Encoder(vehicle.sysid, signing=signing), StreamSchedule(off))
+            )
         self.handler = MessageHandler(
             CommandHandler(self.telemetry, o.alt),
             self.geo,
@@ -259,8 +262,7 @@ class Emulator:
         for severity, text in v.status:
             out.append(d.MAVLink_statustext_message(severity, text.encode()))
         v.status.clear()
-        out += v.outbox
-        v.outbox.clear()
+        out += node.take_outbox()
         node.send(out)
 
     # ----- sim loop
@@ -376,8 +378,7 @@ class Emulator:
                 node.last_heartbeat = t
             # What the vehicle's logic queued this tick (MISSION_CURRENT, ITEM_REACHED) goes
             # before the streams, which carry the state after it.
-            frames = [enc.pack(msg) for msg in v.outbox]
-            v.outbox.clear()
+            frames = [enc.pack(msg) for msg in node.take_outbox()]
             for m in due:
                 if m in POSITION_STREAMS:
                     frames.append(frame(m, batch[m][v.index]))
