@@ -180,11 +180,13 @@ class TargetTracks:
         out = np.full((self.n_runs, self.spec.count), np.inf)
         if self.walk is None:
             return out
-        starts, velocity = self.segments(until)
         last = int(np.floor(until / self.grid_dt + NODE_EPS))
         size = self.area.size
         with np.errstate(divide="ignore", invalid="ignore"):
             for k in range(last + 1):
+                if np.isfinite(out).all():
+                    break  # every target has left: no need to draw the paths further
+                starts, velocity = self.segments(k * self.grid_dt)
                 s, v = starts[:, k], velocity[:, k]
                 wall = np.where(v > 0, size, 0.0)
                 hit = np.where(v != 0, (wall - s) / v, np.inf)  # (runs, m, 2), >= 0 inside
