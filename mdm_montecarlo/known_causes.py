@@ -64,6 +64,11 @@ CAUSES: tuple[Cause, ...] = (
         lambda r, m: "the default rule (anchor) is the row above it",
     ),
     Cause(
+        "Targets that leave the area",
+        lambda r, m: r.variant == VARIANTS["targets_leave"][0],
+        lambda r, m: "the default (bounce, confirmations only) is the row above it",
+    ),
+    Cause(
         "Social-cognitive baselines (PSO, SPSO, ARPSO; simtablepso1)",
         lambda r, m: r.method in SWARMS,
         lambda r, m: "{} {:.3f}".format(

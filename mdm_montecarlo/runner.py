@@ -37,6 +37,9 @@ class MissionResults:
     sim_seconds: float
     followed: int | None = None
     """Swarm baselines: particle-iterations that followed a peer's best (of ``events``)."""
+    gone: NDArray[np.float64] | None = None
+    """(runs, targets) when each target left the area, where T_S counts it
+    (``mission.ts_rule: confirmed_or_gone``); else None."""
 
     @property
     def runs(self) -> int:
@@ -67,7 +70,9 @@ class MissionResults:
 
     def ts(self) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """T_S of every run (capped at mission.ts_cap) and which runs were capped."""
-        return metrics.time_to_all(self.team_times, self.real, self.profile.mission.ts_cap)
+        return metrics.time_to_all(
+            self.team_times, self.real, self.profile.mission.ts_cap, self.gone
+        )
 
 
 class RunInterruptedError(MontecarloError):
@@ -275,4 +280,7 @@ def _collect(profile: MissionProfile, seed: int, results: list[BlockResult]) -> 
         followed=None
         if any(r.followed is None for r in results)
         else sum(r.followed or 0 for r in results),
+        gone=None
+        if any(r.gone is None for r in results)
+        else np.concatenate([r.gone for r in results if r.gone is not None], axis=0),
     )

@@ -175,6 +175,12 @@ class MissionSpec(_Strict):
         le=MAX_MISSION_TIME,
         description=f"T_S of runs that never finish, s (at most {MAX_MISSION_TIME:g}).",
     )
+    ts_rule: Literal["confirmed", "confirmed_or_gone"] = Field(
+        default="confirmed",
+        description="T_S: the time every real target is confirmed (confirmed), or confirmed "
+        "or gone out of the area, whichever is first (confirmed_or_gone; with "
+        "target_motion.boundary free).",
+    )
 
 
 class GeoPoint(_Strict):

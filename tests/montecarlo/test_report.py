@@ -67,7 +67,7 @@ def small_report(tmp_path_factory: pytest.TempPathFactory) -> str:
 
 def test_summary_comes_first_and_outside_rows_link_their_cause(small_report: str) -> None:
     assert small_report.index("## Summary") < small_report.index("## simtable1")
-    assert re.search(r"T_nc inside tolerance: \d+ of 19 rows", small_report)
+    assert re.search(r"T_nc inside tolerance: \d+ of 23 rows", small_report)
     outside = small_report.split("## Means outside tolerance")[1].split("\n## ", maxsplit=1)[0]
     rows = [line for line in outside.splitlines() if line.startswith("| simtable1")]
     assert rows
@@ -168,3 +168,19 @@ def test_no_improvement_percentage_against_a_baseline_that_confirmed_nothing() -
     table = format_table(measured)
     assert "nan" not in table.lower()
     assert "inf" not in table.lower()
+
+
+def test_every_dynamic_row_has_its_targets_leave_row() -> None:
+    """simtable1, simtablef1, Dsimtable6, simtable3 and scaling: each dynamic row (swarms
+    aside) is followed by the same case with the free walk and T_S counting departures."""
+    tables = ("simtable1", "simtablef1", "Dsimtable6", "simtable3", "scaling")
+    rows = study_rows(tables)
+    leave = [k for k, r in enumerate(rows) if r.case.variant == "targets_leave"]
+    dynamic = [r for r in rows if r.case.scenario == "dynamic" and not r.case.variant]
+    assert len(leave) == len(dynamic) == 4 + 4 + 9 + 5 + 12
+    for k in leave:
+        assert rows[k].case == replace(rows[k - 1].case, variant="targets_leave")
+        profile = rows[k].case.profile()
+        assert profile.target_motion is not None
+        assert profile.target_motion.boundary == "free"
+        assert profile.mission.ts_rule == "confirmed_or_gone"
