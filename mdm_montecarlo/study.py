@@ -141,13 +141,13 @@ def study_rows(tables: tuple[str, ...] = TABLES) -> list[Row]:
             rows.append(Row(r.table, replace(_case_of(r), variant="eq10"), r))
         if r.table in POPUP_VARIANT_TABLES and r.scenario == "popup" and r.method in ALL_METHODS:
             rows.append(Row(r.table, replace(_case_of(r), variant="popup_from_0"), r))
+        if r.table in LEAVE_VARIANT_TABLES and r.scenario == "dynamic" and r.method in ALL_METHODS:
+            rows.append(Row(r.table, replace(_case_of(r), variant="targets_leave"), r))
         if r.table in LAWNMOWER_TABLES and r.method == "MDM":
             rows += [
                 Row(r.table, replace(_case_of(r), method=m, variant="lawnmower"), None)
                 for m in LAWNMOWER_METHODS
             ]
-        if r.table in LEAVE_VARIANT_TABLES and r.scenario == "dynamic" and r.method in ALL_METHODS:
-            rows.append(Row(r.table, replace(_case_of(r), variant="targets_leave"), r))
         if r.table == "simtablepso1" and r.method in SWARM_METHODS:
             rows += [Row(r.table, replace(_case_of(r), variant=v), r) for v in SWARM_VARIANTS]
     if "scaling" in tables:
