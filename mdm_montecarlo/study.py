@@ -65,6 +65,9 @@ targets and does not read them; 'swarm_waypoint_detection' also reads MDM's 2 km
 sensor; 'swarm_detection' is "swarm given MDM's detection sensor" (one iteration every 5 s,
 100 m)."""
 SWARM_VARIANTS = ("swarm_forgets", "swarm_waypoint_detection", "swarm_detection")
+POPUP_VARIANT_TABLES = ("simtable1", "simtablef1", "simtable3", "simtable5")
+"""Tables whose pop-up rows (US, BS, LS and MDM) each have a 'popup_from_0' row after them."""
+ALL_METHODS = ("US", "BS", "LS", "MDM")
 
 
 @dataclass(frozen=True)
@@ -119,7 +122,7 @@ def study_rows(tables: tuple[str, ...] = TABLES) -> list[Row]:
         rows.append(Row(r.table, _case_of(r), r))
         if r.table == "simtable1" and r.method == "MDM":
             rows.append(Row(r.table, replace(_case_of(r), variant="eq10"), r))
-        if r.table == "simtable1" and r.scenario == "popup" and r.method in ("US", "MDM"):
+        if r.table in POPUP_VARIANT_TABLES and r.scenario == "popup" and r.method in ALL_METHODS:
             rows.append(Row(r.table, replace(_case_of(r), variant="popup_from_0"), r))
         if r.table == "simtablepso1" and r.method in SWARM_METHODS:
             rows += [Row(r.table, replace(_case_of(r), variant=v), r) for v in SWARM_VARIANTS]
