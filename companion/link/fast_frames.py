@@ -16,6 +16,7 @@ from __future__ import annotations
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from mavlink_wire import frames
+from mavlink_wire.frames import unpack as unpack_payload
 
 LOCAL_POSITION_NED = mavlink2.MAVLINK_MSG_ID_LOCAL_POSITION_NED
 NAMED_VALUE_FLOAT = mavlink2.MAVLINK_MSG_ID_NAMED_VALUE_FLOAT
@@ -38,7 +39,7 @@ afx, afy, afz, yaw, yaw_rate, type_mask, target_system, target_component, coordi
 def unpack(msg_id: int, frame: bytes) -> tuple[int | float | bytes, ...]:
     """Fields of a frame of a :data:`FAST` message in wire order, as pymavlink reads them:
     the payload zero-extended (MAVLink 2 cuts trailing zeros), char arrays without their NULs."""
-    fields = frames.unpack(_UNPACKERS[msg_id], frame, len(frame) - 2)
+    fields = unpack_payload(_UNPACKERS[msg_id], frame, len(frame) - 2)
     if msg_id not in _TEXT:
         return fields  # type: ignore[return-value]
     return tuple(f.rstrip(b"\x00") if isinstance(f, bytes) else f for f in fields)  # type: ignore[misc]
