@@ -72,6 +72,9 @@ sensor; 'swarm_detection' is "swarm given MDM's detection sensor" (one iteration
 100 m). 'lawnmower': the partitioned lawnmowers LM1/LM2 (docs/model.md, "The lawnmower
 baseline"), which the paper does not fly: their rows carry no paper value."""
 SWARM_VARIANTS = ("swarm_forgets", "swarm_waypoint_detection", "swarm_detection")
+POPUP_VARIANT_TABLES = ("simtable1", "simtablef1", "simtable3", "simtable5")
+"""Tables whose pop-up rows (US, BS, LS and MDM) each have a 'popup_from_0' row after them."""
+ALL_METHODS = ("US", "BS", "LS", "MDM")
 LAWNMOWER_TABLES = ("simtable1", "simtablef1")
 """Tables that get LM1 and LM2 rows after each scenario's MDM row."""
 
@@ -128,7 +131,7 @@ def study_rows(tables: tuple[str, ...] = TABLES) -> list[Row]:
         rows.append(Row(r.table, _case_of(r), r))
         if r.table == "simtable1" and r.method == "MDM":
             rows.append(Row(r.table, replace(_case_of(r), variant="eq10"), r))
-        if r.table == "simtable1" and r.scenario == "popup" and r.method in ("US", "MDM"):
+        if r.table in POPUP_VARIANT_TABLES and r.scenario == "popup" and r.method in ALL_METHODS:
             rows.append(Row(r.table, replace(_case_of(r), variant="popup_from_0"), r))
         if r.table in LAWNMOWER_TABLES and r.method == "MDM":
             rows += [

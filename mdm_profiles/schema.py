@@ -182,6 +182,10 @@ class GeoPoint(_Strict):
     lon: float = Field(ge=-180, le=180)
 
 
+DEFAULT_MAX_ALTITUDE = 120.0
+"""The ceiling, m above the take-off point, where a profile sets none (the usual legal limit)."""
+
+
 class SiteSpec(_Strict):
     """A real flying site (field profiles): geofence, link and failsafe choices of the companion."""
 
@@ -201,6 +205,13 @@ class SiteSpec(_Strict):
         le=1e5,
         description="The companion refuses to start a vehicle farther than this (m) outside "
         "the search area.",
+    )
+    max_altitude: float = Field(
+        default=DEFAULT_MAX_ALTITUDE,
+        gt=0,
+        le=1e4,
+        description="The ceiling, m above the take-off point: every vehicle's layer "
+        "(fleet.altitude + i x fleet.altitude_step) stays under it.",
     )
     fence_inset: float = Field(
         default=20.0,
