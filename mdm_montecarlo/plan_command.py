@@ -14,7 +14,6 @@ from pathlib import Path
 from mdm_montecarlo.result_files import check_writable
 from mdm_montecarlo.runner import run_many
 from mdm_montecarlo.team_plan import (
-    CEILING,
     PlanAsk,
     PlanRow,
     check,
@@ -50,12 +49,6 @@ def add_plan_parser(
         "--methods", default="MDM,US,LM1,LM2", help="comma-separated (default MDM,US,LM1,LM2)"
     )
     p.add_argument("--want", type=float, default=0.9, help="probability to reach (default 0.9)")
-    p.add_argument(
-        "--ceiling",
-        type=float,
-        default=CEILING,
-        help=f"highest altitude above home for the team's layers, m (default {CEILING:g})",
-    )
     p.add_argument("--out", help="folder for plan.csv and plan.png (default reports/plan-<time>)")
     common(p)
 
@@ -63,7 +56,7 @@ def add_plan_parser(
 def plan_command(args: argparse.Namespace) -> int:
     profile = apply_overrides(load_profile(args.profile), args.set)
     methods = tuple(m.strip() for m in args.methods.split(",") if m.strip())
-    ask = PlanAsk(profile, args.teams, args.endurance, methods, args.want, args.ceiling)
+    ask = PlanAsk(profile, args.teams, args.endurance, methods, args.want)
     check(ask)
     out = Path(args.out or time.strftime("reports/plan-%Y%m%d-%H%M%S", time.gmtime()))
     check_writable(out)

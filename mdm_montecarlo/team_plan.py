@@ -12,8 +12,8 @@ Refused before any run (ValueError, exit 2 from the CLI): a profile without a si
 endurance below the transit (the time to fly the search area's diagonal at the fleet speed:
 below it a vehicle cannot reach the far side of the area from its start point), a team larger
 than the profile can start (its altitude layers, fleet.altitude + (n - 1) x
-fleet.altitude_step, above the ceiling, 120 m by default: the open category's limit; or more
-vehicles than MAVLink system ids, 255).
+fleet.altitude_step, above site.max_altitude: mdm_profiles.ceiling, as the companion checks
+before it arms; or more vehicles than MAVLink system ids, 255).
 """
 
 from __future__ import annotations
@@ -26,9 +26,8 @@ import numpy as np
 from mdm_montecarlo.runner import MissionResults
 from mdm_montecarlo.variants import with_fleet_size, with_method
 from mdm_profiles import MissionProfile
+from mdm_profiles.ceiling import CeilingError, check_ceiling
 
-CEILING = 120.0
-"""Default highest flight altitude above home, m (the EU/Swiss open category's 120 m)."""
 MAX_SYSTEM_IDS = 255
 
 
@@ -39,7 +38,6 @@ class PlanAsk:
     endurance_min: float
     methods: tuple[str, ...]
     want: float
-    ceiling: float = CEILING
 
 
 @dataclass(frozen=True)
@@ -80,21 +78,13 @@ def check(ask: PlanAsk) -> None:
             f"({math.hypot(profile.area.north, profile.area.east):.0f} m) takes "
             f"{transit / 60:.1f} min at {profile.fleet.speed:g} m/s"
         )
-    fleet = profile.fleet
     biggest = max(ask.teams)
-    top = fleet.altitude + (biggest - 1) * fleet.altitude_step
-    if top > ask.ceiling:
-        most = (
-            int((ask.ceiling - fleet.altitude) // fleet.altitude_step) + 1
-            if fleet.altitude_step
-            else biggest
-        )
+    try:
+        check_ceiling(profile, biggest)
+    except CeilingError as exc:
         raise ValueError(
-            f"--teams: {biggest} vehicles is more than profile {profile.name!r} can start: its "
-            f"altitude layers (fleet.altitude {fleet.altitude:g} m + {biggest - 1} x "
-            f"fleet.altitude_step {fleet.altitude_step:g} m = {top:g} m) go above the ceiling "
-            f"{ask.ceiling:g} m (--ceiling); at most {most}"
-        )
+            f"--teams: {biggest} vehicles is more than profile {profile.name!r} can start: {exc}"
+        ) from None
     if biggest > MAX_SYSTEM_IDS:
         raise ValueError(
             f"--teams: {biggest} vehicles; MAVLink system ids allow {MAX_SYSTEM_IDS} at most"
