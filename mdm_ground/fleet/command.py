@@ -7,6 +7,7 @@ import json
 import time
 from pathlib import Path
 
+from companion.mission.core_for import LAWNMOWER_KINDS, lawnmower_refusal
 from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
 from mdm_core.search.pso import VARIANTS
 from mdm_ground.fleet.gcs import parse_gcs
@@ -15,10 +16,13 @@ from mdm_ground.fleet.runner import run_fleet
 from mdm_ground.fleet.summary import exit_status, summary_lines
 from mdm_ground.live_web.cli_args import check_tiles, parse_web, web_argv
 from mdm_profiles import load_profile
+from mdm_provenance import extras
 
 
 def fleet_command(args: argparse.Namespace) -> int:
     """`companion fleet`: run, print a summary (or JSON); 0 only for a complete run."""
+    if args.vehicles_file is None and args.sitl is None:  # the emulator flies the team
+        extras.require("companion fleet", "emulator")
     out = args.out or Path("runs") / time.strftime("fleet-%Y%m%d-%H%M%S")
     profile = load_profile(args.profile)
     # Bad --mqtt* flags, or a swarm kind without a broker, fail here, not N times.
@@ -28,6 +32,8 @@ def fleet_command(args: argparse.Namespace) -> int:
             f"profile {profile.name!r}: policy.kind {profile.policy.kind!r} shares the swarm's "
             "bests over MQTT; configure a broker (--mqtt HOST[:PORT] or the profile's mqtt:)"
         )
+    if profile.policy.kind in LAWNMOWER_KINDS:
+        raise ValueError(lawnmower_refusal(profile.name, profile.policy.kind))
     web = _web_argv(args)
     if args.gcs is not None:
         parse_gcs(args.gcs)
