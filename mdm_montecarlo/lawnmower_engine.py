@@ -13,7 +13,7 @@ import numpy as np
 from mdm_core.search import lawnmower
 from mdm_core.world import Scenario
 from mdm_montecarlo.compiled_tracks import shared_tracks
-from mdm_montecarlo.engine import BlockResult, block_rngs
+from mdm_montecarlo.engine import BlockResult, block_rngs, departures
 from mdm_montecarlo.lawnmower_kernel import fly_lawnmower
 from mdm_profiles import MissionProfile
 
@@ -87,4 +87,5 @@ def run_lawnmower_block(profile: MissionProfile, seed: int, block: int, n_runs: 
         tracks.max_speed,
         first,
     )
-    return BlockResult(block, first.reshape(n_runs, n_vehicles, -1), legs, simulated)
+    gone = departures(profile, tracks, cap)
+    return BlockResult(block, first.reshape(n_runs, n_vehicles, -1), legs, simulated, gone=gone)

@@ -21,7 +21,15 @@ from mdm_montecarlo.plots import plot_scaling, plot_section3b, plot_table
 from mdm_montecarlo.report_comparisons import comparison_section
 from mdm_montecarlo.runner import MissionResults
 from mdm_montecarlo.section3b import SearchGeometry, confirmed_share, p_cm, p_cs
-from mdm_montecarlo.study import SECTION3B_METHODS, TNC_TOLERANCE, TS_TOLERANCE, Case, Row
+from mdm_montecarlo.study import (
+    READINGS,
+    SECTION3B_METHODS,
+    TNC_TOLERANCE,
+    TS_TOLERANCE,
+    VARIANTS,
+    Case,
+    Row,
+)
 from mdm_montecarlo.tables import MeasuredRow, format_table
 
 Plot = tuple[Callable[..., None], tuple[Any, ...]]
@@ -102,6 +110,77 @@ def summary(measured: list[MeasuredRow], docs: str, claims: list[Claim]) -> list
         "",
     ]
     return lines
+
+
+def _base_key(m: MeasuredRow) -> tuple[object, ...]:
+    return (m.table, m.scenario, m.method, m.level1, m.level2, m.delta1_pct_L, m.n_uav, m.n_false)
+
+
+def reading_rows(measured: list[MeasuredRow], reading: str) -> list[MeasuredRow]:
+    """The rows a reading flies: each default row, or its variant row of the reading's choice
+    for its scenario where the report has one."""
+    choice = {k: VARIANTS[v][0] for k, v in READINGS[reading].items()}
+    by_key = {(_base_key(m), m.variant): m for m in measured}
+    out = []
+    for m in measured:
+        if m.variant:
+            continue
+        wanted = choice.get(m.scenario, "")
+        out.append(by_key.get((_base_key(m), wanted), m))
+    return out
+
+
+def _mdm_ahead(rows: list[MeasuredRow]) -> list[str]:
+    """Per scenario of simtable1: is MDM ahead of US, BS and LS in mean T_nc and mean T_S."""
+    out = []
+    for scenario in ("fixed", "popup", "dynamic"):
+        mine = [m for m in rows if m.table == "simtable1" and m.scenario == scenario]
+        mdm = [m for m in mine if m.method == "MDM"]
+        if not mdm:
+            continue
+        parts = []
+        for m in mine:
+            if m.method == "MDM":
+                continue
+            tnc = mdm[0].tnc_mean > m.tnc_mean
+            ts = (mdm[0].ts_mean_s or 0) < (m.ts_mean_s or 0)
+            parts.append(f"{m.method} {'yes' if tnc else '**no**'}/{'yes' if ts else '**no**'}")
+        out.append(f"{scenario}: " + ", ".join(parts))
+    return out
+
+
+def readings_section(measured: list[MeasuredRow], docs: str) -> list[str]:
+    """Rows inside tolerance under each named reading, by scenario, and MDM's lead."""
+    lines = [
+        "## Readings",
+        "",
+        "Each reading flies every default row, or its row of the reading's choice for its "
+        f"scenario ([One reading of the paper]({docs}#one-reading-of-the-paper)).",
+        "",
+        "| reading | choices | T_nc inside | T_S inside | T_nc by scenario | T_S by scenario |"
+        " MDM ahead in simtable1 (T_nc/T_S) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, choices in READINGS.items():
+        rows = reading_rows(measured, name)
+        count: dict[str, dict[str, list[bool]]] = {"tnc": {}, "ts": {}}
+        for m in rows:
+            if m.tnc_within is not None:
+                count["tnc"].setdefault(m.scenario, []).append(m.tnc_within)
+            if m.ts_within is not None:
+                count["ts"].setdefault(m.scenario, []).append(m.ts_within)
+        total = {k: [x for v in d.values() for x in v] for k, d in count.items()}
+        by = {
+            k: ", ".join(f"{s} {sum(v)}/{len(v)}" for s, v in d.items()) for k, d in count.items()
+        }
+        label = ", ".join(f"{s}: {VARIANTS[v][0]}" for s, v in choices.items()) or "the defaults"
+        lines.append(
+            f"| {name} | {label} | {sum(total['tnc'])}/{len(total['tnc'])} | "
+            f"{sum(total['ts'])}/{len(total['ts'])} | {by['tnc']} | {by['ts']} | "
+            + "; ".join(_mdm_ahead(rows))
+            + " |"
+        )
+    return [*lines, ""]
 
 
 def outside_table(measured: list[MeasuredRow], docs: str) -> list[str]:
@@ -208,6 +287,7 @@ def write_report(
         header,
         "",
         *summary(measured, docs, claims),
+        *readings_section(measured, docs),
         *outside_table(measured, docs),
         *comparison_section(rows, results),
         "Single-sensor and swarm AISE/AISC are against the MDM row of the same table, scenario "

@@ -179,8 +179,21 @@ def test_every_dynamic_row_has_its_targets_leave_row() -> None:
     dynamic = [r for r in rows if r.case.scenario == "dynamic" and not r.case.variant]
     assert len(leave) == len(dynamic) == 4 + 4 + 9 + 5 + 12
     for k in leave:
-        assert rows[k].case == replace(rows[k - 1].case, variant="targets_leave")
+        # the default row before it (simtable1/f1's lawnmower rows may sit between them)
+        before = next(r.case for r in reversed(rows[:k]) if not r.case.variant)
+        assert rows[k].case == replace(before, variant="targets_leave")
         profile = rows[k].case.profile()
         assert profile.target_motion is not None
         assert profile.target_motion.boundary == "free"
         assert profile.mission.ts_rule == "confirmed_or_gone"
+
+
+def test_the_readings_section_counts_the_chosen_variant_rows(small_report: str) -> None:
+    """simtable1 alone: 'closest' takes the t_i = 200 (i - 1) row of each pop-up row (4 rows),
+    so its T_nc rows are the default reading's 12, not 12 plus the variants."""
+    part = small_report.split("## Readings")[1].split("\n## ", maxsplit=1)[0]
+    default = next(ln for ln in part.splitlines() if ln.startswith("| default |"))
+    closest = next(ln for ln in part.splitlines() if ln.startswith("| closest |"))
+    assert re.search(r"\| \d+/12 \| \d+/12 \|", default)
+    assert re.search(r"\| \d+/12 \| \d+/12 \|", closest)
+    assert "popup: t_i = 200 (i - 1)" in closest
