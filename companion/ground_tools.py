@@ -12,11 +12,12 @@ from pathlib import Path
 from typing import Protocol, cast
 
 from mdm_profiles import MissionProfile
+from mdm_provenance import extras
 
 log = logging.getLogger(__name__)
 
 GROUP = "mdm_search.ground"
-INSTALL = "pip install 'mdm-search[ground]'"
+INSTALL = extras.install_hint("ground")
 COMMANDS: dict[str, str] = {
     "fleet": "run the emulator (or SITL, or real vehicles) and a companion per vehicle",
     "map": "write map.geojson and map.png of a run directory",
@@ -39,10 +40,15 @@ class GroundTools(Protocol):
 
 
 def load() -> GroundTools | str:
-    """The ground tools, or one line saying why they cannot be had and how to get them."""
+    """The ground tools, or one line saying why they cannot be had and how to get them: their
+    entry point, or a module of the [ground] extra, is missing (mdm_ground imports them only
+    where a command uses them, so the entry point alone loads without them)."""
     found = entry_points(group=GROUP, name="tools")
     if not found:
         return f"the ground tools are not installed: {INSTALL}"
+    absent = extras.missing_module("ground")
+    if absent is not None:
+        return f"the ground tools are not installed ({absent} is missing): {INSTALL}"
     try:
         return cast(GroundTools, next(iter(found)).load())
     except ImportError as exc:

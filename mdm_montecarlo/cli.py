@@ -87,7 +87,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--method",
-        help="US, BS, LS, PSO, SPSO, ARPSO, MDM (the profile's levels) or MDM:L1+L2 "
+        help="US, BS, LS, PSO, SPSO, ARPSO, LM1, LM2, MDM (the profile's levels) or MDM:L1+L2 "
         "(default: the profile's policy)",
     )
     run.add_argument(

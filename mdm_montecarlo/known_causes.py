@@ -83,6 +83,11 @@ CAUSES: tuple[Cause, ...] = (
     ),
     Cause(
         "Pop-up times",
+        lambda r, m: r.variant == VARIANTS["popup_from_0"][0],
+        lambda r, m: "the default appear times (t_i = 200 i) are the row above it",
+    ),
+    Cause(
+        "Pop-up times",
         lambda r, m: r.scenario == "popup" and m == "T_nc",
         lambda r, m: "appear times t_i = 200 (i - 1): US 4.237, MDM US+US 4.937 (300 runs)",
     ),

@@ -55,6 +55,7 @@ _VARIANT_TICKS = {
     "swarm_forgets": "forgets",
     "swarm_waypoint_detection": "r_1 waypoints",
     "swarm_detection": "r_1 every 5 s",
+    "lawnmower": "not in paper",
 }
 """Short x tick names of the variants of study.VARIANTS (the report's tables give the labels)."""
 PaperMeans = dict[Case, tuple[float | None, float | None]]

@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from mdm_core import metrics
 from mdm_montecarlo.engine import BLOCK_RUNS, BlockResult, run_block
 from mdm_montecarlo.errors import MontecarloError
+from mdm_montecarlo.lawnmower_engine import LAWNMOWER_KINDS, run_lawnmower_block
 from mdm_montecarlo.local_pool import imap_unordered
 from mdm_montecarlo.social_engine import SWARM_KINDS, run_swarm_block
 from mdm_profiles import MissionProfile
@@ -88,9 +89,12 @@ def is_swarm(profile: MissionProfile) -> bool:
 
 
 def simulate_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
-    """One block of runs: the event-driven engine, or the time-stepped one for PSO/SPSO/ARPSO."""
+    """One block of runs: the event-driven engine, the time-stepped one for PSO/SPSO/ARPSO, or
+    the lawnmowers' (LM1/LM2)."""
     if is_swarm(profile):
         return run_swarm_block(profile, seed, block, n_runs)
+    if profile.policy.kind in LAWNMOWER_KINDS:
+        return run_lawnmower_block(profile, seed, block, n_runs)
     return run_block(profile, seed, block, n_runs)
 
 

@@ -13,11 +13,11 @@ import threading
 from collections.abc import Iterator
 from pathlib import Path
 
-from mavlink_signing import ENV_VAR, load_signing_key
+from mavlink_wire import ENV_VAR, load_signing_key
 from mdm_core.ports import GCS_UDP, TCP_BASE, VEHICLE_OWN_UDP_BASE, VEHICLE_UDP_BASE
 from mdm_profiles import ProfileError, builtin_profile, builtin_profiles, load_profile
 from mdm_profiles.schema import MissionProfile
-from mdm_provenance import add_version_flag
+from mdm_provenance import add_version_flag, extras
 from sim_vehicle_stub.config import EmulatorConfig
 from sim_vehicle_stub.personas import persona_names
 
@@ -172,6 +172,7 @@ async def _serve(
 def main(argv: list[str] | None = None) -> int:
     with _stops_noted() as stops:
         args = build_parser().parse_args(argv)
+        extras.require("sim-vehicle", "emulator")  # before the emulator imports numba
         logging.basicConfig(
             level=args.log_level.upper(), format="%(asctime)s %(levelname)s %(name)s: %(message)s"
         )

@@ -7,7 +7,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from mavlink_signing import Verdict
+from mavlink_wire import Verdict
 from sim_vehicle_stub.encoder import Encoder
 from sim_vehicle_stub.framing import LinkStats
 from sim_vehicle_stub.mavlink import dialect as d

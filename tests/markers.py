@@ -1,6 +1,7 @@
 """The markers a test gets from the fixtures it uses (never by hand), so that a new test that
-asks for a SITL instance, a broker, a browser, a Docker image or a fleet's processes is selected
-and deselected with its kind: ``pytest -m "not sitl and not docker and not browser"``.
+asks for a SITL instance, a broker, a browser, a Docker image, a fleet's processes or a fresh
+install is selected and deselected with its kind:
+``pytest -m "not sitl and not docker and not browser and not install"``.
 
 A test with none of them is the socket-light core."""
 
@@ -14,6 +15,7 @@ MARKERS: dict[str, str] = {
     "broker": "talks to a Mosquitto broker (fixtures mqtt_broker, mosquitto)",
     "browser": "drives headless Chromium (fixture chromium, browser_*)",
     "fleet": "runs several processes: emulator and companions (fixtures fleet_*)",
+    "install": "installs the package into a fresh virtual environment (fixtures install_*)",
 }
 """Marker -> its description, as registered with pytest."""
 
@@ -29,6 +31,7 @@ _PREFIXES: tuple[tuple[str, str], ...] = (
     ("docker_", "docker"),
     ("browser_", "browser"),
     ("fleet_", "fleet"),
+    ("install_", "install"),
 )
 
 

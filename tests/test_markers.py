@@ -21,6 +21,7 @@ from tests.markers import MARKERS, markers_for
         (["chromium"], {"browser"}),
         (["browser_page"], {"browser"}),
         (["fleet_processes"], {"fleet"}),
+        (["install_vehicle_venv"], {"install"}),
         (["fleet_processes", "mqtt_broker", "px4"], {"fleet", "broker", "sitl"}),
         (["tmp_path", "capsys", "monkeypatch", "images", "broker", "arducopter_log"], set()),
     ],
@@ -42,6 +43,7 @@ def test_every_marker_given_is_registered_with_a_description() -> None:
         "chromium",
         "browser_x",
         "fleet_x",
+        "install_x",
     ]
     assert markers_for(every) == set(MARKERS)
     assert all(description.strip() for description in MARKERS.values())

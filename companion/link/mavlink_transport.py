@@ -10,7 +10,7 @@ from collections.abc import Callable
 from typing import Any, cast
 
 from companion.link.address import Address
-from companion.link.base import LinkError
+from companion.link.errors import LinkError
 
 log = logging.getLogger(__name__)
 

@@ -15,10 +15,13 @@ from mdm_ground.fleet.runner import run_fleet
 from mdm_ground.fleet.summary import exit_status, summary_lines
 from mdm_ground.live_web.cli_args import check_tiles, parse_web, web_argv
 from mdm_profiles import load_profile
+from mdm_provenance import extras
 
 
 def fleet_command(args: argparse.Namespace) -> int:
     """`companion fleet`: run, print a summary (or JSON); 0 only for a complete run."""
+    if args.vehicles_file is None and args.sitl is None:  # the emulator flies the team
+        extras.require("companion fleet", "emulator")
     out = args.out or Path("runs") / time.strftime("fleet-%Y%m%d-%H%M%S")
     profile = load_profile(args.profile)
     # Bad --mqtt* flags, or a swarm kind without a broker, fail here, not N times.

@@ -13,7 +13,6 @@ import subprocess
 import sys
 import tempfile
 import threading
-import tomllib
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -121,8 +120,12 @@ def wheelhouse() -> Path:
             f"for Debian {RELEASE}'s python3 {IMAGE_PYTHON[0]}.{IMAGE_PYTHON[1]}: run the "
             "docker tests with that Python"
         )
-    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
-    requirements = [*pyproject["project"]["dependencies"], *pyproject["build-system"]["requires"]]
+    # what the image's dependency layer installs: the package with its [all] extra
+    requirements = subprocess.run(
+        [sys.executable, str(ROOT / "docker" / "requirements.py"), str(ROOT / "pyproject.toml"),
+         "all"],
+        check=True, capture_output=True, text=True, timeout=60,
+    ).stdout.split()  # fmt: skip
     key = hashlib.sha256("\n".join(sorted(requirements)).encode()).hexdigest()[:16]
     folder = Path.home() / ".cache" / "mdm-search" / "docker-wheels" / key
     if not (folder / "complete").exists():
