@@ -36,10 +36,11 @@ passing up to 4.2 m off in the first run)."""
 LANDING_AGREEMENT = 8.0
 """m between where the two touched down (the rally point 50 m north, nearer than home; PX4 SITL
 touched down 3.8-5.5 m past it in three runs)."""
-PATH_TOLERANCE = {"arducopter": 6.0, "px4": 9.0}
+PATH_TOLERANCE = {"arducopter": 7.0, "px4": 9.0}
 """m: the largest distance from a point of one survey path to the other path (PX4: 6.3-7.1 m
-in three runs; ArduCopter's S-curves and PX4's acceptance-radius turns round the corners the
-lag loop flies square; figures in benchmarks/README.md, "AUTO against SITL")."""
+in three runs; ArduCopter: 6.27 m in four runs, 2026-12-02, the same to 1 mm each time;
+ArduCopter's S-curves and PX4's acceptance-radius turns round the corners the lag loop flies
+square; figures in benchmarks/README.md, "AUTO against SITL")."""
 
 
 def _survey(path: list[tuple[float, float, float]]) -> np.ndarray:
