@@ -81,6 +81,7 @@ else:  # essential: the companion's own decode, guidance, encode and .tlog, noth
     from companion.geofence import Geofence
     from companion.guidance import GuidanceConfig, pursuit
     from companion.link import fast_frames
+    from mavlink_wire import frames as wire
     from companion.link.tlog import TelemetryLog
     fence = Geofence.rectangle(20000.0, 20000.0)
     guide = GuidanceConfig(speed=20.0, altitude=30.0, acceptance_radius=5.0)
@@ -92,7 +93,7 @@ else:  # essential: the companion's own decode, guidance, encode and .tlog, noth
             self.transport = transport
         def datagram_received(self, data, addr):
             position = None
-            for msg_id, _, frame in fast_frames.split(data) or ():
+            for msg_id, _, frame in wire.split(data) or ():
                 tlog.write(frame)
                 fields = fast_frames.unpack(msg_id, frame)
                 if msg_id == fast_frames.LOCAL_POSITION_NED:

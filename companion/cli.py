@@ -24,9 +24,10 @@ from companion.mission import MissionConfig
 from companion.mission.mission_exit import MissionExit
 from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
-from mavlink_signing import ENV_VAR, load_signing_key
+from mavlink_wire import ENV_VAR, load_signing_key
 from mdm_core.ports import VEHICLE_UDP_BASE
 from mdm_profiles import ProfileError, SensorSourceKind, load_profile
+from mdm_profiles.ceiling import check_ceiling
 from mdm_profiles.mqtt_spec import MqttSpec
 from mdm_provenance import add_version_flag
 
@@ -130,6 +131,7 @@ def run_command(args: argparse.Namespace) -> int:
     profile = load_profile(args.profile)
     if not 0 <= args.vehicle < profile.fleet.vehicles:
         raise ValueError(f"--vehicle {args.vehicle}: profile has {profile.fleet.vehicles} vehicles")
+    check_ceiling(profile, profile.fleet.vehicles)  # the whole team's layers, before connecting
     if args.system_id is not None and not 1 <= args.system_id <= 255:
         raise ValueError(f"--system-id {args.system_id}: must be 1..255 (a MAVLink system id)")
     site = profile.site

@@ -22,7 +22,7 @@ from companion.errors import InputError
 from companion.fence_from_profile import own_frame_reach, site_geometry
 from companion.link.base import VehicleLink
 from companion.mission import MissionConfig, VehicleMission
-from companion.mission.core_for import is_swarm
+from companion.mission.core_for import LAWNMOWER_KINDS, is_swarm, lawnmower_refusal
 from companion.mission.start_point import start_point
 from companion.mission.swarm_core import SwarmCore, live_swarm_refusal
 from companion.sensors.factory import DetectorFeed, make_sensor_source
@@ -67,6 +67,8 @@ def check_flight(config: MissionConfig, mqtt: MqttSpec | None, source: SensorSou
     vehicles = config.profile.fleet.vehicles
     if not 0 <= config.vehicle < vehicles:
         raise InputError(f"vehicle {config.vehicle}: profile has {vehicles} vehicles")
+    if config.profile.policy.kind in LAWNMOWER_KINDS:
+        raise InputError(lawnmower_refusal(config.profile.name, config.profile.policy.kind))
     if mqtt is None and is_swarm(config):
         raise InputError(
             f"profile {config.profile.name!r}: policy.kind {config.profile.policy.kind!r} "

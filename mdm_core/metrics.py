@@ -26,8 +26,17 @@ def confirmed_within(times: FloatArray, horizon: float) -> NDArray[np.int64]:
     return np.asarray((times <= horizon).sum(axis=1), dtype=np.int64)
 
 
-def time_to_all(times: FloatArray, real: BoolArray, cap: float) -> tuple[FloatArray, BoolArray]:
-    """T_S per run, and whether it was capped (not every real target confirmed by ``cap``)."""
+def time_to_all(
+    times: FloatArray, real: BoolArray, cap: float, gone: FloatArray | None = None
+) -> tuple[FloatArray, BoolArray]:
+    """T_S per run, and whether it was capped (not every real target confirmed by ``cap``).
+
+    ``gone`` (runs, targets): when each target left the area (inf: never); given, a target
+    counts as searched at its confirmation or its departure, whichever is first
+    (``mission.ts_rule: confirmed_or_gone``).
+    """
+    if gone is not None:
+        times = np.minimum(times, gone)
     last = np.where(real[None, :], times, -np.inf).max(axis=1)
     capped = ~(last <= cap)
     return np.where(capped, cap, last), capped

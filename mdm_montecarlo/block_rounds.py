@@ -50,6 +50,7 @@ def fly_rounds(
     active: BoolArray,
     first: FloatArray,
     stop: FloatArray,
+    gone: FloatArray,
     known: BoolArray,
     known_until: FloatArray,
     known_speed: FloatArray,
@@ -237,5 +238,17 @@ def fly_rounds(
                 known_until[lanes[i]] = -np.inf
         rounds += 1
         record(
-            first, stop, active, confirmed, new, lanes, runs, time, real, n_vehicles, duration, cap
+            first,
+            stop,
+            gone,
+            active,
+            confirmed,
+            new,
+            lanes,
+            runs,
+            time,
+            real,
+            n_vehicles,
+            duration,
+            cap,
         )

@@ -16,6 +16,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from mdm_montecarlo.compare_command import add_compare_parser, compare_command
+from mdm_montecarlo.plan_command import add_plan_parser, plan_command
 from mdm_montecarlo.result_files import (
     append_provenance,
     case_columns,
@@ -87,7 +88,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--method",
-        help="US, BS, LS, PSO, SPSO, ARPSO, MDM (the profile's levels) or MDM:L1+L2 "
+        help="US, BS, LS, PSO, SPSO, ARPSO, LM1, LM2, MDM (the profile's levels) or MDM:L1+L2 "
         "(default: the profile's policy)",
     )
     run.add_argument(
@@ -106,6 +107,7 @@ def _parser() -> argparse.ArgumentParser:
     _common(rep)
     add_compare_parser(sub, _common)
     add_sweep_parser(sub, _common)
+    add_plan_parser(sub, _common)
     return parser
 
 
@@ -290,6 +292,7 @@ def main(argv: list[str] | None = None) -> int:
             "reproduce": _reproduce,
             "compare": compare_command,
             "sweep": sweep_command,
+            "plan": plan_command,
         }
         return commands[args.command](args)
     except (ProfileError, ValueError) as exc:

@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mdm_core.search.from_profile import policy_config
-from mdm_core.world import Scenario
+from mdm_core.world import Scenario, TargetTracks
 from mdm_montecarlo.block_rounds import DONE, fly_rounds
 from mdm_montecarlo.compiled_step import CompiledPolicy
 from mdm_montecarlo.compiled_tracks import shared_tracks
@@ -57,6 +57,16 @@ class BlockResult:
     followed: int | None = None
     """Swarm baselines: particle-iterations that followed a best heard from a peer (``events``
     counts all particle-iterations); None for the methods without communication."""
+    gone: FloatArray | None = None
+    """(runs, targets) when each target left the area (inf: never), with
+    ``mission.ts_rule: confirmed_or_gone`` and moving targets; else None."""
+
+
+def departures(profile: MissionProfile, tracks: TargetTracks, until: float) -> FloatArray | None:
+    """The targets' departure times when the profile's T_S counts them (else None)."""
+    if profile.mission.ts_rule != "confirmed_or_gone" or not tracks.moving:
+        return None
+    return tracks.departures(until)
 
 
 def block_rngs(seed: int, block: int) -> tuple[np.random.Generator, ...]:
@@ -87,6 +97,11 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     m = targets.count
     first = np.full((n, m), np.inf)
     stop = np.full(n_runs, cap)
+    gone = departures(profile, tracks, cap)
+    gone_or_inf = np.full((n_runs, m), np.inf) if gone is None else gone
+    if gone is not None:  # a run whose targets all leave unconfirmed ends when the last does
+        last = np.where(~targets.false_mask, gone, -np.inf).max(axis=1)
+        stop = np.minimum(np.maximum(last, duration), cap)
     active = np.ones(n, dtype=bool)
     remembered = RememberedTargets(policy.config.memory_radius, tracks, n, m)
     config = policy.config
@@ -107,6 +122,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
             active,
             first,
             stop,
+            gone_or_inf,
             remembered.known,
             remembered.until,
             remembered.speed,
@@ -144,4 +160,4 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         seg_start, seg_velocity = tracks.segments(reach)
 
     per_vehicle = first.reshape(n_runs, n_vehicles, m)
-    return BlockResult(block, per_vehicle, events, float(time.sum()))
+    return BlockResult(block, per_vehicle, events, float(time.sum()), gone=gone)

@@ -64,6 +64,11 @@ CAUSES: tuple[Cause, ...] = (
         lambda r, m: "the default rule (anchor) is the row above it",
     ),
     Cause(
+        "Targets that leave the area",
+        lambda r, m: r.variant == VARIANTS["targets_leave"][0],
+        lambda r, m: "the default (bounce, confirmations only) is the row above it",
+    ),
+    Cause(
         "Social-cognitive baselines (PSO, SPSO, ARPSO; simtablepso1)",
         lambda r, m: r.method in SWARMS,
         lambda r, m: "{} {:.3f}".format(
@@ -80,6 +85,11 @@ CAUSES: tuple[Cause, ...] = (
             and r.delta1_pct_L == 20.0
         ),
         lambda r, m: "detection_memory = exact: 4623 s (LS+BS, 1000 runs)",
+    ),
+    Cause(
+        "Pop-up times",
+        lambda r, m: r.variant == VARIANTS["popup_from_0"][0],
+        lambda r, m: "the default appear times (t_i = 200 i) are the row above it",
     ),
     Cause(
         "Pop-up times",

@@ -52,9 +52,11 @@ def _axis_of(table: str) -> tuple[str, str]:
 _VARIANT_TICKS = {
     "eq10": "eq. 10",
     "popup_from_0": "t_i=200(i-1)",
+    "targets_leave": "leave",
     "swarm_forgets": "forgets",
     "swarm_waypoint_detection": "r_1 waypoints",
     "swarm_detection": "r_1 every 5 s",
+    "lawnmower": "not in paper",
 }
 """Short x tick names of the variants of study.VARIANTS (the report's tables give the labels)."""
 PaperMeans = dict[Case, tuple[float | None, float | None]]

@@ -195,6 +195,7 @@ def advance(
 def record(
     first: FloatArray,
     stop: FloatArray,
+    gone: FloatArray,
     active: BoolArray,
     confirmed: BoolArray,
     confirmations: BoolArray,
@@ -209,7 +210,9 @@ def record(
     """Keep each lane's first confirmation time of each real target, move the stop time of the
     runs that confirmed (the latest time a confirmation can still change T_nc or T_S: the
     team's last first confirmation, within [duration, cap]) and retire the lanes past it.
-    ``confirmations`` (n, m) are the new ones; only the ``confirmed`` lanes (n,) have any."""
+    ``confirmations`` (n, m) are the new ones; only the ``confirmed`` lanes (n,) have any.
+    ``gone`` (runs, m): when a target left the area (inf: never, or T_S counts confirmations
+    only); a target is done at its confirmation or departure, whichever is first."""
     m = first.shape[1]
     changed = np.zeros(stop.shape[0], dtype=np.bool_)
     for i in range(lanes.shape[0]):
@@ -225,7 +228,7 @@ def record(
         for j in range(m):
             if not real[j]:
                 continue
-            team = np.inf
+            team = gone[run, j]
             for v in range(n_vehicles):
                 team = min(team, first[run * n_vehicles + v, j])
             bound = max(bound, team)

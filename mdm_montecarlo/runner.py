@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from mdm_core import metrics
 from mdm_montecarlo.engine import BLOCK_RUNS, BlockResult, run_block
 from mdm_montecarlo.errors import MontecarloError
+from mdm_montecarlo.lawnmower_engine import LAWNMOWER_KINDS, run_lawnmower_block
 from mdm_montecarlo.local_pool import imap_unordered
 from mdm_montecarlo.social_engine import SWARM_KINDS, run_swarm_block
 from mdm_profiles import MissionProfile
@@ -36,6 +37,9 @@ class MissionResults:
     sim_seconds: float
     followed: int | None = None
     """Swarm baselines: particle-iterations that followed a peer's best (of ``events``)."""
+    gone: NDArray[np.float64] | None = None
+    """(runs, targets) when each target left the area, where T_S counts it
+    (``mission.ts_rule: confirmed_or_gone``); else None."""
 
     @property
     def runs(self) -> int:
@@ -66,7 +70,9 @@ class MissionResults:
 
     def ts(self) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """T_S of every run (capped at mission.ts_cap) and which runs were capped."""
-        return metrics.time_to_all(self.team_times, self.real, self.profile.mission.ts_cap)
+        return metrics.time_to_all(
+            self.team_times, self.real, self.profile.mission.ts_cap, self.gone
+        )
 
 
 class RunInterruptedError(MontecarloError):
@@ -88,9 +94,12 @@ def is_swarm(profile: MissionProfile) -> bool:
 
 
 def simulate_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
-    """One block of runs: the event-driven engine, or the time-stepped one for PSO/SPSO/ARPSO."""
+    """One block of runs: the event-driven engine, the time-stepped one for PSO/SPSO/ARPSO, or
+    the lawnmowers' (LM1/LM2)."""
     if is_swarm(profile):
         return run_swarm_block(profile, seed, block, n_runs)
+    if profile.policy.kind in LAWNMOWER_KINDS:
+        return run_lawnmower_block(profile, seed, block, n_runs)
     return run_block(profile, seed, block, n_runs)
 
 
@@ -271,4 +280,7 @@ def _collect(profile: MissionProfile, seed: int, results: list[BlockResult]) -> 
         followed=None
         if any(r.followed is None for r in results)
         else sum(r.followed or 0 for r in results),
+        gone=None
+        if any(r.gone is None for r in results)
+        else np.concatenate([r.gone for r in results if r.gone is not None], axis=0),
     )

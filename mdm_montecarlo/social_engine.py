@@ -63,7 +63,7 @@ from mdm_core.world import Scenario
 from mdm_montecarlo import swarm_kernels as kernels
 from mdm_montecarlo.compiled_tracks import shared_tracks
 from mdm_montecarlo.compiled_waypoints import CompiledWaypoints
-from mdm_montecarlo.engine import BlockResult, block_rngs
+from mdm_montecarlo.engine import BlockResult, block_rngs, departures
 from mdm_montecarlo.swarm_sensors import SwarmSensors
 from mdm_montecarlo.waypoint_swarm import run_waypoint_swarm_block
 from mdm_profiles import MissionProfile
@@ -317,7 +317,8 @@ def run_swarm_block(
         if t >= duration and _all_confirmed(first, real):
             break
 
-    return BlockResult(block, first, steps * n, float(t * n), followed)
+    gone = departures(profile, sensors.tracks, max(profile.mission.ts_cap, duration))
+    return BlockResult(block, first, steps * n, float(t * n), followed, gone)
 
 
 def _skip_uniforms(rng: np.random.Generator, count: int) -> None:

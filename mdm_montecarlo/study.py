@@ -5,7 +5,12 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from mdm_montecarlo.paper import PaperRow, paper_rows
-from mdm_montecarlo.variants import SWARM_METHODS, with_fleet_size, with_method
+from mdm_montecarlo.variants import (
+    LAWNMOWER_METHODS,
+    SWARM_METHODS,
+    with_fleet_size,
+    with_method,
+)
 from mdm_profiles import MissionProfile, builtin_profile
 from mdm_profiles.overrides import apply_overrides
 
@@ -41,7 +46,12 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
         "t_i = 200 (i - 1)",
         tuple(f"targets.{k}.appear={200 * k}" for k in range(10)),
     ),
+    "targets_leave": (
+        "targets leave, T_S confirmed or gone",
+        ("target_motion.boundary=free", "mission.ts_rule=confirmed_or_gone"),
+    ),
     "swarm_forgets": ("memory forgets confirmed targets", _FORGET),
+    "lawnmower": ("lawnmower baseline, not in the paper: no paper value", ()),
     "swarm_waypoint_detection": (
         "waypoint PSO, MDM's detection sensor",
         ("policy.swarm.signal_sensor=detection", *_FORGET),
@@ -59,12 +69,22 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
 paper figures: name -> (label, profile overrides). 'eq10': level-2 waypoints step from the
 previous waypoint, P_{q+1} = P_q + delta_2 D (the default steps from the point of detection;
 docs/model.md, "Level-2 waypoints: the default is not eq. (10)"). 'popup_from_0': the pop-up
-targets appear from t = 0 (docs/model.md, "Pop-up times"). The swarm readings of
+targets appear from t = 0 (docs/model.md, "Pop-up times"). 'targets_leave': the walk leaves
+the area and T_S counts a target at its confirmation or its departure (docs/model.md,
+"Targets that leave the area"). The swarm readings of
 docs/model.md, "Social-cognitive baselines": 'swarm_forgets' drops the bests of confirmed
 targets and does not read them; 'swarm_waypoint_detection' also reads MDM's 2 km detection
 sensor; 'swarm_detection' is "swarm given MDM's detection sensor" (one iteration every 5 s,
-100 m)."""
+100 m). 'lawnmower': the partitioned lawnmowers LM1/LM2 (docs/model.md, "The lawnmower
+baseline"), which the paper does not fly: their rows carry no paper value."""
 SWARM_VARIANTS = ("swarm_forgets", "swarm_waypoint_detection", "swarm_detection")
+LEAVE_VARIANT_TABLES = ("simtable1", "simtablef1", "Dsimtable6", "simtable3", "scaling")
+"""Tables whose dynamic rows (swarms aside) each have a 'targets_leave' row after them."""
+POPUP_VARIANT_TABLES = ("simtable1", "simtablef1", "simtable3", "simtable5")
+"""Tables whose pop-up rows (US, BS, LS and MDM) each have a 'popup_from_0' row after them."""
+ALL_METHODS = ("US", "BS", "LS", "MDM")
+LAWNMOWER_TABLES = ("simtable1", "simtablef1")
+"""Tables that get LM1 and LM2 rows after each scenario's MDM row."""
 
 
 @dataclass(frozen=True)
@@ -119,8 +139,15 @@ def study_rows(tables: tuple[str, ...] = TABLES) -> list[Row]:
         rows.append(Row(r.table, _case_of(r), r))
         if r.table == "simtable1" and r.method == "MDM":
             rows.append(Row(r.table, replace(_case_of(r), variant="eq10"), r))
-        if r.table == "simtable1" and r.scenario == "popup" and r.method in ("US", "MDM"):
+        if r.table in POPUP_VARIANT_TABLES and r.scenario == "popup" and r.method in ALL_METHODS:
             rows.append(Row(r.table, replace(_case_of(r), variant="popup_from_0"), r))
+        if r.table in LEAVE_VARIANT_TABLES and r.scenario == "dynamic" and r.method in ALL_METHODS:
+            rows.append(Row(r.table, replace(_case_of(r), variant="targets_leave"), r))
+        if r.table in LAWNMOWER_TABLES and r.method == "MDM":
+            rows += [
+                Row(r.table, replace(_case_of(r), method=m, variant="lawnmower"), None)
+                for m in LAWNMOWER_METHODS
+            ]
         if r.table == "simtablepso1" and r.method in SWARM_METHODS:
             rows += [Row(r.table, replace(_case_of(r), variant=v), r) for v in SWARM_VARIANTS]
     if "scaling" in tables:
@@ -128,7 +155,10 @@ def study_rows(tables: tuple[str, ...] = TABLES) -> list[Row]:
         for scenario, mdm in best.items():
             for n in SCALING_FLEETS:
                 for method in ("US", "BS", "LS", mdm):
-                    rows.append(Row("scaling", Case(scenario, method, 20.0, n, 0), None))
+                    case = Case(scenario, method, 20.0, n, 0)
+                    rows.append(Row("scaling", case, None))
+                    if scenario == "dynamic":
+                        rows.append(Row("scaling", replace(case, variant="targets_leave"), None))
     if "section3b" in tables:
         for method in SECTION3B_METHODS:
             rows.append(Row("section3b", Case("fixed", method, 20.0, 1, 0), None))

@@ -45,7 +45,7 @@ def add_sweep_parser(
     p.add_argument("--profile", required=True, help="profile file or built-in name")
     p.add_argument(
         "--method",
-        help="US, BS, LS, PSO, SPSO, ARPSO, MDM (the profile's levels) or MDM:L1+L2 "
+        help="US, BS, LS, PSO, SPSO, ARPSO, LM1, LM2, MDM (the profile's levels) or MDM:L1+L2 "
         "(default: the profile's policy)",
     )
     p.add_argument(

@@ -1,5 +1,5 @@
-"""Named policy variants of section IV: 'US', 'BS', 'LS' (single sensor), 'MDM:LS+BS' etc., and
-the social-cognitive baselines 'PSO', 'SPSO', 'ARPSO'."""
+"""Named policy variants of section IV: 'US', 'BS', 'LS' (single sensor), 'MDM:LS+BS' etc., the
+social-cognitive baselines 'PSO', 'SPSO', 'ARPSO', and the lawnmowers 'LM1', 'LM2'."""
 
 from __future__ import annotations
 
@@ -7,6 +7,9 @@ from mdm_profiles import LevelSpec, MissionProfile, PolicySpec
 
 METHODS = ("US", "BS", "LS")
 SWARM_METHODS = ("PSO", "SPSO", "ARPSO")
+LAWNMOWER_METHODS = ("LM1", "LM2")
+"""The partitioned lawnmower baselines: LM1 sweeps with the confirmation sensor, LM2 with the
+detection sensor and a confirmation search after each detection (docs/model.md)."""
 
 
 def parse_method(text: str) -> tuple[str, tuple[str, ...]]:
@@ -20,6 +23,8 @@ def parse_method(text: str) -> tuple[str, tuple[str, ...]]:
         return "sss", (text,)
     if text in SWARM_METHODS:
         return text.lower(), ("US",)
+    if text in LAWNMOWER_METHODS:
+        return text.lower(), ("US",)  # the level is unused: the plan fixes every waypoint
     if text == "MDM":
         return "mdm", ()
     if text.startswith("MDM:"):
@@ -27,7 +32,7 @@ def parse_method(text: str) -> tuple[str, tuple[str, ...]]:
         if names and all(n in METHODS for n in names):
             return "mdm", names
     raise ValueError(
-        f"unknown method {text!r}; allowed: US, BS, LS, PSO, SPSO, ARPSO, "
+        f"unknown method {text!r}; allowed: US, BS, LS, PSO, SPSO, ARPSO, LM1, LM2, "
         "MDM (the profile's levels) or MDM:<L1>+<L2>[+...] with L in US/BS/LS"
     )
 

@@ -43,7 +43,7 @@ from mdm_montecarlo import waypoint_legs
 from mdm_montecarlo.compiled_step import CompiledPolicy
 from mdm_montecarlo.compiled_tracks import shared_tracks
 from mdm_montecarlo.compiled_waypoints import RULES
-from mdm_montecarlo.engine import BlockResult, block_rngs
+from mdm_montecarlo.engine import BlockResult, block_rngs, departures
 from mdm_montecarlo.swarm_sensors import NEAR
 from mdm_montecarlo.waypoint_rounds import RULE_COLUMNS, VARIANTS, fly_waypoints
 from mdm_profiles import MissionProfile
@@ -129,8 +129,9 @@ def run_waypoint_swarm_block(
         rng,
     )
     first = waypoint_legs.keep_first(conf_time, conf_step, known_step, end, n_vehicles)
+    gone = departures(profile, tracks, stop)
     return BlockResult(
-        block, first.reshape(*shape, -1), iterations, float(times[end]) * n, followed
+        block, first.reshape(*shape, -1), iterations, float(times[end]) * n, followed, gone
     )
 
 

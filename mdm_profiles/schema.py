@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from mdm_profiles.failsafe import FailsafeSpec
+from mdm_profiles.lawnmower_spec import LawnmowerSpec
 from mdm_profiles.mqtt_spec import MqttSpec
 from mdm_profiles.sensor_source import SensorSourceSpec
 from mdm_profiles.swarm import SwarmSpec
@@ -133,7 +134,7 @@ class DistributionParams(_Strict):
 
 
 class PolicySpec(_Strict):
-    kind: Literal["mdm", "sss", "pso", "spso", "arpso"] = "mdm"
+    kind: Literal["mdm", "sss", "pso", "spso", "arpso", "lm1", "lm2"] = "mdm"
     levels: list[LevelSpec] = Field(min_length=1)
     distributions: DistributionParams = DistributionParams()
     out_of_area: Literal["reflect", "clip", "redraw"] = "reflect"
@@ -156,6 +157,9 @@ class PolicySpec(_Strict):
     swarm: SwarmSpec = Field(
         default=SwarmSpec(), description="PSO/SPSO/ARPSO parameters; levels[0] explores."
     )
+    lawnmower: LawnmowerSpec = Field(
+        default=LawnmowerSpec(), description="lm1/lm2 (partitioned lawnmower) parameters."
+    )
 
 
 class MissionSpec(_Strict):
@@ -171,11 +175,21 @@ class MissionSpec(_Strict):
         le=MAX_MISSION_TIME,
         description=f"T_S of runs that never finish, s (at most {MAX_MISSION_TIME:g}).",
     )
+    ts_rule: Literal["confirmed", "confirmed_or_gone"] = Field(
+        default="confirmed",
+        description="T_S: the time every real target is confirmed (confirmed), or confirmed "
+        "or gone out of the area, whichever is first (confirmed_or_gone; with "
+        "target_motion.boundary free).",
+    )
 
 
 class GeoPoint(_Strict):
     lat: float = Field(ge=-90, le=90)
     lon: float = Field(ge=-180, le=180)
+
+
+DEFAULT_MAX_ALTITUDE = 120.0
+"""The ceiling, m above the take-off point, where a profile sets none (the usual legal limit)."""
 
 
 class SiteSpec(_Strict):
@@ -197,6 +211,13 @@ class SiteSpec(_Strict):
         le=1e5,
         description="The companion refuses to start a vehicle farther than this (m) outside "
         "the search area.",
+    )
+    max_altitude: float = Field(
+        default=DEFAULT_MAX_ALTITUDE,
+        gt=0,
+        le=1e4,
+        description="The ceiling, m above the take-off point: every vehicle's layer "
+        "(fleet.altitude + i x fleet.altitude_step) stays under it.",
     )
     fence_inset: float = Field(
         default=20.0,
@@ -241,6 +262,8 @@ class MissionProfile(_Strict):
                 f"policy.kind 'mdm' needs one level per sensor: {len(levels)} levels, "
                 f"{len(self.sensors)} sensors"
             )
+        if self.policy.kind == "lm2" and len(self.sensors) < 2:
+            raise ValueError("policy.kind 'lm2' needs a detection and a confirmation sensor")
         if levels[0].index is not None:
             raise ValueError("policy.levels[0] (level 1) takes no index: it never times out")
         for k, level in enumerate(levels[1:], start=1):

@@ -13,7 +13,7 @@ import threading
 from collections.abc import Iterator
 from pathlib import Path
 
-from mavlink_signing import ENV_VAR, load_signing_key
+from mavlink_wire import ENV_VAR, load_signing_key
 from mdm_core.ports import GCS_UDP, TCP_BASE, VEHICLE_OWN_UDP_BASE, VEHICLE_UDP_BASE
 from mdm_profiles import ProfileError, builtin_profile, builtin_profiles, load_profile
 from mdm_profiles.schema import MissionProfile

@@ -67,7 +67,7 @@ class EmulatorConfig:
     """Override the profile's periphery start points, metres (north, east)."""
     signing_key: bytes | None = field(default=None, repr=False)
     """MAVLink 2 signing secret (32 bytes); None: signing off. From a key file or the
-    environment (mavlink_signing.load_signing_key), never from the profile."""
+    environment (mavlink_wire.load_signing_key), never from the profile."""
 
     def __post_init__(self) -> None:
         n = self.fleet_size

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from mavlink_signing import SigningState
+from mavlink_wire import SigningState
 from mdm_core.dynamics import LagModel
 from mdm_core.ports import TCP_STRIDE
 from mdm_core.world import Scenario
@@ -25,7 +25,6 @@ from sim_vehicle_stub.endpoints import GcsEndpoint, TcpServer, UdpEndpoint
 from sim_vehicle_stub.events import EventLog
 from sim_vehicle_stub.failsafes import check_failsafes, inside_fences
 from sim_vehicle_stub.fast_streams import (
-    CRC_EXTRA,
     DEBUG_VECT,
     NVF,
     POSITION_STREAMS,
@@ -38,12 +37,12 @@ from sim_vehicle_stub.geo_frame import GeoFrame
 from sim_vehicle_stub.handlers import MessageHandler
 from sim_vehicle_stub.mavlink import dialect as d
 from sim_vehicle_stub.mission_protocol import MissionProtocol
-from sim_vehicle_stub.node import VehicleNode
+from sim_vehicle_stub.node import MISSION_CURRENT_ID, VehicleNode
 from sim_vehicle_stub.personas import ProfileFacts, create_persona
 from sim_vehicle_stub.personas.base import Behaviour
 from sim_vehicle_stub.sensing import Reading, SensorWorld
 from sim_vehicle_stub.sim_clock import SimClock
-from sim_vehicle_stub.telemetry import Telemetry
+from sim_vehicle_stub.telemetry import StreamSchedule, Telemetry
 from sim_vehicle_stub.vehicle import Vehicle
 
 log = logging.getLogger(__name__)
@@ -115,7 +114,10 @@ class Emulator:
                 self.geo,
             )  # fmt: skip
             signing = SigningState(config.signing_key) if config.signing_key else None
-            self.nodes.append(VehicleNode(vehicle, Encoder(vehicle.sysid, signing=signing)))
+            off = frozenset(() if persona.mission.current_unasked else (MISSION_CURRENT_ID,))
+            self.nodes.append(
+                VehicleNode(vehicle, Encoder(vehicle.sysid, signing=signing), StreamSchedule(off))
+            )
         self.handler = MessageHandler(
             CommandHandler(self.telemetry, o.alt),
             self.geo,
@@ -260,8 +262,7 @@ class Emulator:
         for severity, text in v.status:
             out.append(d.MAVLink_statustext_message(severity, text.encode()))
         v.status.clear()
-        out += v.outbox
-        v.outbox.clear()
+        out += node.take_outbox()
         node.send(out)
 
     # ----- sim loop
@@ -377,18 +378,17 @@ class Emulator:
                 node.last_heartbeat = t
             # What the vehicle's logic queued this tick (MISSION_CURRENT, ITEM_REACHED) goes
             # before the streams, which carry the state after it.
-            frames = [enc.pack(msg) for msg in v.outbox]
-            v.outbox.clear()
+            frames = [enc.pack(msg) for msg in node.take_outbox()]
             for m in due:
                 if m in POSITION_STREAMS:
-                    frames.append(frame(m, CRC_EXTRA[m], batch[m][v.index]))
+                    frames.append(frame(m, batch[m][v.index]))
                     continue
                 try:
                     layout = layouts.get(m)
                     if layout is None:
                         frames.append(enc.pack(builders[m](v)))
                     else:
-                        frames.append(frame(m, layout.crc_extra, layout.payload(args[m](v))))
+                        frames.append(frame(m, layout.payload(args[m](v))))
                 except (ValueError, OverflowError, struct.error):
                     # A state no field can carry (a vehicle flown thousands of km away):
                     # that one message is skipped; the vehicle and the others carry on.
@@ -406,13 +406,11 @@ class Emulator:
         """The signal and the contacts, contacts in the vehicle's local frame (from its
         origin, as LOCAL_POSITION_NED)."""
         name = b"CNF" if r.confirms else b"DET"
-        out = [enc.frame(NVF, CRC_EXTRA[NVF], signal_payload(self.clock.boot_ms, r.signal))]
+        out = [enc.frame(NVF, signal_payload(self.clock.boot_ms, r.signal))]
         usec = self.clock.usec
         on, oe = origin
         out += [
-            enc.frame(
-                DEBUG_VECT, CRC_EXTRA[DEBUG_VECT], contact_payload(name, usec, n - on, e - oe, s)
-            )
+            enc.frame(DEBUG_VECT, contact_payload(name, usec, n - on, e - oe, s))
             for _, n, e, s in r.contacts
         ]
         return out

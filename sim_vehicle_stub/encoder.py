@@ -1,24 +1,21 @@
 """MAVLink encoding for one vehicle: its own system id, component 1 and sequence counter.
 
-Messages without numeric arrays take a fast path (one struct.pack, fastcrc when installed) that
-produces the same bytes as pymavlink's own packer; the rest go through pymavlink. With a signing
-state every frame is signed (MAVLink 2 signing), whichever path built it.
+Messages without numeric arrays take a fast path (one struct.pack) that produces the same bytes
+as pymavlink's own packer; the rest go through pymavlink for their payload. Every frame is built
+by the wire's framer (:func:`mavlink_wire.frames.frame`); with a signing state every frame is
+signed (MAVLink 2 signing), whichever path built it.
 """
 
 from __future__ import annotations
 
 import re
-import struct
 from typing import Any
 
-from mavlink_signing import SigningState
-from mavlink_signing.frame_crc import frame_crc
+from mavlink_wire import SigningState
+from mavlink_wire.frames import cut
+from mavlink_wire.frames import frame as wire_frame
 from sim_vehicle_stub.mavlink import dialect
 
-_HEADER = struct.Struct("<BBBBBBHB")
-"""A MAVLink 2 header after its magic byte: length, flags, seq, system, component, 24-bit id."""
-_CRC = struct.Struct("<H")
-_EXTRA = [bytes((i,)) for i in range(256)]
 _COUNTED = re.compile(r"(\d+)([a-zA-Z?])")
 _FAST: dict[type, tuple[str, ...] | None] = {}
 
@@ -48,23 +45,19 @@ class Encoder:
         if fields is None:
             # pymavlink packs the payload (arrays, trailing zeros cut); frame() adds the rest.
             payload: bytes = msg.pack(self.mav)[10:-2]
-            return self.frame(type(msg).id, type(msg).crc_extra, payload)
+            return self.frame(type(msg).id, payload)
         values = [getattr(msg, f) for f in fields]
         values = [v.encode() if isinstance(v, str) else v for v in values]
-        payload = msg.unpacker.pack(*values).rstrip(b"\x00") or b"\x00"
         # Class attributes: a field may be called "id" (STATUSTEXT).
-        return self.frame(type(msg).id, type(msg).crc_extra, payload)
+        return self.frame(type(msg).id, cut(msg.unpacker.pack(*values)))
 
-    def frame(self, msg_id: int, crc_extra: int, payload: bytes) -> bytes:
-        """A MAVLink 2 frame around a payload whose trailing zeros are already cut."""
+    def frame(self, msg_id: int, payload: bytes) -> bytes:
+        """A MAVLink 2 frame around a payload whose trailing zeros are already cut, numbered
+        next in this vehicle's sequence."""
         mav = self.mav
         seq = mav.seq
         mav.seq = (seq + 1) & 0xFF
-        body = _HEADER.pack(
-            len(payload), self._incompat, 0, seq, self.sysid, self.compid, msg_id & 0xFFFF,
-            msg_id >> 16,
-        ) + payload  # fmt: skip
-        data = b"\xfd" + body + _CRC.pack(frame_crc(body + _EXTRA[crc_extra]))
+        data = wire_frame(msg_id, payload, seq, self.sysid, self.compid, self._incompat)
         if self.signing is not None:
             data += self.signing.signature(data)
         return data

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from mavlink_wire.frames import cut
 from sim_vehicle_stub.fleet_kinematics import Fleet
 from sim_vehicle_stub.mavlink import dialect as d
 
@@ -27,7 +28,6 @@ GPI, LPN, ATT = (
 POSITION_STREAMS = frozenset((GPI, LPN, ATT))
 """The 10 Hz streams packed for the whole fleet at once."""
 NVF, DEBUG_VECT = d.MAVLINK_MSG_ID_NAMED_VALUE_FLOAT, d.MAVLINK_MSG_ID_DEBUG_VECT
-CRC_EXTRA = {k: d.mavlink_map[k].crc_extra for k in (GPI, LPN, ATT, NVF, DEBUG_VECT)}
 
 _NVF = struct.Struct("<If10s")
 _DVEC = struct.Struct("<Qfff10s")
@@ -35,7 +35,7 @@ _DVEC = struct.Struct("<Qfff10s")
 
 def _rows(arr: np.ndarray) -> list[bytes]:
     buf, size = arr.tobytes(), arr.itemsize * arr.shape[1]
-    return [buf[i : i + size].rstrip(b"\x00") or b"\x00" for i in range(0, len(buf), size)]
+    return [cut(buf[i : i + size]) for i in range(0, len(buf), size)]
 
 
 # Each message is a row of one plain array whose columns are its fields in wire order (a 4-byte
@@ -85,12 +85,12 @@ def att_rows(fleet: Fleet, boot_ms: int, roll: np.ndarray, pitch: np.ndarray) ->
 
 def signal_payload(boot_ms: int, value: float) -> bytes:
     """NAMED_VALUE_FLOAT "SENS_SIG"."""
-    return _NVF.pack(boot_ms, value, b"SENS_SIG").rstrip(b"\x00") or b"\x00"
+    return cut(_NVF.pack(boot_ms, value, b"SENS_SIG"))
 
 
 def contact_payload(name: bytes, usec: int, north: float, east: float, strength: float) -> bytes:
     """DEBUG_VECT "DET"/"CNF" with x north, y east, z signal strength."""
-    return _DVEC.pack(usec, north, east, strength, name).rstrip(b"\x00") or b"\x00"
+    return cut(_DVEC.pack(usec, north, east, strength, name))
 
 
 class WireLayout:
@@ -100,7 +100,6 @@ class WireLayout:
 
     def __init__(self, cls: Any) -> None:
         self.msg_id: int = cls.id
-        self.crc_extra: int = cls.crc_extra
         self._struct: struct.Struct = cls.unpacker
         params = list(inspect.signature(cls.__init__).parameters.values())[1:]
         self._defaults = tuple(p.default for p in params)
@@ -122,5 +121,4 @@ class WireLayout:
                 else:
                     flat.append(value)
             values = flat
-        data: bytes = self._struct.pack(*values)
-        return data.rstrip(b"\x00") or b"\x00"
+        return cut(self._struct.pack(*values))

@@ -1,4 +1,5 @@
-"""Split received bytes into MAVLink frames, decode them, and count everything that is dropped.
+"""Split received bytes into MAVLink frames, decode them, and count everything that is dropped
+(the frame layout is the wire's, :mod:`mavlink_wire.frames`).
 
 Each UDP datagram is parsed on its own (a truncated frame never poisons the next datagram); a
 TCP stream keeps at most one partial frame between reads.
@@ -9,10 +10,12 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from mavlink_wire.frames import HEADER_BYTES, MAGIC, OVERHEAD, msg_id_at
+from mavlink_wire.signing_state import SIGNATURE_BYTES
 from sim_vehicle_stub.mavlink import dialect
 from sim_vehicle_stub.plain_decode import decode_plain, plain_type
 
-_V2, _V1 = 0xFD, 0xFE
+_V2, _V1 = MAGIC, 0xFE
 _MAX_FRAMES_PER_READ = 64
 
 
@@ -98,7 +101,7 @@ class FrameDecoder:
                     errors += 1
                 i = nxt
                 continue
-            head = 10 if magic == _V2 else 6
+            head = HEADER_BYTES if magic == _V2 else 6
             if n - i < head:
                 total = -1
             else:
@@ -111,7 +114,7 @@ class FrameDecoder:
                         resync = True
                         i += 1
                         continue
-                    total = 12 + plen + (13 if incompat & 1 else 0)
+                    total = OVERHEAD + plen + (SIGNATURE_BYTES if incompat & 1 else 0)
                 else:
                     total = 8 + plen
             if total < 0 or n - i < total:
@@ -121,9 +124,7 @@ class FrameDecoder:
                     stats.truncated += 1
                     errors += 1
                 break
-            msgid = (
-                buf[i + 7] | (buf[i + 8] << 8) | (buf[i + 9] << 16) if magic == _V2 else buf[i + 5]
-            )
+            msgid = msg_id_at(buf, i) if magic == _V2 else buf[i + 5]
             if msgid not in dialect.mavlink_map:
                 stats.unknown_id += 1
                 errors += 1

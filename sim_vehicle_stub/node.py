@@ -7,7 +7,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from mavlink_signing import Verdict
+from mavlink_wire import Verdict
 from sim_vehicle_stub.encoder import Encoder
 from sim_vehicle_stub.framing import LinkStats
 from sim_vehicle_stub.mavlink import dialect as d
@@ -16,6 +16,7 @@ from sim_vehicle_stub.vehicle import Vehicle
 
 _MAX_DATAGRAM = 1400
 HEARTBEAT_ID = d.MAVLINK_MSG_ID_HEARTBEAT
+MISSION_CURRENT_ID = d.MAVLINK_MSG_ID_MISSION_CURRENT
 
 
 @dataclass
@@ -40,6 +41,16 @@ class VehicleNode:
             return False
         interval = self.schedule.interval.get(HEARTBEAT_ID, 1.0)
         return now - self.last_heartbeat >= 0.5 * interval
+
+    def take_outbox(self) -> list[Any]:
+        """What the vehicle's logic queued (MISSION_CURRENT, ITEM_REACHED), emptied; a
+        MISSION_CURRENT only while it streams (ArduCopter's only once a client asked:
+        MissionRules.current_unasked)."""
+        v = self.vehicle
+        current_on = self.schedule.streams(MISSION_CURRENT_ID)
+        out = [m for m in v.outbox if current_on or m.get_msgId() != MISSION_CURRENT_ID]
+        v.outbox.clear()
+        return out
 
     def authentic(self, messages: list[Any]) -> list[Any]:
         """The messages this vehicle may act on: all of them with signing off; with signing on

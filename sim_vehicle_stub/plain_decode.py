@@ -16,7 +16,8 @@ import re
 import struct
 from typing import Any, NamedTuple
 
-from mavlink_signing.frame_crc import frame_crc
+from mavlink_wire.crc import frame_crc
+from mavlink_wire.frames import unpack
 from sim_vehicle_stub.mavlink import dialect
 
 _CRC = struct.Struct("<H")
@@ -55,11 +56,7 @@ def decode_plain(kind: PlainType, frame: bytes) -> Any:
     crc = _CRC.unpack_from(frame, end)[0]
     if crc != frame_crc(frame[1:end] + kind.extra):
         raise dialect.MAVError(f"invalid MAVLink CRC in msgID {kind.cls.id}")
-    size = kind.unpacker.size
-    payload = frame[10:end]
-    if plen < size:
-        payload += bytes(size - plen)
-    values = kind.unpacker.unpack_from(payload)
+    values = unpack(kind.unpacker, frame, end)
     msg = kind.cls(*[values[k] for k in kind.orders])
     msgbuf = bytearray(frame)
     msg._msgbuf = msgbuf

@@ -344,9 +344,14 @@ STREAMABLE = frozenset(
 class StreamSchedule:
     """Per-vehicle message intervals (sim s) and next due times."""
 
-    def __init__(self) -> None:
-        self.interval = {k: 1.0 / hz for k, hz in DEFAULT_RATES.items()}
+    def __init__(self, unasked_off: frozenset[int] = frozenset()) -> None:
+        """``unasked_off``: default streams this vehicle sends only once a client asks."""
+        self.interval = {k: 1.0 / hz for k, hz in DEFAULT_RATES.items() if k not in unasked_off}
         self.next_due = dict.fromkeys(self.interval, 0.0)
+
+    def streams(self, msg_id: int) -> bool:
+        """Whether ``msg_id`` is streamed now (by default or because a client asked)."""
+        return msg_id in self.interval
 
     def set_interval(self, msg_id: int, interval_us: float) -> bool:
         """SET_MESSAGE_INTERVAL semantics: -1 off, 0 default, else microseconds."""

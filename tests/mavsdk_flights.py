@@ -145,6 +145,16 @@ def _mission_start(direct: MavlinkDirect, sysid: int) -> int:
     return int(json.loads(direct.send_command(msg).fields_json).get("result", -1))
 
 
+def _ask_mission_current(direct: MavlinkDirect, sysid: int) -> int:
+    """SET_MESSAGE_INTERVAL MISSION_CURRENT at 1 Hz, as a ground station asks a stock
+    ArduCopter (which sends none until asked; MAVSDK does not ask); its MAV_RESULT."""
+    fields: dict[str, float] = {f"param{i}": 0.0 for i in range(1, 8)}
+    fields.update({"target_system": sysid, "target_component": 1, "command": 511})
+    fields.update({"param1": 42.0, "param2": 1e6, "confirmation": 0})
+    msg = MavlinkMessage("COMMAND_LONG", 245, 190, sysid, 1, json.dumps(fields))
+    return int(json.loads(direct.send_command(msg).fields_json).get("result", -1))
+
+
 async def _start_ardupilot_mission(
     act: ActionAsync, direct: MavlinkDirect, system: Any, seconds: float
 ) -> None:
@@ -290,6 +300,13 @@ async def fly_mission_plugin(
             )
         await mission.set_return_to_launch_after_mission(True)
         await mission.upload_mission(MissionPlan(items))
+        if ardupilot:  # the plugin's progress reads MISSION_CURRENT
+            sysid = await system.get_system_id()
+            direct = MavlinkDirect(system._system)
+            asked = await asyncio.get_running_loop().run_in_executor(
+                None, _ask_mission_current, direct, sysid
+            )
+            assert asked == 0, f"SET_MESSAGE_INTERVAL MISSION_CURRENT: result {asked}"
 
         async def watch() -> None:
             async for p in mission.subscribe_mission_progress():

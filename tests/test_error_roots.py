@@ -11,7 +11,7 @@ import pytest
 
 from mavlink_conformance.errors import ConformanceError
 from mavlink_conformance.session import LinkClosedError
-from mavlink_signing import SigningError, SigningKeyError
+from mavlink_wire import SigningError, SigningKeyError
 from mdm_ground.errors import GroundError
 from mdm_montecarlo.errors import MontecarloError
 from mdm_profiles import ProfileError, ProfilesError
@@ -20,7 +20,7 @@ ROOTS: dict[str, type[Exception]] = {
     "mdm_montecarlo": MontecarloError,
     "mdm_ground": GroundError,
     "mdm_profiles": ProfilesError,
-    "mavlink_signing": SigningError,
+    "mavlink_wire": SigningError,
     "mavlink_conformance": ConformanceError,
 }
 

@@ -17,14 +17,14 @@ REPO = Path(__file__).resolve().parents[1]
 
 ALLOWED: dict[str, set[str]] = {
     "mdm_profiles": set(),
-    "mavlink_signing": set(),
+    "mavlink_wire": set(),
     "mdm_provenance": set(),
     "mdm_core": {"mdm_profiles"},
-    "companion": {"mdm_core", "mdm_profiles", "mavlink_signing", "mdm_provenance"},
-    "mdm_ground": {"companion", "mdm_core", "mdm_profiles", "mavlink_signing", "mdm_provenance"},
-    "sim_vehicle_stub": {"mdm_core", "mdm_profiles", "mavlink_signing", "mdm_provenance"},
+    "companion": {"mdm_core", "mdm_profiles", "mavlink_wire", "mdm_provenance"},
+    "mdm_ground": {"companion", "mdm_core", "mdm_profiles", "mavlink_wire", "mdm_provenance"},
+    "sim_vehicle_stub": {"mdm_core", "mdm_profiles", "mavlink_wire", "mdm_provenance"},
     "mdm_montecarlo": {"mdm_core", "mdm_profiles", "mdm_provenance"},
-    "mavlink_conformance": {"mavlink_signing", "mdm_provenance"},
+    "mavlink_conformance": {"mavlink_wire", "mdm_provenance"},
 }
 
 

@@ -1,31 +1,37 @@
 """The link interface every MAVLink backend implements (pymavlink, MAVSDK), and what they share:
-stream requests, the speed limit, parameter probes, the vehicle's own words (STATUSTEXT)."""
+the profile's frame, the vehicle's origin and fence, the vehicle's own words (STATUSTEXT); the
+stream negotiation (stream_requests.py), the speed limit (speed_policy.py) and the sensor switch
+(sensor_parameter.py) are its parts, the search's fast path its hook (position_answerer.py)."""
 
 from __future__ import annotations
 
 import asyncio
-import logging
 import math
 import time
 from abc import ABC, abstractmethod
 from collections import deque
 from collections.abc import Callable
-from typing import Literal, Protocol
+from typing import Literal
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from companion.autopilots import Autopilot, FlightMode
-from companion.errors import CompanionError
 from companion.guidance import NedSetpoint
+from companion.link.errors import LinkError
 from companion.link.fence_protocol import FenceTransferError
 from companion.link.local_frame import LocalFrame
 from companion.link.messages import GlobalPosition, LinkEvent, LocalPosition
-from companion.link.outcome import CommandResult, Outcome, denied
-from companion.link.streams import StreamNeed, StreamWatch
+from companion.link.outcome import CommandResult, Outcome
+from companion.link.position_answerer import PositionAnswerer
+from companion.link.sensor_parameter import SensorParameter
+from companion.link.speed_policy import SpeedPolicy
+from companion.link.stream_requests import StreamRequests
+from companion.link.streams import StreamWatch
 from companion.link.telemetry_guard import TelemetryGuard
 from companion.link.vehicle_frame import FrameAlignment
 
-log = logging.getLogger(__name__)
+__all__ = ["LinkError", "SetpointKind", "VehicleLink"]
+"""LinkError: the interface's error, named here for the code that uses the interface."""
 
 SetpointKind = Literal["velocity", "position"]
 
@@ -34,29 +40,7 @@ _REASON_WAIT_S = 0.3
 before the COMMAND_ACK, but sends it from its text queue, which can come out after the ack."""
 
 
-class PositionAnswerer(Protocol):
-    """Takes a position that only needs steering, without the events' path
-    (mission/search_answer.py)."""
-
-    def ready(self, vehicle_time: float, north: float, east: float) -> bool:
-        """Whether this position (vehicle s, profile frame) only needs steering."""
-
-    def answer(
-        self,
-        pos: LocalPosition,
-        signal: float | None,
-        before: list[LinkEvent],
-        after: list[LinkEvent],
-    ) -> None:
-        """Steer from ``pos``; ``signal``: the sensor's SENS_SIG reading that came with it;
-        ``before`` / ``after``: the other events of its datagram, in order."""
-
-
-class LinkError(CompanionError, RuntimeError):
-    """The link cannot be opened or a command could not be delivered."""
-
-
-class VehicleLink(ABC):
+class VehicleLink(StreamRequests, SpeedPolicy, SensorParameter, ABC):
     """One vehicle over MAVLink: events in (``events``), commands and setpoints out.
 
     A backend parses what it receives into :mod:`companion.link.messages` events on
@@ -323,109 +307,6 @@ class VehicleLink(ABC):
         if not texts:
             return result
         return CommandResult(result.what, result.outcome, result.result, "; ".join(texts[-2:]))
-
-    # -- streams ---------------------------------------------------------------------------
-
-    async def request_streams(self, needs: tuple[StreamNeed, ...], wait: float = 2.0) -> list[str]:
-        """Make sure every needed message arrives at its rate: look first, then ask with
-        SET_MESSAGE_INTERVAL, then with REQUEST_DATA_STREAM. Returns one line per message still
-        missing, naming what was tried (empty when all arrive)."""
-        since = time.monotonic()
-        missing = await self._await_streams(needs, since, wait)
-        tried: dict[str, list[str]] = {n.name: [] for n in missing}
-        for need in missing:
-            self.streams.clear(need.name)
-            result = await self.command_long(
-                mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL, float(need.msg_id), need.interval_us()
-            )
-            tried[need.name].append(
-                f"SET_MESSAGE_INTERVAL {need.interval_us():.0f} us: {result.outcome.value}"
-            )
-            log.info(
-                "asked system %d for %s every %.0f us: %s",
-                self.target_system,
-                need.name,
-                need.interval_us(),
-                result.describe(),
-            )
-        if missing:
-            missing = await self._await_streams(missing, since, wait)
-        for need in missing:
-            rate = max(1, math.ceil(need.rate_hz))
-            self.request_data_stream(need.data_stream, rate)
-            stream = mavlink2.enums["MAV_DATA_STREAM"][need.data_stream].name
-            tried[need.name].append(f"REQUEST_DATA_STREAM {stream} at {rate} Hz")
-            log.info("asked system %d for %s at %d Hz", self.target_system, stream, rate)
-        if missing:
-            missing = await self._await_streams(missing, since, wait)
-        problems = []
-        for need in missing:
-            measured = self.streams.rate(need.name)
-            got = (
-                "nothing"
-                if not self.streams.seen_since(need.name, since)
-                else (f"{measured:.1f} Hz" if measured is not None else "too few to time")
-            )
-            problems.append(
-                f"{need.name} from system {self.target_system}: needed at "
-                f"{need.rate_hz:g} Hz, got {got}; tried {'; '.join(tried[need.name])}"
-            )
-        return problems
-
-    async def _await_streams(
-        self, needs: tuple[StreamNeed, ...] | list[StreamNeed], since: float, wait: float
-    ) -> tuple[StreamNeed, ...]:
-        deadline = time.monotonic() + wait
-        while True:
-            missing = tuple(n for n in needs if not self.streams.satisfied(n, since))
-            if not missing or time.monotonic() >= deadline:
-                return missing
-            await asyncio.sleep(0.1)
-
-    # -- parameters and speed --------------------------------------------------------------
-
-    async def has_param(self, name: str) -> bool:
-        """Whether the vehicle answers PARAM_REQUEST_READ for ``name`` (asked once)."""
-        known = self._param_known.get(name)
-        if known is None:
-            known = await self.read_param(name) is not None
-            self._param_known[name] = known
-        return known
-
-    async def set_speed(self, speed: float) -> str:
-        """Set the horizontal speed limit to ``speed`` m/s: DO_CHANGE_SPEED, then the
-        autopilot's own parameter (read, raised if lower, read back). Returns what the vehicle
-        now keeps, one line, naming a cap below ``speed``."""
-        ap = self.autopilot
-        result = await self.command_long(
-            mavlink2.MAV_CMD_DO_CHANGE_SPEED,
-            1.0,
-            speed,
-            -1.0,  # 1 = ground speed; -1 = throttle as is
-        )
-        line = f"DO_CHANGE_SPEED {speed:g} m/s {result.describe()}"
-        if ap is None or ap.speed_param is None:
-            return line
-        name, scale = ap.speed_param
-        value = await self.read_param(name)
-        if value is None:
-            return f"{line}; {name} not readable"
-        if value / scale < speed - 1e-6:
-            echoed = await self.set_param(name, speed * scale, mavlink2.MAV_PARAM_TYPE_REAL32)
-            if echoed is None:
-                return f"{line}; {name} {value / scale:g} m/s, raising it got no answer"
-            value = echoed
-        kept = value / scale
-        if kept < speed - 1e-6:
-            return f"{line}; vehicle caps at {kept:g} m/s ({name}), profile asks {speed:g}"
-        return f"{line}; {name} {kept:g} m/s"
-
-    async def set_sensor(self, index: int) -> CommandResult:
-        """Switch the payload sensor: parameter MDM_SENSOR (INT32), -1 = off. Only where the
-        vehicle has the parameter: otherwise denied at once, never a PARAM_SET loop."""
-        if not await self.has_param("MDM_SENSOR"):
-            return denied("MDM_SENSOR", "the vehicle has no MDM_SENSOR parameter")
-        return await self._set_sensor(index)
 
     @abstractmethod
     async def _set_sensor(self, index: int) -> CommandResult:

@@ -34,6 +34,11 @@ class FenceTransferError(CompanionError, RuntimeError):
     """The vehicle did not take (or give) the fence; the message says at which step."""
 
 
+class FenceRefusedError(FenceTransferError):
+    """The vehicle refused the fence itself (too many items, a frame or command it does not
+    take): trying again would not help."""
+
+
 class FenceTransfer:
     """One upload or download at a time over ``send`` (encoded messages out) and ``inbox``
     (the link puts every mission-protocol message of the vehicle there)."""
@@ -55,32 +60,68 @@ class FenceTransfer:
         self.inbox: asyncio.Queue[Any] = asyncio.Queue()
 
     async def upload(self, vertices: list[Vertex]) -> None:
-        """Replace the vehicle's fence with one inclusion polygon."""
+        """Replace the vehicle's fence with one inclusion polygon. A transfer the vehicle
+        drops (MAV_MISSION_ERROR or silence: PX4 answers MAV_MISSION_ERROR to an item that comes after it gave up waiting,
+        or after it finished; it goes silent after its own time-out) is cancelled and started
+        again from MISSION_COUNT, ``tries`` times in all; the error names every attempt."""
+        failures: list[str] = []
+        for _ in range(self._tries):
+            try:
+                await self._upload_once(vertices)
+                return
+            except FenceRefusedError:
+                raise
+            except FenceTransferError as exc:
+                failures.append(str(exc))
+            # End the vehicle's side of the transfer (PX4 goes idle on a cancel from its
+            # partner), then start again.
+            self._send(
+                self._mav.mission_ack_encode(
+                    self._target, 1, mavlink2.MAV_MISSION_OPERATION_CANCELLED, FENCE
+                )
+            )
+            await asyncio.sleep(self._timeout / 3)
+        raise FenceTransferError(f"{len(failures)} attempts failed: " + "; ".join(failures))
+
+    async def _upload_once(self, vertices: list[Vertex]) -> None:
         n = len(vertices)
         count = self._mav.mission_count_encode(self._target, 1, n, FENCE)
         sent: set[int] = set()
-        deadline_tries = self._tries
+        # The highest item the vehicle asked for: a request for an earlier one is a stale
+        # repeat (PX4 repeats a request every 250 ms of its own clock) and is not answered, or
+        # the item could reach the vehicle after the transfer ended (MAV_MISSION_ERROR).
+        latest = -1
+        count_tries = self._tries
         self._drain()
         self._send(count)
         while True:
             msg = await self._next(("MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK"))
             if msg is None:
-                if sent or deadline_tries <= 1:
+                if sent or count_tries <= 1:
                     step = f"after item {max(sent)}" if sent else "to MISSION_COUNT"
                     raise FenceTransferError(f"no answer {step} (mission_type FENCE)")
-                deadline_tries -= 1
+                count_tries -= 1
                 self._send(count)
                 continue
             if msg.get_type() == "MISSION_ACK":
                 if msg.type != mavlink2.MAV_MISSION_ACCEPTED:
                     name = mavlink2.enums["MAV_MISSION_RESULT"][msg.type].name
-                    raise FenceTransferError(f"fence refused: {name}")
+                    where = f"after item {max(sent)}" if sent else "to MISSION_COUNT"
+                    error = (
+                        FenceTransferError
+                        if msg.type == mavlink2.MAV_MISSION_ERROR
+                        else FenceRefusedError
+                    )
+                    raise error(f"fence refused {where}: {name}")
                 if len(sent) < n:
                     raise FenceTransferError(f"accepted after {len(sent)} of {n} items")
                 return
             seq = msg.seq
             if not 0 <= seq < n:
                 raise FenceTransferError(f"vehicle asked for item {seq} of {n}")
+            if seq < latest:
+                continue
+            latest = seq
             lat, lon = vertices[seq]
             self._send(
                 self._mav.mission_item_int_encode(
@@ -141,19 +182,27 @@ class FenceTransfer:
             self.inbox.get_nowait()
 
     async def _next(self, kinds: tuple[str, ...], seq: int | None = None) -> Any:
-        """The next fence message of one of ``kinds`` (and item ``seq``) within the timeout."""
+        """The next fence message of one of ``kinds`` (and item ``seq``) within the timeout.
+        What was queued by the deadline is still read: a busy event loop (this task waiting
+        for its turn) must not read as a silent vehicle."""
         deadline = time.monotonic() + self._timeout
+        late: int | None = None
         while True:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return None
-            # asyncio.wait, not wait_for: on 3.11 wait_for can swallow a cancel
-            getter = asyncio.ensure_future(self.inbox.get())
-            done, _ = await asyncio.wait({getter}, timeout=left)
-            if not done:
-                getter.cancel()
-                return None
-            msg = getter.result()
+            if late is None and time.monotonic() >= deadline:
+                late = self.inbox.qsize()
+            if late is not None:
+                if late == 0:
+                    return None
+                late -= 1
+                msg = self.inbox.get_nowait()
+            else:
+                # asyncio.wait, not wait_for: on 3.11 wait_for can swallow a cancel
+                getter = asyncio.ensure_future(self.inbox.get())
+                done, _ = await asyncio.wait({getter}, timeout=deadline - time.monotonic())
+                if not done:
+                    getter.cancel()
+                    continue
+                msg = getter.result()
             if msg.get_type() not in kinds or getattr(msg, "mission_type", 0) != FENCE:
                 continue
             if seq is not None and msg.seq != seq:

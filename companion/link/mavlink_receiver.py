@@ -21,7 +21,8 @@ from companion.link.mavlink_decode import MavlinkDecoding
 from companion.link.mavlink_transport import MavlinkTransport
 from companion.link.messages import LinkEvent, LocalPosition, StraySource
 from companion.link.tlog import TelemetryLog
-from mavlink_signing import SigningState, Verdict
+from mavlink_wire import SigningState, Verdict
+from mavlink_wire import frames as wire
 
 log = logging.getLogger(__name__)
 
@@ -117,7 +118,7 @@ class MavlinkReceiver(MavlinkDecoding):
         ):
             return False
         received = time.perf_counter()
-        frames = fast_frames.split(data)
+        frames = wire.split(data)
         if frames is None:
             return False
         position: tuple[int, float, float, float, float, float, float] | None = None
@@ -177,7 +178,7 @@ class MavlinkReceiver(MavlinkDecoding):
 
     def _receive(self, data: bytes, addr: tuple[str | Any, int] | None) -> None:
         received = time.perf_counter()
-        frames = fast_frames.split(data) if self._signing is None and addr is not None else None
+        frames = wire.split(data) if self._signing is None and addr is not None else None
         if frames is None:
             self._accept(data, addr, received)
             return

@@ -13,7 +13,7 @@ from typing import Any, cast
 
 from companion.errors import InputError
 from companion.link.address import Address
-from companion.link.base import LinkError
+from companion.link.errors import LinkError
 from companion.link.serial_device import open_serial
 
 log = logging.getLogger(__name__)

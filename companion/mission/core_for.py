@@ -44,6 +44,18 @@ class MissionCore(Protocol):
     def index_value(self, time: float) -> float: ...
 
 
+LAWNMOWER_KINDS = ("lm1", "lm2")
+"""The lawnmower baselines: flown by the Monte-Carlo engine only (not yet by the companion)."""
+
+
+def lawnmower_refusal(profile: str, kind: str) -> str:
+    """Why a lawnmower profile is refused in the air."""
+    return (
+        f"profile {profile!r}: policy.kind {kind!r} (the lawnmower baseline) runs in the "
+        "Monte-Carlo engine only (mdm-montecarlo run/plan); the companion does not fly it yet"
+    )
+
+
 def is_swarm(config: MissionConfig) -> bool:
     return config.profile.policy.kind in VARIANTS
 
@@ -53,6 +65,8 @@ def core_for(
 ) -> MissionCore:
     """The core of ``config``'s policy kind; ``signal``: the active sensor's latest SENS_SIG,
     ``peers``: the swarm exchange (required by the swarm kinds)."""
+    if config.profile.policy.kind in LAWNMOWER_KINDS:
+        raise ValueError(lawnmower_refusal(config.profile.name, config.profile.policy.kind))
     if not is_swarm(config):
         return SearchCore(config.profile, config.seed, config.vehicle)
     if peers is None:

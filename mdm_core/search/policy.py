@@ -9,6 +9,15 @@ to draw from; it keeps no clock and does no I/O. One ``step`` call applies, for 
 2. the decaying index of levels >= 2 (C_I, D^k_I) below its bound -> back to level 1;
 3. a new waypoint P_{q+1} = P_q + delta_k D(S_t) when the level changed or the waypoint was
    reached.
+
+This is the reference implementation of the policy. The companion runs it (a batch of one);
+the Monte-Carlo engine runs compiled twins of its hot parts, each tested bit for bit against
+this code: ``step`` in ``mdm_montecarlo/compiled_step.py``, the waypoint draws
+(``_next_waypoints``, the start waypoints) in ``compiled_waypoints.py`` (both
+tests/montecarlo/test_compiled_policy.py), ``memory_distance2`` in ``compiled_memory.py``
+(test_compiled_memory.py) and ``remembered.py`` (test_remembered.py). A change here is made in
+its twin too, or those tests fail; docs/architecture.md, "The search policy and its compiled
+twins", lists the pairs.
 """
 
 from __future__ import annotations

@@ -173,6 +173,30 @@ class TargetTracks:
         self._grow_to(int(np.floor(until / self.grid_dt + NODE_EPS)))
         return self._starts, self._velocity
 
+    def departures(self, until: float) -> FloatArray:
+        """(runs, m): when each target's path first leaves the area, inf if not by ``until``
+        (and for fixed targets). Solved exactly on the linear segments: per segment and axis,
+        the time the line reaches the wall it heads for, the earliest within its segment."""
+        out = np.full((self.n_runs, self.spec.count), np.inf)
+        if self.walk is None:
+            return out
+        last = int(np.floor(until / self.grid_dt + NODE_EPS))
+        size = self.area.size
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for k in range(last + 1):
+                if np.isfinite(out).all():
+                    break  # every target has left: no need to draw the paths further
+                starts, velocity = self.segments(k * self.grid_dt)
+                s, v = starts[:, k], velocity[:, k]
+                wall = np.where(v > 0, size, 0.0)
+                hit = np.where(v != 0, (wall - s) / v, np.inf)  # (runs, m, 2), >= 0 inside
+                hit = np.where(hit >= 0, hit, 0.0)  # a node already outside: gone at once
+                at = k * self.grid_dt + hit.min(axis=-1)
+                leaves = (hit.min(axis=-1) <= self.grid_dt) & np.isinf(out)
+                out[leaves] = at[leaves]
+        out[out > until] = np.inf
+        return out
+
     def _grow_to(self, k: int) -> None:
         """Draw segments until segment k exists (the walk's draws come in the same order)."""
         while self._filled <= k:

@@ -14,6 +14,7 @@ from mdm_ground.errors import GroundError
 from mdm_ground.fleet.options import FleetOptions
 from mdm_ground.fleet.ports import PortBlock, check_base_port, free_port_block
 from mdm_profiles import MissionProfile
+from mdm_profiles.ceiling import CeilingError, check_ceiling
 
 MAX_VEHICLES = 254
 """MAVLink system ids 1..254 (255 is a ground station); vehicle i is system i+1 in the
@@ -50,6 +51,16 @@ def check_arguments(o: FleetOptions, profile: MissionProfile) -> int:
             else f"MAVLink system ids stop at {MAX_VEHICLES}"
         )
         raise FleetInputError(f"--vehicles {n}: must be 1..{limit} ({why})")
+    try:
+        check_ceiling(profile, n)
+    except CeilingError as exc:
+        raise FleetInputError(f"--vehicles {n}: {exc}") from exc
+    if profile.mission.ts_rule != "confirmed" and profile.target_motion is not None:
+        raise FleetInputError(
+            f"profile {profile.name!r}: mission.ts_rule {profile.mission.ts_rule} is scored by "
+            "the Monte-Carlo engine only; a fleet run scores T_S by confirmations (ts_rule "
+            "confirmed)"
+        )
     if not o.duration > 0:
         raise FleetInputError(f"--duration {o.duration:g}: must be > 0 (search time, sim s)")
     if not o.speedup >= 0:

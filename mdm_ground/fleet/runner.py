@@ -15,7 +15,7 @@ from dataclasses import dataclass, field, replace
 
 from companion.link.factory import check_signing_support
 from companion.mission.phase import Phase
-from mavlink_signing import load_signing_key
+from mavlink_wire import load_signing_key
 from mdm_ground.fleet import processes
 from mdm_ground.fleet.flight_checks import flight_checks
 from mdm_ground.fleet.gcs import emulator_gcs_args

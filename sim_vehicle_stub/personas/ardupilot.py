@@ -65,6 +65,7 @@ class ArduCopterPersona(Persona):
         global_frame_nav_only=False,
         past_end_answer=d.MAV_MISSION_INVALID_SEQUENCE,
         reports_mission_state=True,
+        current_unasked=False,
         acceptance_param="WPNAV_RADIUS",
         acceptance_scale=100.0,
         start_needs_armed=False,

@@ -94,6 +94,13 @@ class MissionRules:
     NO_ANSWER (PX4)."""
     reports_mission_state: bool
     """MISSION_CURRENT carries mission_state and mission_mode (ArduPilot) or 0 (PX4)."""
+    current_unasked: bool
+    """MISSION_CURRENT goes out on a link that did not ask for it: PX4 streams it by default; a
+    stock ArduCopter sends none there, neither streamed nor at an item change, until a client
+    asks (SET_MESSAGE_INTERVAL, REQUEST_DATA_STREAM EXTENDED_STATUS). Measured on ArduCopter
+    SITL: MAVSDK flying a plan on SERIAL0 got only MISSION_ITEM_REACHED, so its mission
+    progress starts at 2 (after the take-off item is reached); SERIAL1, asking 10 Hz, got
+    MISSION_CURRENT 1 for the take-off."""
     acceptance_param: str
     """The waypoint acceptance radius used when an item's param2 is 0."""
     acceptance_scale: float

@@ -69,6 +69,7 @@ class Px4Persona(Persona):
         global_frame_nav_only=True,
         past_end_answer=NO_ANSWER,
         reports_mission_state=False,
+        current_unasked=True,
         acceptance_param="NAV_ACC_RAD",
         acceptance_scale=1.0,
         start_needs_armed=True,

@@ -233,6 +233,34 @@ class Observer:
             )
             time.sleep(0.05)
 
+    def await_state(
+        self,
+        holds: Callable[[Trace], bool],
+        vehicle_s: float,
+        what: str,
+        *,
+        wall_timeout: float = 300.0,
+        context: Callable[[], str] | None = None,
+    ) -> Trace:
+        """Wait until ``holds`` of a snapshot; fail once the vehicle's own clock ran
+        ``vehicle_s`` without it (a loaded host's slower SITL gets its time, where a wall-clock
+        bound scaled by the nominal speed-up ran out), or after ``wall_timeout`` wall s (a
+        stalled SITL)."""
+        start = self.snapshot().boot_s
+        deadline = time.monotonic() + wall_timeout
+        while True:
+            snap = self.snapshot()
+            if holds(snap):
+                return snap
+            ran = snap.boot_s - start
+            if ran >= vehicle_s or time.monotonic() > deadline:
+                more = "" if context is None else f"\n{context()}"
+                raise AssertionError(
+                    f"{what}: not seen in {ran:.1f} vehicle s ({vehicle_s:g} allowed; wall "
+                    f"limit {wall_timeout:g} s){more}"
+                )
+            time.sleep(0.05)
+
     def close(self) -> None:
         self._stop.set()
         self._thread.join(timeout=2.0)

@@ -13,7 +13,7 @@ import pytest
 
 from companion.link.messages import Heartbeat
 from companion.link.pymavlink_link import PymavlinkLink
-from mavlink_signing import passphrase_to_secret
+from mavlink_wire import passphrase_to_secret
 from mdm_ground.fleet.runner import FleetOptions, run_fleet
 from tests.emulator_harness import make_config, running_emulator
 

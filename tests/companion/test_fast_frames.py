@@ -10,9 +10,9 @@ from typing import Any
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from companion.link import fast_frames
 from companion.link.messages import LinkEvent, LocalPosition
 from companion.link.pymavlink_link import PymavlinkLink
+from mavlink_wire import frames as wire
 
 
 def _datagrams(*, truncate: bool = False) -> list[bytes]:
@@ -109,10 +109,10 @@ def test_fast_path_events_and_log_equal_pymavlink(tmp_path: Path) -> None:
 def test_split_leaves_anything_unusual_to_pymavlink() -> None:
     mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
     good = bytes(mav.local_position_ned_encode(1, 1.0, 2.0, 3.0, 0, 0, 0).pack(mav))
-    assert fast_frames.split(good) == [(32, 1, good)]
-    assert fast_frames.split(good + good[:-1]) is None
-    assert fast_frames.split(good[:-1] + b"\x00") is None
-    assert fast_frames.split(b"\xfe" + good[1:]) is None
+    assert wire.split(good) == [(32, 1, good)]
+    assert wire.split(good + good[:-1]) is None
+    assert wire.split(good[:-1] + b"\x00") is None
+    assert wire.split(b"\xfe" + good[1:]) is None
 
 
 def test_a_truncated_datagram_no_longer_swallows_the_next_position(tmp_path: Path) -> None:

@@ -4,6 +4,7 @@ claims about Figs. 4-9, and the eq. (10) row."""
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -66,7 +67,7 @@ def small_report(tmp_path_factory: pytest.TempPathFactory) -> str:
 
 def test_summary_comes_first_and_outside_rows_link_their_cause(small_report: str) -> None:
     assert small_report.index("## Summary") < small_report.index("## simtable1")
-    assert re.search(r"T_nc inside tolerance: \d+ of 17 rows", small_report)
+    assert re.search(r"T_nc inside tolerance: \d+ of 23 rows", small_report)
     outside = small_report.split("## Means outside tolerance")[1].split("\n## ", maxsplit=1)[0]
     rows = [line for line in outside.splitlines() if line.startswith("| simtable1")]
     assert rows
@@ -82,11 +83,12 @@ def test_eq10_row_sits_beside_the_default(small_report: str) -> None:
 
 
 def test_popup_rows_from_t0_follow_the_default_rows(small_report: str) -> None:
-    """The pop-up US and MDM rows with t_i = 200 (i - 1) come after their default rows (MDM's
-    after its eq. (10) row) and fly targets that appear from t = 0."""
+    """Every pop-up row (US, BS, LS, MDM) with t_i = 200 (i - 1) comes after its default row
+    (MDM's after its eq. (10) row) and flies targets that appear from t = 0."""
     table = small_report.split("## simtable1")[1]
     label = "t_i = 200 (i - 1)"
-    expected = {"US": [False, True], "MDM": [False, False, True]}
+    expected = {"US": [False, True], "BS": [False, True], "LS": [False, True]}
+    expected["MDM"] = [False, False, True]
     for method, marks in expected.items():
         lines = [
             ln for ln in table.splitlines() if ln.startswith(f"| simtable1 | popup | {method}")
@@ -94,9 +96,30 @@ def test_popup_rows_from_t0_follow_the_default_rows(small_report: str) -> None:
         assert [label in ln for ln in lines] == marks
     rows = study_rows(("simtable1",))
     variant = [r.case for r in rows if r.case.variant == "popup_from_0"]
-    assert [c.method for c in variant] == ["US", "MDM:US+US"]
+    assert [c.method for c in variant] == ["US", "BS", "LS", "MDM:US+US"]
     appear = [t.appear for t in variant[0].profile().targets]
     assert appear == [200.0 * k for k in range(10)]
+
+
+def test_every_popup_row_of_four_tables_has_its_t0_row() -> None:
+    """simtablef1, simtable3 and simtable5: each pop-up row is followed by the same case with
+    targets from t = 0 (simtablef1's false targets stay false); no other scenario has one."""
+    rows = study_rows(("simtablef1", "simtable3", "simtable5"))
+    for k, row in enumerate(rows):
+        if row.case.variant == "popup_from_0":
+            before = rows[k - 1].case
+            assert row.case.scenario == "popup"
+            assert row.case == replace(before, variant="popup_from_0")
+            targets = row.case.profile().targets
+            assert [t.appear for t in targets] == [200.0 * i for i in range(10)]
+            assert [t.false_target for t in targets] == [
+                t.false_target for t in before.profile().targets
+            ]
+    counts = {
+        table: sum(r.case.variant == "popup_from_0" for r in rows if r.table == table)
+        for table in ("simtablef1", "simtable3", "simtable5")
+    }
+    assert counts == {"simtablef1": 4, "simtable3": 5, "simtable5": 9}
 
 
 def test_every_swarm_row_has_its_three_labelled_readings() -> None:
@@ -145,3 +168,19 @@ def test_no_improvement_percentage_against_a_baseline_that_confirmed_nothing() -
     table = format_table(measured)
     assert "nan" not in table.lower()
     assert "inf" not in table.lower()
+
+
+def test_every_dynamic_row_has_its_targets_leave_row() -> None:
+    """simtable1, simtablef1, Dsimtable6, simtable3 and scaling: each dynamic row (swarms
+    aside) is followed by the same case with the free walk and T_S counting departures."""
+    tables = ("simtable1", "simtablef1", "Dsimtable6", "simtable3", "scaling")
+    rows = study_rows(tables)
+    leave = [k for k, r in enumerate(rows) if r.case.variant == "targets_leave"]
+    dynamic = [r for r in rows if r.case.scenario == "dynamic" and not r.case.variant]
+    assert len(leave) == len(dynamic) == 4 + 4 + 9 + 5 + 12
+    for k in leave:
+        assert rows[k].case == replace(rows[k - 1].case, variant="targets_leave")
+        profile = rows[k].case.profile()
+        assert profile.target_motion is not None
+        assert profile.target_motion.boundary == "free"
+        assert profile.mission.ts_rule == "confirmed_or_gone"

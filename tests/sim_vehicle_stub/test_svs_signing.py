@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from mavlink_signing import passphrase_to_secret
+from mavlink_wire import passphrase_to_secret
 from sim_vehicle_stub.cli import main as sim_vehicle_main
 from tests.emulator_harness import Client, free_udp_base, make_config, running_emulator
 

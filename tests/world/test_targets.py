@@ -152,3 +152,37 @@ def test_room_reserved_for_a_horizon_changes_no_draw(
     run = np.arange(4)
     t = np.array([0.0, 4999.9, 5000.0, 29999.0])
     np.testing.assert_array_equal(grown.positions(run, t), reserved.positions(run, t))
+
+
+def test_departure_is_the_first_time_the_path_leaves_the_area() -> None:
+    """tracks.departures: exact first exit from the area on the linear segments, checked
+    against the path sampled every 0.05 s (inside just before, outside just after)."""
+    area = Area(2000.0, 1500.0)
+    walk = RandomWalk(speed=20.0, boundary="free")  # drifts 8 m/s per axis, noise 3 m/step
+    points = spec((1000.0, 700.0), (1900.0, 100.0), (300.0, 1400.0))
+    tracks = TargetTracks(points, area, 4, np.random.default_rng(3), walk, 25.0)
+    gone = tracks.departures(1000.0)
+    assert np.isfinite(gone).all()
+    runs = np.arange(4)
+    for j in range(points.count):
+        for run in runs:
+            t = gone[run, j]
+            before = np.arange(0.0, t - 1e-6, 0.05)
+            inside = area.contains(tracks.positions(np.full(len(before), run), before)[:, j])
+            assert inside.all()
+            after = tracks.positions(np.array([run]), np.array([t + 1e-3]))[0, j]
+            assert not area.contains(after)
+    # a later horizon finds the same times; a shorter one none past it
+    np.testing.assert_array_equal(tracks.departures(4000.0), gone)
+    short = tracks.departures(float(gone.min()))
+    assert np.isinf(short[gone > gone.min()]).all()
+
+
+def test_bounded_and_fixed_targets_never_depart() -> None:
+    area = Area(100.0, 100.0)
+    bounce = TargetTracks(
+        spec((90.0, 90.0)), area, 5, np.random.default_rng(5), RandomWalk(boundary="bounce"), 10.0
+    )
+    fixed = TargetTracks(spec((90.0, 90.0)), area, 5, np.random.default_rng(5))
+    assert np.isinf(bounce.departures(2000.0)).all()
+    assert np.isinf(fixed.departures(2000.0)).all()

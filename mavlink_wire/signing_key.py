@@ -12,7 +12,7 @@ import os
 from collections.abc import Mapping
 from pathlib import Path
 
-from mavlink_signing.errors import SigningError
+from mavlink_wire.errors import SigningError
 
 ENV_VAR = "MDM_MAVLINK_KEY"
 """Environment variable holding the passphrase; unset or empty means signing off."""

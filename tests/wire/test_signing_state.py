@@ -1,4 +1,4 @@
-"""The signing rules of mavlink_signing against pymavlink's own signer and parser."""
+"""The signing rules of mavlink_wire against pymavlink's own signer and parser."""
 
 from __future__ import annotations
 
@@ -10,14 +10,14 @@ import pytest
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from mavlink_signing import (
+from mavlink_wire import (
     SigningKeyError,
     SigningState,
     Verdict,
     load_signing_key,
     passphrase_to_secret,
 )
-from mavlink_signing.state import EPOCH_2015
+from mavlink_wire.signing_state import EPOCH_2015
 
 KEY = passphrase_to_secret("state-test-key")
 NOW = EPOCH_2015 + 3.0e8  # a fixed wall clock, Unix seconds

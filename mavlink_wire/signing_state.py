@@ -18,7 +18,7 @@ import time
 from collections.abc import Callable
 from enum import Enum
 
-from mavlink_signing.frame_crc import frame_crc
+from mavlink_wire.crc import frame_crc
 
 SECRET_BYTES = 32
 SIGNATURE_BYTES = 13
