@@ -17,7 +17,9 @@ from typing import Any
 from companion import ground_tools
 from companion.autopilots import FlightMode
 from companion.fly import REFUSED, STOPPED_BY_SECOND_SIGNAL, check_flight, fly
+from companion.link.address import parse_address
 from companion.link.factory import BACKENDS, Backend, make_link
+from companion.link.serial_device import check_serial
 from companion.mission import MissionConfig
 from companion.mission.mission_exit import MissionExit
 from companion.sensors.factory import SENSOR_SOURCES
@@ -36,7 +38,11 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p = sub.add_parser("run", help="fly one vehicle's MDM search")
     p.add_argument("--profile", required=True, help="profile file or built-in name")
     p.add_argument("--vehicle", type=int, required=True, help="0-based vehicle index")
-    p.add_argument("--connect", help="link URL (default udpin:0.0.0.0:BASE_PORT+I)")
+    p.add_argument(
+        "--connect",
+        help="link URL: udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT or serial:DEVICE:BAUD "
+        "(default udpin:0.0.0.0:BASE_PORT+I)",
+    )
     p.add_argument(
         "--system-id",
         type=int,
@@ -151,6 +157,9 @@ def run_command(args: argparse.Namespace) -> int:
     mqtt = mqtt_spec(args, profile.mqtt)
     sensor_source: SensorSourceKind = args.sensor_source or profile.sensor_source.kind
     check_flight(config, mqtt, sensor_source)  # before any socket or file
+    address = parse_address(url)
+    if address.is_serial:  # missing, busy, no permission: refused now (exit 2), not retried
+        check_serial(address)
     signing_key = load_signing_key(args.signing_key_file)
     fly = _fly(
         config,

@@ -10,6 +10,7 @@ import os
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -98,26 +99,47 @@ def _peak_rss_kb(pid: int) -> int:
     return 0
 
 
-def fly(venv: Path, out: Path, *, duration: float = 60.0, speedup: float = 10.0) -> Flight:
+def fly(
+    venv: Path,
+    out: Path,
+    *,
+    duration: float = 60.0,
+    speedup: float = 10.0,
+    base: int | None = None,
+    link: tuple[str, ...] = (),
+    during: Callable[[subprocess.Popen[bytes]], None] = lambda _: None,
+    draw_map: bool = True,
+) -> Flight:
     """`companion run` of ``venv`` flying vehicle 0 for ``duration`` vehicle s against an
-    emulator of its own, to the landing; its exit status and peak resident memory."""
+    emulator of its own sending to ``base`` (default: a free port, the companion's), to the
+    landing; its exit status and peak resident memory. ``link``: the companion's link options
+    (default: its own UDP port ``base``); ``during`` runs once the companion has started;
+    ``draw_map``: False for `--no-map`."""
     out.mkdir(parents=True, exist_ok=True)
-    base = free_udp_base(1, gap=BIND_OFFSET)
+    base = free_udp_base(1, gap=BIND_OFFSET) if base is None else base
     emu = emulator(out, base, speedup=speedup)
     observer = Observer(f"udpout:127.0.0.1:{base + BIND_OFFSET}", sysid=1)
     try:
         with (out / "companion-0.log").open("ab") as log:
             companion = subprocess.Popen(
                 [str(venv / "bin" / "companion"), "run", "--profile", "paper-fixed",
-                 "--vehicle", "0", "--base-port", str(base), "--duration", str(duration),
-                 "--land-wait", "600", "--max-speedup", str(speedup), "--seed", "5",
+                 "--vehicle", "0", *(link or ("--base-port", str(base))),
+                 *(() if draw_map else ("--no-map",)),
+                 "--duration", str(duration), "--land-wait", "600",
+                 "--max-speedup", str(speedup), "--seed", "5",
                  "--log-dir", str(out)],
                 stdout=log, stderr=subprocess.STDOUT, cwd=out,
             )  # fmt: skip
-        peak_kb = 0
-        while companion.poll() is None:
-            peak_kb = max(peak_kb, _peak_rss_kb(companion.pid))
-            time.sleep(0.25)
+        try:
+            during(companion)
+            peak_kb = 0
+            while companion.poll() is None:
+                peak_kb = max(peak_kb, _peak_rss_kb(companion.pid))
+                time.sleep(0.25)
+        finally:
+            if companion.poll() is None:
+                companion.kill()
+                companion.wait()
         seen = observer.snapshot()
     finally:
         observer.close()

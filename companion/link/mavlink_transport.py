@@ -1,16 +1,20 @@
 """The sockets under the pymavlink link: UDP in (bound; answers go to the vehicle's address once
-it spoke), UDP out, TCP; bytes in to the link's callbacks, bytes out as they are."""
+it spoke), UDP out, TCP, and a serial device (serial_device.py); bytes in to the link's
+callbacks, bytes out as they are."""
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import os
 import socket
 from collections.abc import Callable
 from typing import Any, cast
 
+from companion.errors import InputError
 from companion.link.address import Address
 from companion.link.errors import LinkError
+from companion.link.serial_device import open_serial
 
 log = logging.getLogger(__name__)
 
@@ -22,9 +26,15 @@ OnDatagram = Callable[[bytes, Sender], None]
 
 
 class _Protocol(asyncio.DatagramProtocol, asyncio.Protocol):
-    def __init__(self, on_datagram: OnDatagram, on_stream: Callable[[bytes], None]) -> None:
+    def __init__(
+        self,
+        on_datagram: OnDatagram,
+        on_stream: Callable[[bytes], None],
+        on_lost: Callable[[], None] = lambda: None,
+    ) -> None:
         self.on_datagram = on_datagram
         self.on_stream = on_stream
+        self.on_lost = on_lost
 
     def datagram_received(self, data: bytes, addr: Sender) -> None:
         self.on_datagram(data, addr)
@@ -35,6 +45,7 @@ class _Protocol(asyncio.DatagramProtocol, asyncio.Protocol):
     def connection_lost(self, exc: Exception | None) -> None:
         if exc is not None:
             log.warning("connection lost: %s", exc)
+        self.on_lost()
 
 
 class MavlinkTransport:
@@ -48,6 +59,10 @@ class MavlinkTransport:
         self._on_datagram = on_datagram
         self._on_stream = on_stream
         self._transport: asyncio.BaseTransport | None = None
+        self._serial_out: asyncio.WriteTransport | None = None
+        """A serial device's writing half (``_transport`` is its reading half)."""
+        self._serial_lost = False
+        """The serial device went away (a cable pulled): nothing is sent until it is re-opened."""
         self.sock: socket.socket | None = None
         """The UDP socket (None for TCP or while closed): read directly by :meth:`drain`."""
         self.remote: tuple[str, int] | None = None
@@ -78,12 +93,39 @@ class MavlinkTransport:
                 self.sock = sock
                 if a.scheme == "udpout":
                     self.remote = (a.host, a.port)
+            elif a.is_serial:
+                await self._open_serial(loop)
             else:
                 self._transport, _ = await loop.create_connection(protocol, a.host, a.port)
         except OSError as exc:
             raise LinkError(f"cannot open {a.url()}: {exc}") from exc
+        except InputError as exc:  # a serial device gone or busy: retried like a port not up
+            raise LinkError(str(exc)) from exc
+
+    async def _open_serial(self, loop: asyncio.AbstractEventLoop) -> None:
+        """The device as two pipe transports (reading, writing) over one locked descriptor."""
+        fd = open_serial(self.address)
+        reader = os.fdopen(fd, "rb", buffering=0)
+        writer = os.fdopen(os.dup(fd), "wb", buffering=0)
+
+        def lost() -> None:
+            if self._transport is not None and not self._serial_lost:
+                log.warning("serial device %s gone", self.address.host)
+            self._serial_lost = True
+            if self._serial_out is not None:
+                self._serial_out.close()
+
+        self._serial_lost = False
+        self._transport, _ = await loop.connect_read_pipe(
+            lambda: _Protocol(self._on_datagram, self._on_stream, lost), reader
+        )
+        out, _ = await loop.connect_write_pipe(asyncio.Protocol, writer)
+        self._serial_out = out
 
     def close(self) -> None:
+        if self._serial_out is not None:
+            self._serial_out.close()
+            self._serial_out = None
         if self._transport is not None:
             self._transport.close()
             self._transport = None
@@ -128,6 +170,10 @@ class MavlinkTransport:
             cast(asyncio.DatagramTransport, transport).sendto(buf, self.remote)
         elif self.address.scheme == "udpout":
             cast(asyncio.DatagramTransport, transport).sendto(buf)
+        elif self.address.is_serial:
+            if self._serial_lost or self._serial_out is None:
+                return False  # the device went away: re-opened by the link's reconnect
+            self._serial_out.write(buf)
         else:
             cast(asyncio.WriteTransport, transport).write(buf)
         return True
