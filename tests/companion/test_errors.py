@@ -35,7 +35,14 @@ def test_every_companion_error_derives_from_the_root() -> None:
 
 
 @pytest.mark.parametrize(
-    "url", ["udpin:0.0.0.0", "serial:/dev/tty:57600", "udpin:0.0.0.0:port", "tcp:h:70000"]
+    "url",
+    [
+        "udpin:0.0.0.0",
+        "serial:/dev/ttyUSB0:fast",
+        "serial::57600",
+        "udpin:0.0.0.0:port",
+        "tcp:h:70000",
+    ],
 )
 def test_a_bad_address_is_an_input_error_naming_it(url: str) -> None:
     with pytest.raises(InputError, match="connection") as raised:
