@@ -104,8 +104,8 @@ ExecStart={exec_start}
 Restart=on-failure
 RestartSec=5
 RestartPreventExitStatus=2 130
-# `systemctl stop`: SIGTERM to the companion alone (KillMode=mixed: MAVSDK's mavsdk_server
-# child keeps the link up), which flies the end action and waits for the landing.
+# `systemctl stop`: SIGTERM to the companion, which flies the end action and waits for the
+# landing; SIGKILL (to it and anything it started: KillMode=mixed) only after TimeoutStopSec.
 KillMode=mixed
 KillSignal=SIGTERM
 TimeoutStopSec={spec.stop_timeout:.0f}

@@ -1,9 +1,11 @@
-"""A full disk under the run directory (a real one: a small tmpfs, filled) is a clear error in
-the log, never a crash: the companion searches, flies its end action and lands, with the
-mission log, the .tlog and the log file each saying once that they could not be written."""
+"""A full disk under the run directory (a real one: a small tmpfs, filled to the last byte
+before the companion starts) is a clear error in the log, never a crash: the companion
+searches, flies its end action and lands, with the mission log, the .tlog and the log file
+each saying once that they could not be written."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import sys
@@ -17,13 +19,11 @@ from tests.emulator_harness import free_udp_base
 from tests.vehicle_venv import BIND_OFFSET, emulator
 
 VENV = Path(sys.executable).parents[1]
-ROOM = 6_000
-"""Bytes left free on the filesystem once filled: the first records fit, the flight does not."""
 
 
 @pytest.fixture
 def full_disk(tmp_path: Path) -> Iterator[Path]:
-    """A 1 MB tmpfs mounted for the test, filled to ``ROOM`` bytes from full."""
+    """A 1 MB tmpfs mounted for the test, filled until a write is refused (ENOSPC)."""
     mount = tmp_path / "disk"
     mount.mkdir()
     if os.geteuid() != 0:
@@ -35,9 +35,9 @@ def full_disk(tmp_path: Path) -> Iterator[Path]:
     if done.returncode != 0:
         pytest.skip(f"cannot mount a tmpfs here: {done.stderr.strip()}")
     try:
-        stat = os.statvfs(mount)
-        free = stat.f_bavail * stat.f_frsize
-        (mount / "filler").write_bytes(b"\0" * (free - ROOM))
+        with (mount / "filler").open("wb", buffering=0) as filler, contextlib.suppress(OSError):
+            while True:
+                filler.write(b"\0" * 512)
         yield mount
     finally:
         subprocess.run(["umount", "-l", str(mount)], check=False)
@@ -66,9 +66,12 @@ def test_a_full_disk_is_an_error_in_the_log_and_the_vehicle_lands(
     assert done.returncode == 0, done.stdout[-2000:] + err[-3000:]
     assert "Traceback" not in err
     assert "--- Logging error ---" not in err
-    assert f"log file {run / 'companion.log'}: [Errno 28] No space left on device" in err
+    assert f"log file {run / 'companion.log'}: [Errno 28] No space left on device" in err, err[
+        -3000:
+    ]
     assert err.count(f"log file {run / 'companion.log'}: [Errno 28]") == 1  # said once
     assert "No space left on device; records are lost" in err  # the mission log
+    assert "No space left on device; no more of the flight is written" in err  # the .tlog
     assert seen.armed_ever
     assert seen.distance > 100.0, f"flew {seen.distance:.0f} m"
     assert not seen.armed
