@@ -21,6 +21,7 @@ from companion.link.address import parse_address
 from companion.link.factory import BACKENDS, Backend, make_link
 from companion.link.serial_device import check_serial
 from companion.mission import MissionConfig
+from companion.mission.battery_reserve import reserve_rule
 from companion.mission.mission_exit import MissionExit
 from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
@@ -145,6 +146,7 @@ def run_command(args: argparse.Namespace) -> int:
         duration=args.duration,
         end_action=FlightMode(end_action),
         battery_min=site.battery_min if site is not None else 20.0,
+        battery_reserve=reserve_rule(site, profile.fleet.speed, end_action),
         land_wait=args.land_wait,
         dedicated_link=args.dedicated_link,
         target_system=args.system_id,

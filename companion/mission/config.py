@@ -7,6 +7,7 @@ from pathlib import Path
 
 from companion.autopilots import FlightMode
 from companion.link.base import SetpointKind
+from companion.mission.battery_reserve import ReserveRule
 from mdm_profiles import MissionProfile
 
 
@@ -29,6 +30,9 @@ class MissionConfig:
     """RTL or LAND at the end of the mission."""
     battery_min: float = 20.0
     """End the mission below this remaining battery, percent."""
+    battery_reserve: ReserveRule | None = None
+    """Also end it when what is left is what the flight home needs plus a reserve
+    (battery_reserve.py); None: the fixed minimum only (profiles without a site)."""
     link_timeout: float = 3.0
     """Wall seconds without HEARTBEAT before the link counts as lost (vehicle time stops with
     the link, so this one timer cannot be in vehicle time)."""

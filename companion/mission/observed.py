@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 from companion.link.messages import GlobalPosition, Heartbeat, LocalPosition, SystemStatus
+from companion.mission.battery_reserve import DrainMeter
 from companion.mission.vehicle_clock import VehicleClock
 
 
@@ -37,6 +38,8 @@ class Observed:
         """Mission time the search began (None: not yet)."""
         self.max_search_speed = 0.0
         """Fastest horizontal speed the vehicle reported while searching, m/s."""
+        self.drain = DrainMeter()
+        """The battery's drain in this flight (the reserve rule's measure)."""
 
     def note_received(self, vehicle_time: float) -> None:
         """A position of ``vehicle_time`` came in (whether or not it is acted on)."""

@@ -49,6 +49,10 @@ class Trace:
     boot_s: float = 0.0
     """The vehicle's own clock (time since boot of its latest position), s: runs at the SITL's
     speed-up as far as the host lets it, not at the nominal one."""
+    battery: int = -1
+    """SYS_STATUS battery_remaining, percent (-1: not known)."""
+    mode_battery: list[int] = field(default_factory=list)
+    """``battery`` when each of ``modes`` was first seen."""
 
 
 class Observer:
@@ -113,6 +117,7 @@ class Observer:
             if msg.custom_mode != t.mode:  # type: ignore[attr-defined]
                 t.mode = msg.custom_mode  # type: ignore[attr-defined]
                 t.modes.append(t.mode)
+                t.mode_battery.append(t.battery)
         elif kind == "GLOBAL_POSITION_INT":
             t.boot_s = msg.time_boot_ms / 1000.0  # type: ignore[attr-defined]
             t.alt = msg.relative_alt / 1000.0  # type: ignore[attr-defined]
@@ -124,6 +129,8 @@ class Observer:
                 t.stamps.append(time.monotonic())
             t.last_position = here
             t.max_speed = max(t.max_speed, math.hypot(msg.vx, msg.vy) / 100.0)  # type: ignore[attr-defined]
+        elif kind == "SYS_STATUS":
+            t.battery = msg.battery_remaining  # type: ignore[attr-defined]
         elif kind == "EXTENDED_SYS_STATE":
             t.landed_state = msg.landed_state  # type: ignore[attr-defined]
         elif kind == "STATUSTEXT":
@@ -205,6 +212,8 @@ class Observer:
                 list(t.track),
                 list(t.stamps),
                 t.boot_s,
+                t.battery,
+                list(t.mode_battery),
             )
 
     def hold(
