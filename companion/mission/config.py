@@ -7,6 +7,7 @@ from pathlib import Path
 
 from companion.autopilots import FlightMode
 from companion.link.base import SetpointKind
+from companion.link.log_transfer import FLIGHT_LOG_WAIT_S
 from companion.mission.battery_reserve import ReserveRule
 from mdm_profiles import MissionProfile
 
@@ -42,6 +43,9 @@ class MissionConfig:
     """Wall seconds between 'waiting for system N' lines while the vehicle is not heard."""
     land_wait: float = 600.0
     """Vehicle seconds to wait for touchdown after the end action; 0 = exit at once."""
+    flight_log_wait: float = FLIGHT_LOG_WAIT_S
+    """Wall seconds to download the autopilot's own log once landed (log_transfer.py); 0 =
+    none."""
     climb_timeout: float = 120.0
     """Vehicle seconds allowed to reach the search altitude before the mission is aborted."""
     dedicated_link: bool = False
@@ -75,3 +79,7 @@ class MissionConfig:
 
     def tlog_path(self) -> Path:
         return self.log_dir / f"vehicle-{self.vehicle}.tlog"
+
+    def autopilot_log_stem(self) -> Path:
+        """The autopilot's own log, without its suffix (.bin, .ulg)."""
+        return self.log_dir / f"autopilot-{self.vehicle}"

@@ -38,6 +38,8 @@ class Observed:
         """Mission time the search began (None: not yet)."""
         self.max_search_speed = 0.0
         """Fastest horizontal speed the vehicle reported while searching, m/s."""
+        self.flew = False
+        """The vehicle was seen more than 1 m up in this run."""
         self.drain = DrainMeter()
         """The battery's drain in this flight (the reserve rule's measure)."""
 
@@ -52,6 +54,7 @@ class Observed:
         t = self.clock.update(pos.time)
         if self.home is None and -pos.down < 1.0:
             self.home = (pos.north, pos.east)
+        self.flew |= -pos.down > 1.0
         if prev is not None and pos.time > prev.time:
             self.period += 0.2 * (min(pos.time - prev.time, 1.0) - self.period)
         self.position = pos
