@@ -77,7 +77,8 @@ def test_the_autopilot_log_is_kept_in_the_run_directory(
     found = re.search(r"vehicle \d+: autopilot log (\S+) \((\d+) bytes\)", said())
     assert found, said()[-3000:]
     kept = Path(found.group(1))
-    assert kept.parent == out and kept.name == f"autopilot-{inst.index}{suffix}"
+    assert kept.parent == out
+    assert kept.name == f"autopilot-{inst.index}{suffix}"
     data = kept.read_bytes()
     assert len(data) == int(found.group(2)) > 10_000
     assert data.startswith(magic)
