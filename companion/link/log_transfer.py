@@ -49,18 +49,26 @@ class LogTransfer:
     every LOG_ENTRY and LOG_DATA of the vehicle there)."""
 
     def __init__(
-        self, mav: Any, send: Callable[[Any], None], target_system: int, *, answer: float = 3.0
+        self,
+        mav: Any,
+        send: Callable[[Any], None],
+        target_system: int,
+        *,
+        answer: float = 3.0,
+        tries: int = 3,
     ) -> None:
         self._mav = mav
         self._send = send
         self._target = target_system
         self._answer = answer
         """Wall seconds to wait for the list's first answer, and for data once asked."""
+        self._tries = tries
+        """Requests in a row that may go unanswered before the download stops."""
         self.inbox: asyncio.Queue[Any] = asyncio.Queue()
 
     async def download(self, stem: Path, limit: float) -> FlightLog:
-        """The newest log into ``stem`` + its format's suffix, within ``limit`` wall s (what
-        came by then is kept and named partial)."""
+        """The newest log into ``stem`` + its format's suffix, within ``limit`` wall s and
+        while the vehicle answers (what came by then is kept and named partial)."""
         entry = await self._newest()
         if isinstance(entry, str):
             return FlightLog(None, note=entry)
@@ -68,13 +76,13 @@ class LogTransfer:
         data = bytearray(size)
         missing = [(0, size)]
         deadline = time.monotonic() + limit
+        silent = 0
         try:
-            while missing and time.monotonic() < deadline:
+            while missing and time.monotonic() < deadline and silent < self._tries:
                 ofs, count = missing[0]
                 self._send(self._mav.log_request_data_encode(self._target, 1, log_id, ofs, count))
                 got = await self._receive(log_id, data, missing, deadline)
-                if not got:
-                    break
+                silent = 0 if got else silent + 1
         finally:
             self._send(self._mav.log_request_end_encode(self._target, 1))
         kept = missing[0][0] if missing else size  # the log up to its first gap
@@ -83,7 +91,7 @@ class LogTransfer:
         path = stem.with_suffix(suffix(bytes(data[:8])))
         path.write_bytes(bytes(data[:kept]))
         if missing:
-            note = f"partial: the first {kept} of {size} bytes within {limit:g} s"
+            note = f"partial: the first {kept} of {size} bytes"
             return FlightLog(path, kept, note)
         return FlightLog(path, size)
 
