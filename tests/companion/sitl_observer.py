@@ -53,6 +53,8 @@ class Trace:
     """SYS_STATUS battery_remaining, percent (-1: not known)."""
     mode_battery: list[int] = field(default_factory=list)
     """``battery`` when each of ``modes`` was first seen."""
+    params: dict[str, float] = field(default_factory=dict)
+    """Every PARAM_VALUE on this link (the echoes of :meth:`Observer.set_param`)."""
 
 
 class Observer:
@@ -129,6 +131,9 @@ class Observer:
                 t.stamps.append(time.monotonic())
             t.last_position = here
             t.max_speed = max(t.max_speed, math.hypot(msg.vx, msg.vy) / 100.0)  # type: ignore[attr-defined]
+        elif kind == "PARAM_VALUE":
+            name = msg.param_id  # type: ignore[attr-defined]
+            t.params[name.decode() if isinstance(name, bytes) else name] = msg.param_value  # type: ignore[attr-defined]
         elif kind == "SYS_STATUS":
             t.battery = msg.battery_remaining  # type: ignore[attr-defined]
         elif kind == "EXTENDED_SYS_STATE":
@@ -159,6 +164,14 @@ class Observer:
         full = [*params, *[0.0] * (7 - len(params))]
         with self._send_lock:
             self._conn.mav.command_long_send(self.sysid, 1, command, 0, *full)
+
+    def set_param(self, name: str, value: float) -> None:
+        """PARAM_SET (REAL32), as a ground station sends it (the echo not awaited): the SITL's
+        own SIM_* parameters change the simulated world mid-flight."""
+        with self._send_lock:
+            self._conn.mav.param_set_send(
+                self.sysid, 1, name.encode(), value, mavlink2.MAV_PARAM_TYPE_REAL32
+            )
 
     def read_fence(self) -> list[tuple[int, int, int]]:
         """The fence items the vehicle stores, (command, lat, lon) in 1e-7 degrees, downloaded
@@ -214,6 +227,7 @@ class Observer:
                 t.boot_s,
                 t.battery,
                 list(t.mode_battery),
+                dict(t.params),
             )
 
     def hold(
