@@ -1,8 +1,9 @@
 """What a field engineer keeps: after a short search and the landing, `companion run` downloads
 the autopilot's own log of the flight over MAVLink (LOG_REQUEST_LIST / LOG_REQUEST_DATA) into
 the run directory and prints where it is. On stock ArduCopter (dataflash ``.bin``) and PX4 SIH
-(``.ulg``): the file starts with its format's magic and is, byte for byte, the log the autopilot
-wrote on its own disk (the SITL's working directory), read there by the test."""
+(``.ulg``): the file starts with its format's magic and is, byte for byte, a log the autopilot
+wrote on its own disk (the SITL's working directory, read there by the test) as far as it was
+written when asked for."""
 
 from __future__ import annotations
 
@@ -82,6 +83,12 @@ def test_the_autopilot_log_is_kept_in_the_run_directory(
     data = kept.read_bytes()
     assert len(data) == int(found.group(2)) > 10_000
     assert data.startswith(magic)
-    own = max(inst.workdir.rglob(pattern), key=lambda p: p.stat().st_mtime)
-    assert own.read_bytes()[: len(data)] == data, f"{kept} differs from the autopilot's {own}"
-    print(f"\n{kind}: autopilot log {kept} ({len(data)} bytes), equal to the autopilot's {own}")
+    # one of the logs on the autopilot's disk, as far as it was written when asked for
+    own = {p: p.read_bytes() for p in inst.workdir.rglob(pattern)}
+    equal = [p for p, written in own.items() if written[: len(data)] == data]
+    sizes = {str(p): len(b) for p, b in own.items()}
+    assert equal, f"{kept} ({len(data)} bytes) is none of the autopilot's logs {sizes}"
+    print(
+        f"\n{kind}: autopilot log {kept} ({len(data)} bytes) is the autopilot's {equal[0]} "
+        f"({len(own[equal[0]])} bytes on its disk); its logs: {sizes}"
+    )
