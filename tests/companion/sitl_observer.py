@@ -20,6 +20,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 _STREAMS = (
     mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
     mavlink2.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
+    mavlink2.MAVLINK_MSG_ID_SYS_STATUS,  # the battery: ArduCopter's SERIAL1 sends it only if asked
 )
 
 
