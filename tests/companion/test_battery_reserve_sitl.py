@@ -83,7 +83,7 @@ def _fly(
 
     try:
         wait_until(landed_after_rtl, 900.0, "RTL by itself, landed, disarmed", context=context)
-        assert companion.wait(timeout=60) == 1, context()  # a battery end is a fault end
+        assert companion.wait(timeout=400) == 1, context()  # a battery end: a fault end
         trace = obs.snapshot()
         assert trace.battery >= 0, "the observer never heard SYS_STATUS's battery"
         at_rtl = trace.mode_battery[trace.modes.index(RTL)]
