@@ -81,7 +81,7 @@ class LogTransfer:
             while missing and time.monotonic() < deadline and silent < self._tries:
                 ofs, count = missing[0]
                 self._send(self._mav.log_request_data_encode(self._target, 1, log_id, ofs, count))
-                got = await self._receive(log_id, data, missing, deadline)
+                got = await self._receive(log_id, data, missing, (ofs, ofs + count), deadline)
                 silent = 0 if got else silent + 1
         finally:
             self._send(self._mav.log_request_end_encode(self._target, 1))
@@ -120,12 +120,17 @@ class LogTransfer:
         return newest, entries[newest]
 
     async def _receive(
-        self, log_id: int, data: bytearray, missing: list[tuple[int, int]], deadline: float
+        self,
+        log_id: int,
+        data: bytearray,
+        missing: list[tuple[int, int]],
+        asked: tuple[int, int],
+        deadline: float,
     ) -> bool:
-        """LOG_DATA into ``data`` until the first missing range is filled or the vehicle goes
-        quiet; ``missing`` is updated. False when nothing came at all."""
+        """LOG_DATA into ``data`` until nothing of the range ``asked`` is missing or the
+        vehicle goes quiet; ``missing`` is updated. False when nothing came at all."""
         got = False
-        while missing:
+        while _overlaps(missing, *asked):
             left = min(self._answer, deadline - time.monotonic())
             if left <= 0:
                 return got
@@ -150,6 +155,11 @@ class LogTransfer:
     def _drain(self) -> None:
         while not self.inbox.empty():
             self.inbox.get_nowait()
+
+
+def _overlaps(missing: list[tuple[int, int]], start: int, end: int) -> bool:
+    """Whether any of [start, end) is still in ``missing``."""
+    return any(ofs < end and start < ofs + count for ofs, count in missing)
 
 
 def _take(missing: list[tuple[int, int]], start: int, end: int) -> None:
