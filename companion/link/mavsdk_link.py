@@ -85,6 +85,7 @@ class MavsdkLink(VehicleLink):
         self.address = parse_address(url)
         self.target_system = target_system
         self._ids = (system_id, component_id)
+        self.own_system = system_id
         self._tlog_path = tlog
         self._tlog: TelemetryLog | None = None
         self._discover_timeout = discover_timeout
