@@ -33,10 +33,10 @@ from numpy.typing import NDArray
 from mdm_core.search.from_profile import policy_config
 from mdm_core.world import Scenario, TargetTracks
 from mdm_montecarlo.kernels.block_rounds import DONE, fly_rounds
-from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
+from mdm_montecarlo.kernels.compiled_step import CompiledPolicy, lane_state
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
-from mdm_montecarlo.kernels.compiled_waypoints import RULES
 from mdm_montecarlo.kernels.remembered import RememberedTargets
+from mdm_montecarlo.kernels.round_state import Block, Flight, Paths
 from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]
@@ -91,7 +91,8 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     position = start.reshape(n, 2).copy()
     time = np.zeros(n)
     state = policy.start(position, time, rng_policy)
-    assert policy.table is not None  # else start raised the numpy draws' error
+    rules = policy.rules
+    assert rules is not None  # else start raised the numpy draws' error
 
     targets = scenario.targets
     m = targets.count
@@ -104,53 +105,31 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         stop = np.minimum(np.maximum(last, duration), cap)
     active = np.ones(n, dtype=bool)
     remembered = RememberedTargets(policy.config.memory_radius, tracks, n, m)
-    config = policy.config
+    flight = Flight(position, time, active, first, stop, gone_or_inf)
+    fixed = Block(
+        n_vehicles,
+        speed,
+        duration,
+        cap,
+        targets.false_mask,
+        targets.appear_times,
+        ~targets.false_mask,
+    )
     events = 0
     visible = tracks.max_speed  # the first round checks its windows before any path is drawn
     seg_start, seg_velocity = tracks.segments(0.0)
     while True:
-        status, reach, rounds, state.memory = fly_rounds(
-            state.level,
-            state.entered,
-            state.blind_until,
-            state.anchor,
-            state.waypoint,
-            state.memory,
-            state.memory_count,
-            position,
-            time,
-            active,
-            first,
-            stop,
-            gone_or_inf,
-            remembered.known,
-            remembered.until,
-            remembered.speed,
-            visible,
-            tracks.max_speed,
+        paths = Paths(
             seg_start,
             seg_velocity,
             tracks.filled,
             tracks.grid_dt,
             tracks.moving,
-            targets.false_mask,
-            targets.appear_times,
-            ~targets.false_mask,
-            policy.lifetimes,
-            policy.radii,
-            policy.memory_rule,
-            float(config.memory_radius),
-            float(config.fallback_blind_time),
-            policy.table,
-            policy.area,
-            RULES[config.out_of_area],
-            config.waypoint_origin == "anchor",
-            config.confine_to_detection,
-            n_vehicles,
-            speed,
-            duration,
-            cap,
-            rng_policy,
+            visible,
+            tracks.max_speed,
+        )
+        status, reach, rounds, state.memory = fly_rounds(
+            lane_state(state), flight, remembered.arrays, paths, fixed, rules, rng_policy
         )
         events += rounds
         if status == DONE:

@@ -44,8 +44,16 @@ from mdm_montecarlo.kernels import swarm_kernels as kernels
 from mdm_montecarlo.kernels import waypoint_legs
 from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
-from mdm_montecarlo.kernels.compiled_waypoints import RULES
-from mdm_montecarlo.kernels.waypoint_rounds import RULE_COLUMNS, VARIANTS, fly_waypoints
+from mdm_montecarlo.kernels.waypoint_rounds import (
+    RULE_COLUMNS,
+    VARIANTS,
+    Found,
+    Particles,
+    Sensing,
+    Steps,
+    Swarm,
+    fly_waypoints,
+)
 from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]
@@ -84,27 +92,30 @@ def run_waypoint_swarm_block(
     if config.variant == "spso":
         links = kernels.informants(rng.random((n_runs, n_vehicles, n_vehicles)), spec.informants)
     waypoint = explorer.explore(position.reshape(n, 2), rng).reshape(*shape, 2)
-    assert explorer.table is not None  # else explore raised the numpy draws' error
-    end, iterations, followed = fly_waypoints(
-        VARIANTS[config.variant],
-        rules_of(config),
-        spec.informants,
+    assert explorer.draws is not None  # else explore raised the numpy draws' error
+    swarm = Swarm(VARIANTS[config.variant], rules_of(config), spec.informants, explorer.draws)
+    steps = Steps(
         times,
         dt,
         profile.fleet.speed * dt,
         # The time-stepped loop stops from the first step past the mission duration on.
         max(int(np.searchsorted(times, profile.mission.duration)), 1),
+        np.asarray(scenario.area.size, dtype=float),
+    )
+    particles = Particles(
         position,
         waypoint,
         waypoint - position,
         own.position,
         own.fitness,
         own.source,
-        np.zeros(shape),  # each particle's reading at its last waypoint
-        np.full(shape, -1, dtype=np.intp),  # and the target it came from
-        np.zeros(shape),  # the reading as its current fitness (ARPSO's aggregation degree)
+        np.zeros(shape),
+        np.full(shape, -1, dtype=np.intp),
+        np.zeros(shape),
         links,
-        np.zeros(shape),  # SPSO: the local best each particle steered by at its last arrival
+        np.zeros(shape),
+    )
+    sensing = Sensing(
         seg_start,
         seg_velocity,
         tracks.grid_dt,
@@ -117,17 +128,9 @@ def run_waypoint_swarm_block(
         radius * radius * NEAR,
         not spec.read_confirmed,
         spec.after_confirmation == "forget",
-        explorer.table,
-        explorer.area,
-        RULES[explorer.config.out_of_area],
-        explorer.config.waypoint_origin == "anchor",
-        explorer.config.confine_to_detection,
-        np.asarray(scenario.area.size, dtype=float),
-        known_step,
-        conf_time,
-        conf_step,
-        rng,
     )
+    found = Found(known_step, conf_time, conf_step)
+    end, iterations, followed = fly_waypoints(swarm, steps, particles, sensing, found, rng)
     first = waypoint_legs.keep_first(conf_time, conf_step, known_step, end, n_vehicles)
     gone = departures(profile, tracks, stop)
     return BlockResult(

@@ -13,13 +13,15 @@ the bit (tests/montecarlo/test_waypoint_legs.py against the swarm stepped every 
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numpy.typing import NDArray
 
 from mdm_core.jit import compiled
 from mdm_montecarlo.kernels import swarm_kernels as kernels
 from mdm_montecarlo.kernels import waypoint_kernels
-from mdm_montecarlo.kernels.compiled_waypoints import next_waypoints
+from mdm_montecarlo.kernels.compiled_waypoints import Draws, next_waypoints
 from mdm_montecarlo.kernels.waypoint_legs import forget_confirmed, read_arrivals, walk_legs
 
 FloatArray = NDArray[np.float64]
@@ -54,29 +56,91 @@ RULE_COLUMNS = (
 ) = range(len(RULE_COLUMNS))
 
 
+class Swarm(NamedTuple):
+    """A configuration's swarm as the kernels read it, built once per configuration."""
+
+    variant: int
+    """PSO, SPSO or ARPSO."""
+    rules: FloatArray
+    """Its constants, in the order of RULE_COLUMNS."""
+    informants: int
+    """SPSO: the informants each particle links to."""
+    draws: Draws
+    """The explorers' level-1 waypoint draws."""
+
+
+class Steps(NamedTuple):
+    """The time-stepped loop the waypoint swarm reproduces, and the area its particles fly in."""
+
+    times: FloatArray
+    """Every step's time, seconds (waypoint_swarm._step_times)."""
+    dt: float
+    distance: float
+    """Metres a particle flies in one step."""
+    past_duration: int
+    """The first step past the mission duration (the loop may stop from there on)."""
+    area: FloatArray
+    """The area's (north, east) size, metres."""
+
+
+class Particles(NamedTuple):
+    """Every particle's arrays, (runs, vehicles, ...), updated in place."""
+
+    position: FloatArray
+    waypoint: FloatArray
+    velocity: FloatArray
+    own_position: FloatArray
+    own_fitness: FloatArray
+    own_source: IntArray
+    reading: FloatArray
+    """Its reading at its last waypoint."""
+    source: IntArray
+    """The target that reading came from (-1: none)."""
+    current: FloatArray
+    """The reading as its current fitness (ARPSO's aggregation degree)."""
+    links: BoolArray
+    """(runs, vehicles, vehicles) whom each particle hears."""
+    local_fitness: FloatArray
+    """SPSO: the local best each particle steered by at its last arrival."""
+
+
+class Sensing(NamedTuple):
+    """The targets as the particles sense and confirm them."""
+
+    seg_start: FloatArray
+    seg_velocity: FloatArray
+    grid_dt: float
+    moving: bool
+    top_speed: float
+    appear: FloatArray
+    real: BoolArray
+    confirm_radius: float
+    signal_radius: float
+    near: float
+    """Squared metres within which a reading counts as at the target."""
+    unread_known: bool
+    """A run's confirmed targets give no more readings (not policy.swarm.read_confirmed)."""
+    forget: bool
+    """Forget the bests of confirmed targets (after_confirmation: forget)."""
+
+
+class Found(NamedTuple):
+    """The confirmations, updated in place (waypoint_legs.walk_legs)."""
+
+    known_step: IntArray
+    """(runs, m) the step at which each run first confirms each target."""
+    conf_time: FloatArray
+    """(lanes, m) each particle's first confirmation time."""
+    conf_step: IntArray
+    """(lanes, m) and its step."""
+
+
 @compiled
 def arrive(
-    variant: int,
-    rules: FloatArray,
-    informants: int,
+    swarm: Swarm,
     run: IntArray,
     lane: IntArray,
-    own_position: FloatArray,
-    own_fitness: FloatArray,
-    own_source: IntArray,
-    position: FloatArray,
-    reading: FloatArray,
-    source: IntArray,
-    current: FloatArray,
-    velocity: FloatArray,
-    waypoint: FloatArray,
-    links: BoolArray,
-    local_fitness: FloatArray,
-    table: FloatArray,
-    bounds: FloatArray,
-    rule: int,
-    from_anchor: bool,
-    confine: bool,
+    particles: Particles,
     area: FloatArray,
     rng: np.random.Generator,
 ) -> int:
@@ -90,6 +154,20 @@ def arrive(
     arrivals, 1, 2); SPSO the normals (arrivals, 1, 2), the radii's uniforms (arrivals, 1),
     then the informant keys (stuck, vehicles) of those stuck; then the explorers' level-1
     waypoints (SearchPolicy.start's draw, compiled_waypoints.next_waypoints)."""
+    variant, rules, informants = swarm.variant, swarm.rules, swarm.informants
+    (
+        position,
+        waypoint,
+        velocity,
+        own_position,
+        own_fitness,
+        own_source,
+        reading,
+        source,
+        current,
+        links,
+        local_fitness,
+    ) = particles
     count = run.shape[0]
     n = own_fitness.shape[1]
     previous = waypoint_kernels.take_readings(
@@ -224,15 +302,7 @@ def arrive(
                 start[k, 1] = position[run[a], lane[a], 1]
                 k += 1
         drawn_waypoints = next_waypoints(
-            table,
-            np.zeros(lost, dtype=np.intp),
-            start.copy(),
-            start,
-            bounds,
-            rule,
-            from_anchor,
-            confine,
-            rng,
+            swarm.draws, np.zeros(lost, dtype=np.intp), start.copy(), start, rng
         )
         k = 0
         for a in range(count):
@@ -250,45 +320,11 @@ def arrive(
 
 @compiled
 def fly_waypoints(
-    variant: int,
-    rules: FloatArray,
-    informants: int,
-    times: FloatArray,
-    dt: float,
-    distance: float,
-    past_duration: int,
-    position: FloatArray,
-    waypoint: FloatArray,
-    velocity: FloatArray,
-    own_position: FloatArray,
-    own_fitness: FloatArray,
-    own_source: IntArray,
-    reading: FloatArray,
-    source: IntArray,
-    current: FloatArray,
-    links: BoolArray,
-    local_fitness: FloatArray,
-    seg_start: FloatArray,
-    seg_velocity: FloatArray,
-    grid_dt: float,
-    moving: bool,
-    top_speed: float,
-    appear: FloatArray,
-    real: BoolArray,
-    confirm_radius: float,
-    signal_radius: float,
-    near: float,
-    unread_known: bool,
-    forget: bool,
-    table: FloatArray,
-    bounds: FloatArray,
-    rule: int,
-    from_anchor: bool,
-    confine: bool,
-    area: FloatArray,
-    known_step: IntArray,
-    conf_time: FloatArray,
-    conf_step: IntArray,
+    swarm: Swarm,
+    steps: Steps,
+    particles: Particles,
+    sensing: Sensing,
+    found: Found,
     rng: np.random.Generator,
 ) -> tuple[int, int, int]:
     """The whole block: every particle's first leg from step 0, then round after round to the
@@ -297,6 +333,22 @@ def fly_waypoints(
     step). The particles' arrays are (runs, vehicles, ...) and updated in place, as are
     ``known_step``, ``conf_time`` and ``conf_step`` (waypoint_legs.walk_legs). Returns the last
     step, the iterations (arrivals) and how many of them followed another vehicle's best."""
+    times, dt, distance, past_duration, area = steps
+    position, waypoint, own_fitness, own_source = (
+        particles.position,
+        particles.waypoint,
+        particles.own_fitness,
+        particles.own_source,
+    )
+    reading, source = particles.reading, particles.source
+    seg_start, seg_velocity, grid_dt, moving = (
+        sensing.seg_start,
+        sensing.seg_velocity,
+        sensing.grid_dt,
+        sensing.moving,
+    )
+    appear, real = sensing.appear, sensing.real
+    known_step, conf_time, conf_step = found
     runs, n_vehicles = own_fitness.shape
     n = runs * n_vehicles
     last = times.shape[0] - 1
@@ -323,10 +375,10 @@ def fly_waypoints(
             seg_velocity,
             grid_dt,
             moving,
-            top_speed,
+            sensing.top_speed,
             appear,
             real,
-            confirm_radius,
+            sensing.confirm_radius,
             known_step,
             conf_time,
             conf_step,
@@ -357,45 +409,21 @@ def fly_waypoints(
             moving,
             appear,
             t,
-            signal_radius,
-            near,
+            sensing.signal_radius,
+            sensing.near,
             known_step,
             due,
-            unread_known,
+            sensing.unread_known,
             n_vehicles,
             reading.reshape(n),
             source.reshape(n),
         )
-        if forget:
+        if sensing.forget:
             forget_confirmed(
                 own_fitness.reshape(n), own_source.reshape(n), known_step, due, n_vehicles
             )
         iterations += arrived.size
-        followed += arrive(
-            variant,
-            rules,
-            informants,
-            arrived // n_vehicles,
-            arrived % n_vehicles,
-            own_position,
-            own_fitness,
-            own_source,
-            position,
-            reading,
-            source,
-            current,
-            velocity,
-            waypoint,
-            links,
-            local_fitness,
-            table,
-            bounds,
-            rule,
-            from_anchor,
-            confine,
-            area,
-            rng,
-        )
+        followed += arrive(swarm, arrived // n_vehicles, arrived % n_vehicles, particles, area, rng)
         if end == due:
             # The stepped loop stops after this step's arrivals: their next legs are not flown.
             return end, iterations, followed

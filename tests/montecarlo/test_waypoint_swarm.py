@@ -10,8 +10,9 @@ from mdm_core.search.from_profile import policy_config
 from mdm_core.search.pso import Best
 from mdm_montecarlo.engines.runner import run_missions
 from mdm_montecarlo.engines.social_engine import run_swarm_block
-from mdm_montecarlo.engines.waypoint_swarm import swarm_rules
+from mdm_montecarlo.engines.waypoint_swarm import rules_of, swarm_rules
 from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
+from mdm_montecarlo.kernels.waypoint_rounds import VARIANTS, Particles, Swarm
 from mdm_montecarlo.study.cases import Case
 from mdm_profiles import MissionProfile
 from mdm_profiles.loader import ProfileError
@@ -98,23 +99,23 @@ def _arrive_one(
     waypoint = np.array([[[1000.0, 1000.0], [16000.0, 1000.0], [900.0, 900.0]]])
     velocity = np.zeros((1, 3, 2))
     links = np.ones((1, 3, 3), dtype=bool) & ~np.eye(3, dtype=bool)
-    followed = arrive_reached(
-        config,
-        informants,
-        CompiledPolicy(policy_config(profile)),
-        own,
-        reached,
+    draws = CompiledPolicy(policy_config(profile)).draws
+    assert draws is not None
+    swarm = Swarm(VARIANTS[config.variant], rules_of(config), informants, draws)
+    particles = Particles(
         position,
+        waypoint,
+        velocity,
+        own.position,
+        own.fitness,
+        own.source,
         np.zeros((1, 3)),
         np.full((1, 3), -1),
         np.zeros((1, 3)),
-        velocity,
-        waypoint,
         links,
         np.full((1, 3), local_fitness),
-        np.array([20000.0, 20000.0]),
-        rng,
     )
+    followed = arrive_reached(swarm, reached, particles, np.array([20000.0, 20000.0]), rng)
     return followed, position, waypoint, velocity, links
 
 
