@@ -30,10 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_core.search.from_profile import policy_config
-from mdm_core.world import Scenario, TargetTracks
+from mdm_core.world import TargetTracks
+from mdm_montecarlo.engines.configuration import Configuration
 from mdm_montecarlo.kernels.block_rounds import DONE, fly_rounds
-from mdm_montecarlo.kernels.compiled_step import CompiledPolicy, lane_state
+from mdm_montecarlo.kernels.compiled_step import lane_state
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
 from mdm_montecarlo.kernels.remembered import RememberedTargets
 from mdm_montecarlo.kernels.round_state import Block, Flight, Paths
@@ -75,10 +75,10 @@ def block_rngs(seed: int, block: int) -> tuple[np.random.Generator, ...]:
     return tuple(np.random.default_rng(c) for c in children)
 
 
-def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
-    """Simulate ``n_runs`` missions of the profile; block index ``block`` fixes the random streams."""
-    scenario = Scenario.from_profile(profile)
-    policy = CompiledPolicy(policy_config(profile))
+def run_block(configuration: Configuration, seed: int, block: int, n_runs: int) -> BlockResult:
+    """Simulate ``n_runs`` missions of the configuration; block index ``block`` fixes the
+    random streams."""
+    profile, scenario, policy = configuration.profile, configuration.scenario, configuration.search
     rng_targets, rng_start, rng_policy = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
     speed = profile.fleet.speed

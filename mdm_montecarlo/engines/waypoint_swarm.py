@@ -35,14 +35,12 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.pso import Best, SwarmConfig
-from mdm_core.world import Scenario
+from mdm_montecarlo.engines.configuration import Configuration
 from mdm_montecarlo.engines.engine import BlockResult, block_rngs, departures
 from mdm_montecarlo.engines.swarm_sensors import NEAR
 from mdm_montecarlo.kernels import swarm_kernels as kernels
 from mdm_montecarlo.kernels import waypoint_legs
-from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
 from mdm_montecarlo.kernels.waypoint_rounds import (
     RULE_COLUMNS,
@@ -54,22 +52,21 @@ from mdm_montecarlo.kernels.waypoint_rounds import (
     Swarm,
     fly_waypoints,
 )
-from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 
 def run_waypoint_swarm_block(
-    profile: MissionProfile, seed: int, block: int, n_runs: int
+    configuration: Configuration, seed: int, block: int, n_runs: int
 ) -> BlockResult:
     """Simulate ``n_runs`` missions of a pso/spso/arpso profile whose swarm iterates per
     waypoint (block ``block`` of ``seed``). ``events`` counts the particles' iterations
     (arrivals), ``followed`` those that went for a best held by another vehicle."""
-    scenario = Scenario.from_profile(profile)
+    profile, scenario = configuration.profile, configuration.scenario
     spec = profile.policy.swarm
-    config = swarm_rules(profile)
-    explorer = CompiledPolicy(policy_config(profile))
+    config = swarm_rules(configuration)
+    explorer = configuration.search
     rng_targets, rng_start, rng = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
     shape = (n_runs, n_vehicles)
@@ -81,7 +78,7 @@ def run_waypoint_swarm_block(
     targets = scenario.targets
     tracks = shared_tracks(scenario, n_runs, rng_targets, stop)
     seg_start, seg_velocity = tracks.segments(float(times[-1]))
-    radius = signal_radius(profile)
+    radius = configuration.signal_radius
     position = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
     # The step at which each run first confirms each target (last + 1: not by the last step).
     known_step = np.full((n_runs, targets.count), last + 1, dtype=np.intp)
@@ -138,11 +135,11 @@ def run_waypoint_swarm_block(
     )
 
 
-def swarm_rules(profile: MissionProfile) -> SwarmConfig:
-    """The profile's swarm with |v| at most the single-sensor step delta_1 (level 1's step)."""
-    return replace(
-        swarm_config(profile), max_step=profile.policy.levels[0].step, constant_speed=False
-    )
+def swarm_rules(configuration: Configuration) -> SwarmConfig:
+    """The configuration's swarm with |v| at most the single-sensor step delta_1 (level 1's
+    step)."""
+    step = configuration.profile.policy.levels[0].step
+    return replace(configuration.swarm_rules, max_step=step, constant_speed=False)
 
 
 def rules_of(config: SwarmConfig) -> FloatArray:

@@ -11,6 +11,7 @@ from mdm_core.search.from_profile import policy_config, signal_radius
 from mdm_core.search.pso import Best
 from mdm_core.search.swarm_iteration import explore
 from mdm_core.world import Scenario
+from mdm_montecarlo.engines.configuration import configure
 from mdm_montecarlo.engines.engine import BlockResult, block_rngs
 from mdm_montecarlo.engines.swarm_sensors import SwarmSensors
 from mdm_montecarlo.engines.waypoint_swarm import rules_of, swarm_rules
@@ -25,7 +26,7 @@ def stepped_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -
     """run_waypoint_swarm_block, every particle flown, sensed and confirmed on every step."""
     scenario = Scenario.from_profile(profile)
     spec = profile.policy.swarm
-    config = swarm_rules(profile)
+    config = swarm_rules(configure(profile))
     explorer = CompiledPolicy(policy_config(profile))
     rng_targets, rng_start, rng = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
