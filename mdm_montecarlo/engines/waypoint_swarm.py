@@ -42,16 +42,8 @@ from mdm_montecarlo.engines.swarm_sensors import NEAR
 from mdm_montecarlo.kernels import swarm_kernels as kernels
 from mdm_montecarlo.kernels import waypoint_legs
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
-from mdm_montecarlo.kernels.waypoint_rounds import (
-    RULE_COLUMNS,
-    VARIANTS,
-    Found,
-    Particles,
-    Sensing,
-    Steps,
-    Swarm,
-    fly_waypoints,
-)
+from mdm_montecarlo.kernels.swarm_state import Found, Particles, Sensing, Steps, Swarm
+from mdm_montecarlo.kernels.waypoint_rounds import RULE_COLUMNS, VARIANTS, fly_waypoints
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

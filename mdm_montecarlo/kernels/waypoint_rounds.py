@@ -13,15 +13,14 @@ the bit (tests/montecarlo/test_waypoint_legs.py against the swarm stepped every 
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
 from numpy.typing import NDArray
 
 from mdm_core.jit import compiled
 from mdm_montecarlo.kernels import swarm_kernels as kernels
 from mdm_montecarlo.kernels import waypoint_kernels
-from mdm_montecarlo.kernels.compiled_waypoints import Draws, next_waypoints
+from mdm_montecarlo.kernels.compiled_waypoints import next_waypoints
+from mdm_montecarlo.kernels.swarm_state import Found, Particles, Sensing, Steps, Swarm
 from mdm_montecarlo.kernels.waypoint_legs import forget_confirmed, read_arrivals, walk_legs
 
 FloatArray = NDArray[np.float64]
@@ -56,85 +55,6 @@ RULE_COLUMNS = (
 ) = range(len(RULE_COLUMNS))
 
 
-class Swarm(NamedTuple):
-    """A configuration's swarm as the kernels read it, built once per configuration."""
-
-    variant: int
-    """PSO, SPSO or ARPSO."""
-    rules: FloatArray
-    """Its constants, in the order of RULE_COLUMNS."""
-    informants: int
-    """SPSO: the informants each particle links to."""
-    draws: Draws
-    """The explorers' level-1 waypoint draws."""
-
-
-class Steps(NamedTuple):
-    """The time-stepped loop the waypoint swarm reproduces, and the area its particles fly in."""
-
-    times: FloatArray
-    """Every step's time, seconds (waypoint_swarm._step_times)."""
-    dt: float
-    distance: float
-    """Metres a particle flies in one step."""
-    past_duration: int
-    """The first step past the mission duration (the loop may stop from there on)."""
-    area: FloatArray
-    """The area's (north, east) size, metres."""
-
-
-class Particles(NamedTuple):
-    """Every particle's arrays, (runs, vehicles, ...), updated in place."""
-
-    position: FloatArray
-    waypoint: FloatArray
-    velocity: FloatArray
-    own_position: FloatArray
-    own_fitness: FloatArray
-    own_source: IntArray
-    reading: FloatArray
-    """Its reading at its last waypoint."""
-    source: IntArray
-    """The target that reading came from (-1: none)."""
-    current: FloatArray
-    """The reading as its current fitness (ARPSO's aggregation degree)."""
-    links: BoolArray
-    """(runs, vehicles, vehicles) whom each particle hears."""
-    local_fitness: FloatArray
-    """SPSO: the local best each particle steered by at its last arrival."""
-
-
-class Sensing(NamedTuple):
-    """The targets as the particles sense and confirm them."""
-
-    seg_start: FloatArray
-    seg_velocity: FloatArray
-    grid_dt: float
-    moving: bool
-    top_speed: float
-    appear: FloatArray
-    real: BoolArray
-    confirm_radius: float
-    signal_radius: float
-    near: float
-    """Squared metres within which a reading counts as at the target."""
-    unread_known: bool
-    """A run's confirmed targets give no more readings (not policy.swarm.read_confirmed)."""
-    forget: bool
-    """Forget the bests of confirmed targets (after_confirmation: forget)."""
-
-
-class Found(NamedTuple):
-    """The confirmations, updated in place (waypoint_legs.walk_legs)."""
-
-    known_step: IntArray
-    """(runs, m) the step at which each run first confirms each target."""
-    conf_time: FloatArray
-    """(lanes, m) each particle's first confirmation time."""
-    conf_step: IntArray
-    """(lanes, m) and its step."""
-
-
 @compiled
 def arrive(
     swarm: Swarm,
@@ -155,24 +75,13 @@ def arrive(
     then the informant keys (stuck, vehicles) of those stuck; then the explorers' level-1
     waypoints (SearchPolicy.start's draw, compiled_waypoints.next_waypoints)."""
     variant, rules, informants = swarm.variant, swarm.rules, swarm.informants
-    (
-        position,
-        waypoint,
-        velocity,
-        own_position,
-        own_fitness,
-        own_source,
-        reading,
-        source,
-        current,
-        links,
-        local_fitness,
-    ) = particles
+    position, waypoint, velocity = particles.position, particles.waypoint, particles.velocity
+    own_position, own_fitness = particles.own_position, particles.own_fitness
+    own_source, current, links = particles.own_source, particles.current, particles.links
+    local_fitness = particles.local_fitness
     count = run.shape[0]
     n = own_fitness.shape[1]
-    previous = waypoint_kernels.take_readings(
-        run, lane, position, reading, source, current, own_position, own_fitness, own_source
-    )
+    previous = waypoint_kernels.take_readings(run, lane, particles)
     # The runs with arrivals (``run`` is sorted) and each arrival's row among them.
     slot = np.empty(count, dtype=np.intp)
     hits = 0
