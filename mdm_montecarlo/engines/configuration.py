@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.pso import SwarmConfig
 from mdm_core.world import Scenario
-from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
+from mdm_montecarlo.kernels.policy_step import CompiledPolicy
 from mdm_profiles import MissionProfile
 
 SWARM_KINDS = ("pso", "spso", "arpso")

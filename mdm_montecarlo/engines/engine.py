@@ -14,7 +14,7 @@ Vehicles do not communicate, so lanes of one run only share the targets; the tea
 the minimum over its vehicles of each target's first confirmation time.
 
 Speed: a round's loops over the lanes are compiled with numba (``round_kernels``), and so is
-the policy (``compiled_step``: the numpy ``SearchPolicy``'s step and waypoint draws, bit for
+the policy (``policy_step``: the numpy ``SearchPolicy``'s step and waypoint draws, bit for
 bit, from the same random stream); ``block_rounds.fly_rounds`` runs the rounds one after
 another in one compiled loop, back in Python only to grow the dynamic targets' paths. The
 companion flies the numpy policy.
@@ -33,8 +33,8 @@ from numpy.typing import NDArray
 from mdm_core.world import TargetTracks
 from mdm_montecarlo.engines.configuration import Configuration
 from mdm_montecarlo.kernels.block_rounds import DONE, fly_rounds
-from mdm_montecarlo.kernels.compiled_step import lane_state
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
+from mdm_montecarlo.kernels.policy_step import lane_state
 from mdm_montecarlo.kernels.remembered import RememberedTargets
 from mdm_montecarlo.kernels.round_state import Block, Flight, Paths
 from mdm_profiles import MissionProfile

@@ -9,7 +9,7 @@ mdm_core.search.swarm_iteration, shared with the live companion):
 1. every vehicle with a best to follow (its own or one it heard of, fitness > 0) takes the PSO
    step of its variant (mdm_core.search.pso); the others fly the single-sensor exploration of
    the profile's level 1 (mdm_core.search.SearchPolicy, US with delta_1 by default; its
-   waypoints drawn by the compiled draws of mdm_montecarlo.kernels.compiled_waypoints, the same numbers);
+   waypoints drawn by the compiled draws of mdm_montecarlo.kernels.policy_waypoints, the same numbers);
 2. the step is flown as a straight segment at most speed x interval long (clipped to the area);
    a real target whose r_2 disc the segment enters is confirmed (closed form,
    mdm_core.world.first_entry_time) and becomes known to that vehicle;

@@ -2,7 +2,7 @@
 
 A round moves every active lane to its next event: ``legs``, the remembered targets
 (``remembered.eligible``), ``advance``, the policy step and its memory update
-(``compiled_step``), ``record``. Called from Python, each round cost two dozen numpy calls
+(``policy_step``), ``record``. Called from Python, each round cost two dozen numpy calls
 and six kernel dispatches around those loops, about a sixth of the MDM rows' CPU time over
 their 18 000 rounds (benchmarks/README.md, "2026-11-23 to 2026-11-26: reproduce's speed, change
 by change"). Here the same kernels run in the same
@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from mdm_core.jit import compiled
 from mdm_core.world.targets import NODE_EPS
-from mdm_montecarlo.kernels.compiled_step import (
+from mdm_montecarlo.kernels.policy_step import (
     CONFIRMED,
     EXACT,
     LaneState,

@@ -1,5 +1,8 @@
 """Which targets each lane remembers confirming, kept between events instead of recomputed.
 
+Twin of mdm_core/search/policy.py's ``SearchPolicy.known`` (its memory_distance2 against the
+radius), cached: a change to one is made in the other.
+
 A target is 'remembered' by a lane while it lies within the policy's memory_radius R of a
 position the lane confirmed (SearchPolicy.memory_distance2). That answer only changes when the
 lane confirms again or a target crosses the R circle. Targets move at most at the tracks' top
@@ -22,7 +25,7 @@ from mdm_core.jit import compiled
 from mdm_core.search.policy import PolicyState
 from mdm_core.world import TargetTracks
 from mdm_core.world.targets import NODE_EPS
-from mdm_montecarlo.kernels.compiled_step import LaneState, lane_state, nearest2
+from mdm_montecarlo.kernels.policy_step import LaneState, lane_state, nearest2
 from mdm_montecarlo.kernels.round_state import Paths, Stepped
 
 FloatArray = NDArray[np.float64]

@@ -26,8 +26,8 @@ from numpy.typing import NDArray
 
 from mdm_core.jit import compiled
 from mdm_core.world.targets import NODE_EPS
-from mdm_montecarlo.kernels.compiled_step import DISC, LaneState, PolicyRules, nearest2
 from mdm_montecarlo.kernels.entry_kernel import entry_row
+from mdm_montecarlo.kernels.policy_step import DISC, LaneState, PolicyRules, nearest2
 from mdm_montecarlo.kernels.round_state import Block, Events, Flight, Legs, Paths, Stepped
 
 FloatArray = NDArray[np.float64]

@@ -9,7 +9,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_montecarlo.kernels.compiled_waypoints import Draws
+from mdm_montecarlo.kernels.policy_waypoints import Draws
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

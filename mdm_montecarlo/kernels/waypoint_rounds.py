@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from mdm_core.jit import compiled
 from mdm_montecarlo.kernels import swarm_kernels as kernels
 from mdm_montecarlo.kernels import waypoint_kernels
-from mdm_montecarlo.kernels.compiled_waypoints import next_waypoints
+from mdm_montecarlo.kernels.policy_waypoints import next_waypoints
 from mdm_montecarlo.kernels.swarm_state import Found, Particles, Sensing, Steps, Swarm
 from mdm_montecarlo.kernels.waypoint_legs import forget_confirmed, read_arrivals, walk_legs
 
@@ -73,7 +73,7 @@ def arrive(
     belong to). The random numbers are drawn for them alone: PSO/ARPSO r1 then r2, (2,
     arrivals, 1, 2); SPSO the normals (arrivals, 1, 2), the radii's uniforms (arrivals, 1),
     then the informant keys (stuck, vehicles) of those stuck; then the explorers' level-1
-    waypoints (SearchPolicy.start's draw, compiled_waypoints.next_waypoints)."""
+    waypoints (SearchPolicy.start's draw, policy_waypoints.next_waypoints)."""
     variant, rules, informants = swarm.variant, swarm.rules, swarm.informants
     position, waypoint, velocity = particles.position, particles.waypoint, particles.velocity
     own_position, own_fitness = particles.own_position, particles.own_fitness

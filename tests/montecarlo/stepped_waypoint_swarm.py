@@ -16,8 +16,8 @@ from mdm_montecarlo.engines.engine import BlockResult, block_rngs
 from mdm_montecarlo.engines.swarm_sensors import SwarmSensors
 from mdm_montecarlo.engines.waypoint_swarm import rules_of, swarm_rules
 from mdm_montecarlo.kernels import swarm_kernels as kernels
-from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
 from mdm_montecarlo.kernels.compiled_tracks import compiled_tracks
+from mdm_montecarlo.kernels.policy_step import CompiledPolicy
 from mdm_montecarlo.kernels.swarm_state import Particles, Swarm
 from mdm_montecarlo.kernels.waypoint_rounds import VARIANTS, arrive
 from mdm_profiles import MissionProfile

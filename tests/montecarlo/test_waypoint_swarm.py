@@ -12,7 +12,7 @@ from mdm_montecarlo.engines.configuration import configure
 from mdm_montecarlo.engines.runner import run_missions
 from mdm_montecarlo.engines.social_engine import run_swarm_block
 from mdm_montecarlo.engines.waypoint_swarm import rules_of, swarm_rules
-from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
+from mdm_montecarlo.kernels.policy_step import CompiledPolicy
 from mdm_montecarlo.kernels.swarm_state import Particles, Swarm
 from mdm_montecarlo.kernels.waypoint_rounds import VARIANTS
 from mdm_montecarlo.study.cases import Case

@@ -1,5 +1,8 @@
 """The batch engine's waypoint draws, compiled (numba), bit-identical to the numpy policy's.
 
+Twin of mdm_core/search/policy.py's ``SearchPolicy._next_waypoints`` and ``_draw``, and of
+mdm_core/search/swarm_iteration.py's ``explore``: a change to one is made in the other.
+
 ``SearchPolicy._next_waypoints`` draws, level by level, a step length (Levy step law), a
 direction, folds into the detection disc and into the area, and redraws candidates that land
 outside: a dozen numpy calls on small arrays per level and per redraw round, about a third of
@@ -23,7 +26,7 @@ from mdm_core.search.distributions import Brownian, Levy, Uniform
 from mdm_core.search.levels import PolicyConfig
 from mdm_core.search.policy import _BATCH, _REDRAWS, _STUCK, PolicyState
 from mdm_core.search.swarm_iteration import explore
-from mdm_montecarlo.kernels.compiled_memory import CompiledMemoryPolicy
+from mdm_montecarlo.kernels.policy_memory import CompiledMemoryPolicy
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]

@@ -1,9 +1,13 @@
 """The batch engine's policy step, compiled (numba), bit-identical to ``SearchPolicy.step``.
 
+Twin of mdm_core/search/policy.py's ``SearchPolicy.step`` (its waypoint draws, and
+``CompiledPolicy.explore``, the twin of mdm_core/search/swarm_iteration.py's ``explore``, are
+policy_waypoints.py's): a change to one is made in the other.
+
 ``SearchPolicy.step`` is some forty numpy calls on (lanes,) and (lanes, targets) arrays per
 event: the memory checks of the contacts, the level changes, the decaying index, the blind
 period, the anchor. Here one loop per lane makes the same comparisons and the same sums in the
-same order; the waypoints are then drawn by the compiled draws of ``compiled_waypoints`` and the
+same order; the waypoints are then drawn by the compiled draws of ``policy_waypoints`` and the
 confirmed targets remembered in one more loop, as ``step`` and ``remember`` do. The companion
 keeps the numpy policy (tests/montecarlo/test_compiled_policy.py compares the two on random
 states).
@@ -20,7 +24,7 @@ from numpy.typing import NDArray
 from mdm_core.jit import compiled
 from mdm_core.search.levels import PolicyConfig
 from mdm_core.search.policy import Observation, PolicyState, StepOutcome
-from mdm_montecarlo.kernels.compiled_waypoints import CompiledWaypoints, Draws, next_waypoints
+from mdm_montecarlo.kernels.policy_waypoints import CompiledWaypoints, Draws, next_waypoints
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
