@@ -1,6 +1,7 @@
 """The named structures the waypoint swarm's kernels pass (``waypoint_rounds``,
 ``waypoint_kernels``): a configuration's swarm, the stepped loop, the particles, the targets
-as they sense them and the confirmations, each a NamedTuple numba reads field by field."""
+as they sense them and the confirmations, each a NamedTuple numba reads field by field. Moving one of these classes to another module voids the kernels' disk cache
+(mdm_core/jit.py)."""
 
 from __future__ import annotations
 
@@ -93,3 +94,12 @@ class Found(NamedTuple):
     """(lanes, m) each particle's first confirmation time."""
     conf_step: IntArray
     """(lanes, m) and its step."""
+
+
+class Arrivals(NamedTuple):
+    """Where and when each particle's leg ends (waypoint_legs.walk_legs writes them)."""
+
+    step: IntArray
+    """(lanes,) the step it arrives at (len(times): it does not)."""
+    position: FloatArray
+    """(lanes, 2) where it is then."""

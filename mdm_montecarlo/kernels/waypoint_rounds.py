@@ -20,7 +20,7 @@ from mdm_core.jit import compiled
 from mdm_montecarlo.kernels import swarm_kernels as kernels
 from mdm_montecarlo.kernels import waypoint_kernels
 from mdm_montecarlo.kernels.policy_waypoints import next_waypoints
-from mdm_montecarlo.kernels.swarm_state import Found, Particles, Sensing, Steps, Swarm
+from mdm_montecarlo.kernels.swarm_state import Arrivals, Found, Particles, Sensing, Steps, Swarm
 from mdm_montecarlo.kernels.waypoint_legs import forget_confirmed, read_arrivals, walk_legs
 
 FloatArray = NDArray[np.float64]
@@ -242,58 +242,25 @@ def fly_waypoints(
     step). The particles' arrays are (runs, vehicles, ...) and updated in place, as are
     ``known_step``, ``conf_time`` and ``conf_step`` (waypoint_legs.walk_legs). Returns the last
     step, the iterations (arrivals) and how many of them followed another vehicle's best."""
-    times, dt, distance, past_duration, area = steps
-    position, waypoint, own_fitness, own_source = (
-        particles.position,
-        particles.waypoint,
-        particles.own_fitness,
-        particles.own_source,
-    )
+    times, past_duration, area = steps.times, steps.past_duration, steps.area
+    position, waypoint = particles.position, particles.waypoint
+    own_fitness, own_source = particles.own_fitness, particles.own_source
     reading, source = particles.reading, particles.source
-    seg_start, seg_velocity, grid_dt, moving = (
-        sensing.seg_start,
-        sensing.seg_velocity,
-        sensing.grid_dt,
-        sensing.moving,
-    )
-    appear, real = sensing.appear, sensing.real
-    known_step, conf_time, conf_step = found
+    real, known_step = sensing.real, found.known_step
     runs, n_vehicles = own_fitness.shape
     n = runs * n_vehicles
     last = times.shape[0] - 1
     flat = position.reshape(n, 2)
     arrival_step = np.empty(n, dtype=np.intp)
     arrival = np.empty((n, 2))
+    arrivals = Arrivals(arrival_step, arrival)
     # Every particle's first leg from step 0, then the legs of each step's arrivals.
     starting = np.arange(n)
     begin = 0
     iterations = 0
     followed = 0
     while True:
-        walk_legs(
-            starting,
-            flat,
-            waypoint.reshape(n, 2),
-            begin,
-            times,
-            dt,
-            distance,
-            area,
-            n_vehicles,
-            seg_start,
-            seg_velocity,
-            grid_dt,
-            moving,
-            sensing.top_speed,
-            appear,
-            real,
-            sensing.confirm_radius,
-            known_step,
-            conf_time,
-            conf_step,
-            arrival_step,
-            arrival,
-        )
+        walk_legs(starting, flat, waypoint.reshape(n, 2), begin, steps, sensing, found, arrivals)
         due = arrival_step.min()
         all_known = 0
         for r in range(runs):
@@ -310,22 +277,7 @@ def fly_waypoints(
             flat[p, 1] = arrival[p, 1]
         t = times[due]
         read_arrivals(
-            arrived,
-            flat,
-            seg_start,
-            seg_velocity,
-            grid_dt,
-            moving,
-            appear,
-            t,
-            sensing.signal_radius,
-            sensing.near,
-            known_step,
-            due,
-            sensing.unread_known,
-            n_vehicles,
-            reading.reshape(n),
-            source.reshape(n),
+            arrived, flat, t, due, sensing, known_step, reading.reshape(n), source.reshape(n)
         )
         if sensing.forget:
             forget_confirmed(
