@@ -1,7 +1,8 @@
 """The named structures the waypoint swarm's kernels pass (``waypoint_rounds``,
-``waypoint_kernels``): a configuration's swarm, the stepped loop, the particles, the targets
-as they sense them and the confirmations, each a NamedTuple numba reads field by field. Moving one of these classes to another module voids the kernels' disk cache
-(mdm_core/jit.py)."""
+``waypoint_legs``, ``waypoint_kernels``): a configuration's swarm, the stepped loop, the
+particles, the targets as they sense them, the confirmations and the arrivals, each a
+NamedTuple numba reads field by field. Moving one of these classes to another module voids the
+kernels' disk cache (mdm_core/jit.py)."""
 
 from __future__ import annotations
 
