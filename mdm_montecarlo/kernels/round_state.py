@@ -1,8 +1,8 @@
 """The named structures the batch engine's rounds pass between their kernels (``block_rounds``,
 ``round_kernels``, ``remembered``): numba reads a NamedTuple of arrays and numbers field by
 field at compile time, so handing a kernel four of them costs what its forty arguments cost
-(benchmarks/README.md, "Kernel signatures"). Moving one of these classes to another module voids the kernels' disk cache
-(mdm_core/jit.py)."""
+(benchmarks/README.md, "Kernel signatures"). Moving one of these classes to another module
+voids the kernels' disk cache (mdm_core/jit.py)."""
 
 from __future__ import annotations
 
