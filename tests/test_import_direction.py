@@ -1,6 +1,7 @@
 """Imports run one way: mdm_profiles <- mdm_core <- {companion, sim_vehicle_stub, mdm_montecarlo},
 and companion (the vehicle side) <- mdm_ground (the ground tools), never back: a vehicle installed
 without the ground tools' dependencies still runs ``companion run``.
+Inside mdm_montecarlo its rooms run one way too: kernels <- engines <- study <- commands.
 
 Every import statement of every module (also those inside functions) is read with ``ast``; a
 package may import only the packages listed for it here.
