@@ -22,7 +22,8 @@ from companion.service.unit_file import STATE_ROOT, UnitSpec, render
 UNIT_DIR = Path("/etc/systemd/system")
 _SET_BY_THE_UNIT = ("--log-file", "--new-mission-per-boot", "--no-map")
 STOP_MARGIN = 60.0
-"""Wall seconds past ``--land-wait`` that systemd waits for the companion after SIGTERM."""
+"""Wall seconds past ``--land-wait`` and ``--flight-log-wait`` that systemd waits for the
+companion after SIGTERM."""
 
 
 def _absolute(arg: str) -> str:
@@ -90,7 +91,7 @@ def service_command(argv: list[str], check_run: Callable[[list[str]], argparse.N
         log_dir=log_dir.absolute(),
         description=f"MDM search companion: vehicle {run.vehicle} of {run.profile} over {link}",
         user=options.user or os.environ.get("SUDO_USER") or getpass.getuser(),
-        stop_timeout=run.land_wait + STOP_MARGIN,
+        stop_timeout=run.land_wait + run.flight_log_wait + STOP_MARGIN,
         serial_device=Path(address.host) if address.is_serial else None,
     )
     text = render(spec)

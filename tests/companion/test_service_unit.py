@@ -70,7 +70,7 @@ def test_the_unit_for_a_serial_vehicle_passes_systemd_analyze_verify(tmp_path: P
     assert service["Restart"] == "on-failure"
     assert service["RestartPreventExitStatus"].split() == ["2", "130"]
     assert service["KillMode"] == "mixed"  # SIGTERM to the companion alone: it lands
-    assert service["TimeoutStopSec"] == "660"  # --land-wait 600 + 60
+    assert service["TimeoutStopSec"] == "960"  # --land-wait 600 + --flight-log-wait 300 + 60
     assert service["StateDirectory"] == "mdm-search/vehicle-0"
     assert settings["Unit"]["After"] == "dev-serial0.device"  # waits for the device at boot
     assert _exec_start(unit) == [
