@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import os
 import queue
+import struct
 import threading
 import time
 from collections.abc import Callable
@@ -70,6 +71,10 @@ class Observer:
         self._stop = threading.Event()
         self._mission: queue.Queue[Any] = queue.Queue()
         """Mission-protocol messages of the vehicle, for :meth:`read_fence`."""
+        self._autopilot: int | None = None
+        """MAV_AUTOPILOT of the vehicle's HEARTBEAT (PX4 sends integer parameters bytewise)."""
+        self._params: queue.Queue[Any] = queue.Queue()
+        """PARAM_VALUE messages of the vehicle, for :meth:`read_param`."""
         self._conn = mavutil.mavlink_connection(url, source_system=250, source_component=190)
         self._thread = threading.Thread(target=self._run, name="observer", daemon=True)
         self._thread.start()
@@ -108,6 +113,8 @@ class Observer:
                 continue
             if msg.get_type() in ("MISSION_COUNT", "MISSION_ITEM_INT"):
                 self._mission.put(msg)
+            elif msg.get_type() == "PARAM_VALUE":
+                self._params.put(msg)
             with self._lock:
                 self._update(msg)
 
@@ -115,6 +122,7 @@ class Observer:
         t = self.trace
         kind = msg.get_type()  # type: ignore[attr-defined]
         if kind == "HEARTBEAT" and msg.type != mavlink2.MAV_TYPE_GCS:  # type: ignore[attr-defined]
+            self._autopilot = msg.autopilot  # type: ignore[attr-defined]
             t.armed = bool(msg.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)  # type: ignore[attr-defined]
             t.armed_ever |= t.armed
             if msg.custom_mode != t.mode:  # type: ignore[attr-defined]
@@ -207,6 +215,27 @@ class Observer:
         with self._send_lock:
             mav.mission_ack_send(self.sysid, 1, mavlink2.MAV_MISSION_ACCEPTED, fence)
         return items
+
+    def read_param(self, name: str) -> float:
+        """The vehicle's value of parameter ``name``, asked on this link (PARAM_REQUEST_READ);
+        PX4's integers decoded from their bytes."""
+        for _ in range(5):
+            with self._send_lock:
+                self._conn.mav.param_request_read_send(self.sysid, 1, name.encode(), -1)
+            deadline = time.monotonic() + 2.0
+            while (left := deadline - time.monotonic()) > 0:
+                try:
+                    msg = self._params.get(timeout=left)
+                except queue.Empty:
+                    break
+                if msg.param_id != name:
+                    continue
+                value = float(msg.param_value)
+                integer = msg.param_type != mavlink2.MAV_PARAM_TYPE_REAL32
+                if integer and self._autopilot == mavlink2.MAV_AUTOPILOT_PX4:
+                    return float(struct.unpack("<i", struct.pack("<f", value))[0])
+                return value
+        raise AssertionError(f"observer: no PARAM_VALUE {name}")
 
     def snapshot(self) -> Trace:
         with self._lock:
