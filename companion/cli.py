@@ -22,6 +22,7 @@ from companion.link.factory import BACKENDS, Backend, make_link
 from companion.link.serial_device import check_serial
 from companion.mission import MissionConfig
 from companion.mission.mission_exit import MissionExit
+from companion.mission.safety_net import SAFETY_NET_REFUSED
 from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
 from mavlink_wire import ENV_VAR, load_signing_key
@@ -194,11 +195,14 @@ def _map(config: MissionConfig, reason: str, skip: bool) -> None:
 
 
 def _exit_status(reason: str, end: MissionExit | None) -> int:
-    """130 when a second signal cut the mission short; 1 when the companion refused to start;
+    """130 when a second signal cut the mission short; 2 when the vehicle's safety net is not
+    as needed (failsafe.safety_net); 1 when the companion refused to start;
     else the mission's own (:class:`MissionExit`): 0 only when the vehicle was seen landed and
     disarmed, or the end action accepted where ``--land-wait 0`` asked not to wait."""
     if reason == STOPPED_BY_SECOND_SIGNAL:
         return 130
+    if reason.startswith(SAFETY_NET_REFUSED):
+        return 2
     if reason.startswith(REFUSED) or end is None:
         return 1
     return end.status

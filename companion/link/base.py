@@ -53,6 +53,8 @@ class VehicleLink(StreamRequests, SpeedPolicy, SensorParameter, ABC):
     autopilot: Autopilot | None
     """Set from the first HEARTBEAT of the vehicle."""
     target_system: int
+    own_system: int = 245
+    """The companion's own system id (its HEARTBEAT's): the GCS ArduCopter's failsafe watches."""
     uploads_fence: bool = False
     """The backend implements :meth:`upload_fence` and :meth:`download_fence`."""
     alignment: FrameAlignment | None = None

@@ -51,6 +51,12 @@ _SUBSCRIBED = (
     "GPS_GLOBAL_ORIGIN",
     "HOME_POSITION",
 )
+_INTEGER_TYPES = (
+    mavlink2.MAV_PARAM_TYPE_INT8,
+    mavlink2.MAV_PARAM_TYPE_INT16,
+    mavlink2.MAV_PARAM_TYPE_INT32,
+)
+"""Parameter types set with the plugin's set_param_int first."""
 _HEALTH_BITS = mavlink2.MAV_SYS_STATUS_SENSOR_GPS | mavlink2.MAV_SYS_STATUS_PREARM_CHECK
 _NOT_AUTOPILOT_TYPES = (
     mavlink2.MAV_TYPE_GCS,
@@ -85,6 +91,7 @@ class MavsdkLink(VehicleLink):
         self.address = parse_address(url)
         self.target_system = target_system
         self._ids = (system_id, component_id)
+        self.own_system = system_id
         self._tlog_path = tlog
         self._tlog: TelemetryLog | None = None
         self._discover_timeout = discover_timeout
@@ -421,14 +428,27 @@ class MavsdkLink(VehicleLink):
     async def set_param(self, name: str, value: float, param_type: int) -> float | None:
         if self._param is None:
             return None
-        try:
-            if param_type == mavlink2.MAV_PARAM_TYPE_INT32:
-                await self._param.set_param_int(name, round(value))
-            else:
-                await self._param.set_param_float(name, value)
-        except Exception as exc:
-            log.warning("MAVSDK %s=%g: %s", name, value, exc)
-            return None
+        param = self._param
+
+        async def as_int() -> None:
+            await param.set_param_int(name, round(value))
+
+        async def as_float() -> None:
+            await param.set_param_float(name, value)
+
+        setters = [as_int, as_float]
+        # The plugin checks the type against what the autopilot reported (ArduPilot: INT8,
+        # INT16...): the other setter where the first is refused as of another type.
+        if param_type not in _INTEGER_TYPES:
+            setters.reverse()
+        for k, setter in enumerate(setters):
+            try:
+                await setter()
+                break
+            except Exception as exc:
+                if k == len(setters) - 1:
+                    log.warning("MAVSDK %s=%g: %s", name, value, exc)
+                    return None
         return await self.read_param(name)
 
     async def _set_sensor(self, index: int) -> CommandResult:

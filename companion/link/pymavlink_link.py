@@ -63,6 +63,7 @@ class PymavlinkLink(MavlinkReceiver):
             tlog=tlog,
             signing_key=signing_key,
         )
+        self.own_system = system_id
         self._fence = FenceTransfer(self._mav, self._send, target_system)
         self._commands = MavlinkCommands(
             self._mav,

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from mdm_montecarlo.cli import main
-from mdm_montecarlo.readings import READINGS, reading_cases, with_reading
-from mdm_montecarlo.study import VARIANTS, Case
+from mdm_montecarlo.commands.cli import main
+from mdm_montecarlo.study.cases import VARIANTS, Case
+from mdm_montecarlo.study.readings import READINGS, reading_cases, with_reading
 from mdm_profiles import ProfileError, builtin_profile
 
 COMMANDS = (
