@@ -146,6 +146,7 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
             RULES[config.out_of_area],
             config.waypoint_origin == "anchor",
             config.confine_to_detection,
+            config.anchor_at == "target",
             n_vehicles,
             speed,
             duration,

@@ -108,6 +108,7 @@ def step_lanes(
     rule: int,
     from_anchor: bool,
     confine: bool,
+    on_target: bool,
     rng: np.random.Generator,
     new: BoolArray,
     flags: BoolArray,
@@ -172,7 +173,13 @@ def step_lanes(
         level[lane] = next_level
         if changed:
             entered[lane] = time[i]
-        if detected:
+        if detected and on_target:
+            first = 0
+            while not new[i, first]:
+                first += 1
+            anchor[lane, 0] = contact_positions[i, first, 0]
+            anchor[lane, 1] = contact_positions[i, first, 1]
+        elif detected:
             anchor[lane, 0] = position[i, 0]
             anchor[lane, 1] = position[i, 1]
         flags[i, DETECTED] = detected
@@ -289,6 +296,7 @@ class CompiledPolicy(CompiledWaypoints):
             RULES[self.config.out_of_area],
             self.config.waypoint_origin == "anchor",
             self.config.confine_to_detection,
+            self.config.anchor_at == "target",
             rng,
             new_confirmations,
             flags,
