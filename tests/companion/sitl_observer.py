@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import os
 import queue
+import struct
 import threading
 import time
 from collections.abc import Callable
@@ -20,6 +21,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 _STREAMS = (
     mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
     mavlink2.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
+    mavlink2.MAVLINK_MSG_ID_SYS_STATUS,  # the battery: ArduCopter's SERIAL1 sends it only if asked
 )
 
 
@@ -49,6 +51,12 @@ class Trace:
     boot_s: float = 0.0
     """The vehicle's own clock (time since boot of its latest position), s: runs at the SITL's
     speed-up as far as the host lets it, not at the nominal one."""
+    battery: int = -1
+    """SYS_STATUS battery_remaining, percent (-1: not known)."""
+    mode_battery: list[int] = field(default_factory=list)
+    """``battery`` when each of ``modes`` was first seen."""
+    params: dict[str, float] = field(default_factory=dict)
+    """Every PARAM_VALUE on this link (the echoes of :meth:`Observer.set_param`)."""
 
 
 class Observer:
@@ -63,6 +71,10 @@ class Observer:
         self._stop = threading.Event()
         self._mission: queue.Queue[Any] = queue.Queue()
         """Mission-protocol messages of the vehicle, for :meth:`read_fence`."""
+        self._autopilot: int | None = None
+        """MAV_AUTOPILOT of the vehicle's HEARTBEAT (PX4 sends integer parameters bytewise)."""
+        self._params: queue.Queue[Any] = queue.Queue()
+        """PARAM_VALUE messages of the vehicle, for :meth:`read_param`."""
         self._conn = mavutil.mavlink_connection(url, source_system=250, source_component=190)
         self._thread = threading.Thread(target=self._run, name="observer", daemon=True)
         self._thread.start()
@@ -101,6 +113,8 @@ class Observer:
                 continue
             if msg.get_type() in ("MISSION_COUNT", "MISSION_ITEM_INT"):
                 self._mission.put(msg)
+            elif msg.get_type() == "PARAM_VALUE":
+                self._params.put(msg)
             with self._lock:
                 self._update(msg)
 
@@ -108,11 +122,13 @@ class Observer:
         t = self.trace
         kind = msg.get_type()  # type: ignore[attr-defined]
         if kind == "HEARTBEAT" and msg.type != mavlink2.MAV_TYPE_GCS:  # type: ignore[attr-defined]
+            self._autopilot = msg.autopilot  # type: ignore[attr-defined]
             t.armed = bool(msg.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)  # type: ignore[attr-defined]
             t.armed_ever |= t.armed
             if msg.custom_mode != t.mode:  # type: ignore[attr-defined]
                 t.mode = msg.custom_mode  # type: ignore[attr-defined]
                 t.modes.append(t.mode)
+                t.mode_battery.append(t.battery)
         elif kind == "GLOBAL_POSITION_INT":
             t.boot_s = msg.time_boot_ms / 1000.0  # type: ignore[attr-defined]
             t.alt = msg.relative_alt / 1000.0  # type: ignore[attr-defined]
@@ -124,6 +140,11 @@ class Observer:
                 t.stamps.append(time.monotonic())
             t.last_position = here
             t.max_speed = max(t.max_speed, math.hypot(msg.vx, msg.vy) / 100.0)  # type: ignore[attr-defined]
+        elif kind == "PARAM_VALUE":
+            name = msg.param_id  # type: ignore[attr-defined]
+            t.params[name.decode() if isinstance(name, bytes) else name] = msg.param_value  # type: ignore[attr-defined]
+        elif kind == "SYS_STATUS":
+            t.battery = msg.battery_remaining  # type: ignore[attr-defined]
         elif kind == "EXTENDED_SYS_STATE":
             t.landed_state = msg.landed_state  # type: ignore[attr-defined]
         elif kind == "STATUSTEXT":
@@ -152,6 +173,14 @@ class Observer:
         full = [*params, *[0.0] * (7 - len(params))]
         with self._send_lock:
             self._conn.mav.command_long_send(self.sysid, 1, command, 0, *full)
+
+    def set_param(self, name: str, value: float) -> None:
+        """PARAM_SET (REAL32), as a ground station sends it (the echo not awaited): the SITL's
+        own SIM_* parameters change the simulated world mid-flight."""
+        with self._send_lock:
+            self._conn.mav.param_set_send(
+                self.sysid, 1, name.encode(), value, mavlink2.MAV_PARAM_TYPE_REAL32
+            )
 
     def read_fence(self) -> list[tuple[int, int, int]]:
         """The fence items the vehicle stores, (command, lat, lon) in 1e-7 degrees, downloaded
@@ -187,6 +216,27 @@ class Observer:
             mav.mission_ack_send(self.sysid, 1, mavlink2.MAV_MISSION_ACCEPTED, fence)
         return items
 
+    def read_param(self, name: str) -> float:
+        """The vehicle's value of parameter ``name``, asked on this link (PARAM_REQUEST_READ);
+        PX4's integers decoded from their bytes."""
+        for _ in range(5):
+            with self._send_lock:
+                self._conn.mav.param_request_read_send(self.sysid, 1, name.encode(), -1)
+            deadline = time.monotonic() + 2.0
+            while (left := deadline - time.monotonic()) > 0:
+                try:
+                    msg = self._params.get(timeout=left)
+                except queue.Empty:
+                    break
+                if msg.param_id != name:
+                    continue
+                value = float(msg.param_value)
+                integer = msg.param_type != mavlink2.MAV_PARAM_TYPE_REAL32
+                if integer and self._autopilot == mavlink2.MAV_AUTOPILOT_PX4:
+                    return float(struct.unpack("<i", struct.pack("<f", value))[0])
+                return value
+        raise AssertionError(f"observer: no PARAM_VALUE {name}")
+
     def snapshot(self) -> Trace:
         with self._lock:
             t = self.trace
@@ -205,6 +255,9 @@ class Observer:
                 list(t.track),
                 list(t.stamps),
                 t.boot_s,
+                t.battery,
+                list(t.mode_battery),
+                dict(t.params),
             )
 
     def hold(

@@ -59,3 +59,19 @@ def test_a_vehicle_off_its_layer_is_named_and_fence_time_counts_search_ticks_onl
         "  LAYER: vehicle 1 left its altitude layer 45 m: 1 of 2 search samples more than "
         "2 m off (worst 48.0 m)"
     ) in lines
+
+
+def test_results_hold_each_vehicles_safety_net_before_and_after(tmp_path: Path) -> None:
+    net = {
+        "mode": "set",
+        "state": "ok",
+        "rate": 1.0,
+        "params": [{"name": "GF_ACTION", "before": 2.0, "after": 3.0, "needed": "3"}],
+    }
+    _log(tmp_path, 0, [("search", 600.0, 1000.0, 40.0)])
+    with (tmp_path / "mission-0.jsonl").open("a") as f:
+        f.write(json.dumps({"t": 1.0, "event": "safety_net", **net}) + "\n")
+    _log(tmp_path, 1, [("search", 600.0, 1000.0, 45.0)])  # a restarted companion: none
+    result = score(PROFILE, tmp_path, 2, 900.0)
+    assert result.safety_net == {0: net}
+    assert result.as_json()["safety_net"] == {0: net}
