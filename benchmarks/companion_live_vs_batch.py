@@ -24,6 +24,7 @@ from scipy import stats
 
 from mdm_core.metrics import confirmed_within, team_times
 from mdm_ground.fleet.runner import FleetOptions, run_fleet
+from mdm_montecarlo.engines.configuration import configure
 from mdm_montecarlo.engines.engine import run_block
 from mdm_profiles import load_profile
 
@@ -50,7 +51,7 @@ def main() -> None:
         }
     )
     started = time.perf_counter()
-    res = run_block(short, seed=12345, block=0, n_runs=args.batch)
+    res = run_block(configure(short), seed=12345, block=0, n_runs=args.batch)
     batch = confirmed_within(team_times(res.per_vehicle), args.duration).astype(float)
     print(
         f"batch: {args.batch} runs in {time.perf_counter() - started:.1f} s, "

@@ -21,7 +21,8 @@ from pathlib import Path
 
 from code_commit import commit_of
 
-from mdm_montecarlo.engines.runner import is_swarm, simulate_block
+from mdm_montecarlo.engines.configuration import configure, is_swarm
+from mdm_montecarlo.engines.runner import simulate_block
 from mdm_montecarlo.study.cases import study_rows
 
 
@@ -39,7 +40,9 @@ def main() -> int:
         hashed = hashlib.sha256()
         start = time.process_time()
         for profile in rows:
-            hashed.update(simulate_block(profile, args.seed, 0, args.runs).per_vehicle.tobytes())
+            hashed.update(
+                simulate_block(configure(profile), args.seed, 0, args.runs).per_vehicle.tobytes()
+            )
         cpus.append(time.process_time() - start)
         digest = hashed.hexdigest()[:12]
         print(f"pass {k}       {cpus[-1]:.2f} CPU-s", flush=True)

@@ -11,6 +11,11 @@ the numpy code each kernel replaces, instead of raising ZeroDivisionError. The P
 tests every divisor before dividing; without those tests the engine's kernels take about 8 %
 less CPU (docs/model.md, "Speed of reproduce"), with the same results wherever no division by
 zero happens (where one does, the Python model would have raised).
+
+A kernel taking a NamedTuple (the Monte-Carlo engine's structures) has that class named by
+module and name in its cache index: once the class moves to another module, a cache written
+before fails to load (ModuleNotFoundError at the kernel's first call) until the stale
+``__pycache__`` folder is deleted.
 """
 
 from __future__ import annotations

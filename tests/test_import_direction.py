@@ -1,6 +1,7 @@
 """Imports run one way: mdm_profiles <- mdm_core <- {companion, sim_vehicle_stub, mdm_montecarlo},
 and companion (the vehicle side) <- mdm_ground (the ground tools), never back: a vehicle installed
 without the ground tools' dependencies still runs ``companion run``.
+Inside mdm_montecarlo its rooms run one way too: kernels <- engines <- study <- commands.
 
 Every import statement of every module (also those inside functions) is read with ``ast``; a
 package may import only the packages listed for it here.
@@ -53,3 +54,34 @@ def test_the_check_sees_an_import_inside_a_function(tmp_path: Path) -> None:
     module = tmp_path / "m.py"
     module.write_text("def f():\n    from sim_vehicle_stub.vehicle import Vehicle\n")
     assert _imported_packages(module) == {"sim_vehicle_stub"}
+
+
+ROOMS = ("kernels", "engines", "study", "commands")
+"""mdm_montecarlo's rooms, each importing only the rooms before it (mdm_montecarlo/__init__.py)."""
+
+
+def _montecarlo_rooms(path: Path) -> set[str]:
+    """The rooms of mdm_montecarlo that ``path`` imports."""
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
+        if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            names = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+        found.update(n.split(".")[1] for n in names if n.startswith("mdm_montecarlo."))
+    return found & set(ROOMS)
+
+
+def test_montecarlo_rooms_import_only_the_rooms_before_them() -> None:
+    wrong = {
+        f"{path.relative_to(REPO)} imports mdm_montecarlo.{other}"
+        for room in ROOMS
+        for path in sorted((REPO / "mdm_montecarlo" / room).rglob("*.py"))
+        for other in _montecarlo_rooms(path) - set(ROOMS[: ROOMS.index(room) + 1])
+    }
+    assert not wrong, "\n".join(sorted(wrong))
+
+
+def test_the_room_check_sees_an_import_up(tmp_path: Path) -> None:
+    module = tmp_path / "m.py"
+    module.write_text("from mdm_montecarlo import study\nimport mdm_montecarlo.engines.runner\n")
+    assert _montecarlo_rooms(module) == {"study", "engines"}

@@ -42,3 +42,30 @@ def test_every_pair_names_code_that_exists_and_a_test_that_reads_both() -> None:
             assert "mdm_core.search" in source, test
             imported = set(_IMPORT.findall(source))
             assert any(t.removesuffix(".py") in imported for t in twins), (test, twins, imported)
+
+
+def _home(ref: str) -> Path:
+    """The reference file a table entry names: ``pso.py`` itself, the module of
+    ``swarm_iteration.explore``, or the file defining the class of ``SearchPolicy.step``."""
+    search = REPO / "mdm_core/search"
+    if ref.endswith(".py"):
+        return search / ref
+    first = ref.split(".", maxsplit=1)[0]
+    if (search / f"{first}.py").exists():
+        return search / f"{first}.py"
+    return next(p for p in sorted(search.glob("*.py")) if f"class {first}" in p.read_text())
+
+
+def test_each_side_of_a_pair_names_the_others_file() -> None:
+    """A change to a reference shows its twin and back: the reference's file names each twin's
+    path and each twin names the reference's."""
+    missing = []
+    for refs, twins, _tests in _rows():
+        for home in {_home(ref) for ref in refs}:
+            for twin in twins:
+                path = REPO / "mdm_montecarlo/kernels" / twin
+                if f"mdm_montecarlo/kernels/{twin}" not in home.read_text():
+                    missing.append(f"{home.relative_to(REPO)} does not name {twin}")
+                if f"mdm_core/search/{home.name}" not in path.read_text():
+                    missing.append(f"{twin} does not name mdm_core/search/{home.name}")
+    assert not missing, "\n".join(missing)

@@ -28,6 +28,8 @@ from companion.autopilots import FlightMode, UnknownAutopilotError, autopilot_fo
 from companion.guidance import NedSetpoint
 from companion.link.address import parse_address
 from companion.link.base import LinkError, SetpointKind, VehicleLink
+from companion.link.log_transfer import FlightLog
+from companion.link.mavsdk_logs import download_newest
 from companion.link.messages import (
     Heartbeat,
     LinkEvent,
@@ -96,6 +98,7 @@ class MavsdkLink(VehicleLink):
         self._tlog: TelemetryLog | None = None
         self._discover_timeout = discover_timeout
         self._mavsdk: Mavsdk | None = None
+        self._system: Any = None
         self._direct: MavlinkDirect | None = None
         self._offboard_sync: Offboard | None = None
         self._action: ActionAsync | None = None
@@ -133,6 +136,7 @@ class MavsdkLink(VehicleLink):
                     self.target_system,
                     self.address.url(),
                 )
+        self._system = system
         raw = system._system
         self._direct = MavlinkDirect(raw)
         self._action = ActionAsync(system)
@@ -151,7 +155,7 @@ class MavsdkLink(VehicleLink):
         self._handles.clear()
         if self._mavsdk is not None:
             self._mavsdk.destroy()
-        self._mavsdk = self._direct = self._offboard_sync = None
+        self._mavsdk = self._direct = self._offboard_sync = self._system = None
         self._action = self._offboard = self._param = None
         self._offboard_started = False
         if self._tlog is not None:
@@ -450,6 +454,11 @@ class MavsdkLink(VehicleLink):
                     log.warning("MAVSDK %s=%g: %s", name, value, exc)
                     return None
         return await self.read_param(name)
+
+    async def download_log(self, stem: Path, limit: float) -> FlightLog:
+        if self._system is None:
+            return FlightLog(None, note="the MAVSDK link is closed")
+        return await download_newest(self._system, stem, limit)
 
     async def _set_sensor(self, index: int) -> CommandResult:
         if self._param is None:

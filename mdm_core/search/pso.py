@@ -20,6 +20,9 @@ Update rules, in metres per iteration (sources and choices in docs/model.md):
   w_i = w_ini - alpha (1 - h_i) + beta s (evolution speed factor h_i, aggregation degree s,
   after Yang et al. 2007). Its obstacle term is zero: there are no obstacles in this search and
   UAVs are separated in altitude (Assumption III).
+
+Compiled twin: mdm_montecarlo/kernels/swarm_kernels.py, the same rules operation for operation
+(tests/montecarlo/test_swarm_kernels.py); a change here is made there too.
 """
 
 from __future__ import annotations

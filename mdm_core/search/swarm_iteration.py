@@ -7,6 +7,14 @@ single-sensor exploration of the profile's level 1), take a new reading into the
 and, for SPSO, redraw the informants of particles whose local best did not improve. Shapes are
 the engine's (..., particles) with heard tables (..., particles, vehicles); the live vehicle is
 a batch of one.
+
+Compiled twins, tested bit for bit against this module (a change here is made there too):
+
+- ``explore``: mdm_montecarlo/kernels/policy_waypoints.py (CompiledWaypoints.explore, which
+  the engines call as mdm_montecarlo/kernels/policy_step.py's CompiledPolicy; its tests
+  tests/montecarlo/test_compiled_policy.py);
+- the swarm bests and informants: mdm_montecarlo/kernels/swarm_kernels.py
+  (test_swarm_kernels.py).
 """
 
 from __future__ import annotations

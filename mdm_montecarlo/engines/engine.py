@@ -14,7 +14,7 @@ Vehicles do not communicate, so lanes of one run only share the targets; the tea
 the minimum over its vehicles of each target's first confirmation time.
 
 Speed: a round's loops over the lanes are compiled with numba (``round_kernels``), and so is
-the policy (``compiled_step``: the numpy ``SearchPolicy``'s step and waypoint draws, bit for
+the policy (``policy_step``: the numpy ``SearchPolicy``'s step and waypoint draws, bit for
 bit, from the same random stream); ``block_rounds.fly_rounds`` runs the rounds one after
 another in one compiled loop, back in Python only to grow the dynamic targets' paths. The
 companion flies the numpy policy.
@@ -30,13 +30,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_core.search.from_profile import policy_config
-from mdm_core.world import Scenario, TargetTracks
+from mdm_core.world import TargetTracks
+from mdm_montecarlo.engines.configuration import Configuration
 from mdm_montecarlo.kernels.block_rounds import DONE, fly_rounds
-from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
-from mdm_montecarlo.kernels.compiled_waypoints import RULES
+from mdm_montecarlo.kernels.policy_step import lane_state
 from mdm_montecarlo.kernels.remembered import RememberedTargets
+from mdm_montecarlo.kernels.round_state import Block, Flight, Paths
 from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]
@@ -75,10 +75,10 @@ def block_rngs(seed: int, block: int) -> tuple[np.random.Generator, ...]:
     return tuple(np.random.default_rng(c) for c in children)
 
 
-def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
-    """Simulate ``n_runs`` missions of the profile; block index ``block`` fixes the random streams."""
-    scenario = Scenario.from_profile(profile)
-    policy = CompiledPolicy(policy_config(profile))
+def run_block(configuration: Configuration, seed: int, block: int, n_runs: int) -> BlockResult:
+    """Simulate ``n_runs`` missions of the configuration; block index ``block`` fixes the
+    random streams."""
+    profile, scenario, policy = configuration.profile, configuration.scenario, configuration.search
     rng_targets, rng_start, rng_policy = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
     speed = profile.fleet.speed
@@ -91,7 +91,8 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
     position = start.reshape(n, 2).copy()
     time = np.zeros(n)
     state = policy.start(position, time, rng_policy)
-    assert policy.table is not None  # else start raised the numpy draws' error
+    rules = policy.rules
+    assert rules is not None  # else start raised the numpy draws' error
 
     targets = scenario.targets
     m = targets.count
@@ -104,53 +105,31 @@ def run_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> Bl
         stop = np.minimum(np.maximum(last, duration), cap)
     active = np.ones(n, dtype=bool)
     remembered = RememberedTargets(policy.config.memory_radius, tracks, n, m)
-    config = policy.config
+    flight = Flight(position, time, active, first, stop, gone_or_inf)
+    fixed = Block(
+        n_vehicles,
+        speed,
+        duration,
+        cap,
+        targets.false_mask,
+        targets.appear_times,
+        ~targets.false_mask,
+    )
     events = 0
     visible = tracks.max_speed  # the first round checks its windows before any path is drawn
     seg_start, seg_velocity = tracks.segments(0.0)
     while True:
-        status, reach, rounds, state.memory = fly_rounds(
-            state.level,
-            state.entered,
-            state.blind_until,
-            state.anchor,
-            state.waypoint,
-            state.memory,
-            state.memory_count,
-            position,
-            time,
-            active,
-            first,
-            stop,
-            gone_or_inf,
-            remembered.known,
-            remembered.until,
-            remembered.speed,
-            visible,
-            tracks.max_speed,
+        paths = Paths(
             seg_start,
             seg_velocity,
             tracks.filled,
             tracks.grid_dt,
             tracks.moving,
-            targets.false_mask,
-            targets.appear_times,
-            ~targets.false_mask,
-            policy.lifetimes,
-            policy.radii,
-            policy.memory_rule,
-            float(config.memory_radius),
-            float(config.fallback_blind_time),
-            policy.table,
-            policy.area,
-            RULES[config.out_of_area],
-            config.waypoint_origin == "anchor",
-            config.confine_to_detection,
-            n_vehicles,
-            speed,
-            duration,
-            cap,
-            rng_policy,
+            visible,
+            tracks.max_speed,
+        )
+        status, reach, rounds, state.memory = fly_rounds(
+            lane_state(state), flight, remembered.arrays, paths, fixed, rules, rng_policy
         )
         events += rounds
         if status == DONE:

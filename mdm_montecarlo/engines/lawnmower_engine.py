@@ -11,13 +11,11 @@ from __future__ import annotations
 import numpy as np
 
 from mdm_core.search import lawnmower
-from mdm_core.world import Scenario
+from mdm_montecarlo.engines.configuration import Configuration
 from mdm_montecarlo.engines.engine import BlockResult, block_rngs, departures
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
 from mdm_montecarlo.kernels.lawnmower_kernel import fly_lawnmower
 from mdm_profiles import MissionProfile
-
-LAWNMOWER_KINDS = ("lm1", "lm2")
 
 
 def sweep_radius(profile: MissionProfile) -> float:
@@ -50,10 +48,12 @@ def search_hold(profile: MissionProfile) -> float:
     return -1.0 if hold is None else hold
 
 
-def run_lawnmower_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
-    """Simulate ``n_runs`` missions of an lm1/lm2 profile (block ``block`` of ``seed``);
+def run_lawnmower_block(
+    configuration: Configuration, seed: int, block: int, n_runs: int
+) -> BlockResult:
+    """Simulate ``n_runs`` missions of an lm1/lm2 configuration (block ``block`` of ``seed``);
     ``events`` counts the legs flown."""
-    scenario = Scenario.from_profile(profile)
+    profile, scenario = configuration.profile, configuration.scenario
     rng_targets, rng_start, _ = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
     cap = max(profile.mission.ts_cap, profile.mission.duration)

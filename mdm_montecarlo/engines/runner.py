@@ -9,10 +9,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mdm_core import metrics
+from mdm_montecarlo.engines.configuration import (
+    LAWNMOWER_KINDS,
+    Configuration,
+    configure,
+    is_swarm,
+)
 from mdm_montecarlo.engines.engine import BLOCK_RUNS, BlockResult, run_block
-from mdm_montecarlo.engines.lawnmower_engine import LAWNMOWER_KINDS, run_lawnmower_block
+from mdm_montecarlo.engines.lawnmower_engine import run_lawnmower_block
 from mdm_montecarlo.engines.local_pool import imap_unordered
-from mdm_montecarlo.engines.social_engine import SWARM_KINDS, run_swarm_block
+from mdm_montecarlo.engines.social_engine import run_swarm_block
 from mdm_montecarlo.errors import MontecarloError
 from mdm_profiles import MissionProfile
 
@@ -88,26 +94,22 @@ class RunInterruptedError(MontecarloError):
         self.partial = partial
 
 
-def is_swarm(profile: MissionProfile) -> bool:
-    """Whether the profile's rows run on the time-stepped swarm engine (PSO/SPSO/ARPSO)."""
-    return profile.policy.kind in SWARM_KINDS
-
-
-def simulate_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -> BlockResult:
+def simulate_block(configuration: Configuration, seed: int, block: int, n_runs: int) -> BlockResult:
     """One block of runs: the event-driven engine, the time-stepped one for PSO/SPSO/ARPSO, or
     the lawnmowers' (LM1/LM2)."""
+    profile = configuration.profile
     if is_swarm(profile):
-        return run_swarm_block(profile, seed, block, n_runs)
+        return run_swarm_block(configuration, seed, block, n_runs)
     if profile.policy.kind in LAWNMOWER_KINDS:
-        return run_lawnmower_block(profile, seed, block, n_runs)
-    return run_block(profile, seed, block, n_runs)
+        return run_lawnmower_block(configuration, seed, block, n_runs)
+    return run_block(configuration, seed, block, n_runs)
 
 
 def _indexed_block(
-    index: int, profile: MissionProfile, seed: int, block: int, n_runs: int
+    index: int, configuration: Configuration, seed: int, block: int, n_runs: int
 ) -> tuple[int, BlockResult]:
     """simulate_block tagged with the profile's index (local workers return in any order)."""
-    return index, simulate_block(profile, seed, block, n_runs)
+    return index, simulate_block(configuration, seed, block, n_runs)
 
 
 def _relative_cost(profile: MissionProfile) -> float:
@@ -195,8 +197,9 @@ def run_many(
     blocks: dict[int, list[BlockResult]] = {i: [] for i in range(len(profiles))}
     expected = {i: sum(1 for job in jobs if job[0] == i) for i in range(len(profiles))}
     done = progress or (lambda _n: None)
+    configurations = [configure(profile) for profile in profiles]
     try:
-        _run_jobs(profiles, jobs, seed, workers, scheduler, blocks, done, meanwhile)
+        _run_jobs(configurations, jobs, seed, workers, scheduler, blocks, done, meanwhile)
     except KeyboardInterrupt:
         finished = {
             i: _collect(profiles[i], seed, got)
@@ -213,7 +216,7 @@ def run_many(
 
 
 def _run_jobs(
-    profiles: list[MissionProfile],
+    configurations: list[Configuration],
     jobs: list[tuple[int, int, int]],
     seed: int,
     workers: int,
@@ -229,7 +232,7 @@ def _run_jobs(
 
         with Client(scheduler) as client:  # type: ignore[no-untyped-call]
             futures = {
-                client.submit(simulate_block, profiles[i], seed, b, n, pure=False): i
+                client.submit(simulate_block, configurations[i], seed, b, n, pure=False): i
                 for i, b, n in jobs
             }
             if meanwhile is not None:
@@ -238,25 +241,25 @@ def _run_jobs(
                 blocks[futures[fut]].append(fut.result())
                 done(blocks[futures[fut]][-1].per_vehicle.shape[0])
     elif workers > 1:
-        _load_kernels([profiles[i] for i, _, _ in jobs])
-        work = [(i, profiles[i], seed, b, n) for i, b, n in jobs]
+        _load_kernels([configurations[i] for i, _, _ in jobs])
+        work = [(i, configurations[i], seed, b, n) for i, b, n in jobs]
         for i, result in imap_unordered(_indexed_block, work, workers, meanwhile):
             blocks[i].append(result)
             done(result.per_vehicle.shape[0])
     else:
         for i, b, n in jobs:
-            blocks[i].append(simulate_block(profiles[i], seed, b, n))
+            blocks[i].append(simulate_block(configurations[i], seed, b, n))
             done(n)
 
 
-def _load_kernels(profiles: list[MissionProfile]) -> None:
+def _load_kernels(configurations: list[Configuration]) -> None:
     """One run of the first profile of each engine (batch, interval swarm, waypoint swarm),
     here, thrown away: numba loads an engine's cached kernels on its first call (about 0.45
     CPU-s for the three), so the workers forked after this share them instead of each loading
     its own. The run's streams are its own (block 0 of seed 0); no result depends on it."""
-    firsts = {_engine(p): p for p in reversed(profiles)}
-    for profile in firsts.values():
-        simulate_block(profile, 0, 0, 1)
+    firsts = {_engine(c.profile): c for c in reversed(configurations)}
+    for configuration in firsts.values():
+        simulate_block(configuration, 0, 0, 1)
 
 
 def _engine(profile: MissionProfile) -> str:

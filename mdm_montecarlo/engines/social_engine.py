@@ -9,7 +9,7 @@ mdm_core.search.swarm_iteration, shared with the live companion):
 1. every vehicle with a best to follow (its own or one it heard of, fitness > 0) takes the PSO
    step of its variant (mdm_core.search.pso); the others fly the single-sensor exploration of
    the profile's level 1 (mdm_core.search.SearchPolicy, US with delta_1 by default; its
-   waypoints drawn by the compiled draws of mdm_montecarlo.kernels.compiled_waypoints, the same numbers);
+   waypoints drawn by the compiled draws of mdm_montecarlo.kernels.policy_waypoints, the same numbers);
 2. the step is flown as a straight segment at most speed x interval long (clipped to the area);
    a real target whose r_2 disc the segment enters is confirmed (closed form,
    mdm_core.world.first_entry_time) and becomes known to that vehicle;
@@ -56,22 +56,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.pso import Best, SwarmConfig, forget
 from mdm_core.search.swarm_iteration import BestOf
-from mdm_core.world import Scenario
+from mdm_montecarlo.engines.configuration import Configuration
 from mdm_montecarlo.engines.engine import BlockResult, block_rngs, departures
 from mdm_montecarlo.engines.swarm_sensors import SwarmSensors
 from mdm_montecarlo.engines.waypoint_swarm import run_waypoint_swarm_block
 from mdm_montecarlo.kernels import swarm_kernels as kernels
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
-from mdm_montecarlo.kernels.compiled_waypoints import CompiledWaypoints
-from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 IntArray = NDArray[np.intp]
-SWARM_KINDS = ("pso", "spso", "arpso")
 
 
 @dataclass(frozen=True)
@@ -172,19 +168,20 @@ def _nonzero(mask: BoolArray) -> tuple[IntArray, IntArray, IntArray]:
 
 
 def run_swarm_block(
-    profile: MissionProfile, seed: int, block: int, n_runs: int, *, keep_inbox: bool = False
+    configuration: Configuration, seed: int, block: int, n_runs: int, *, keep_inbox: bool = False
 ) -> BlockResult:
     """Simulate ``n_runs`` missions of a pso/spso/arpso profile (block ``block`` of ``seed``).
 
     keep_inbox: keep the per-receiver inbox even where every message arrives at once and none
     is lost (same results, slower; the module's docstring). A swarm that iterates per waypoint
     (``policy.swarm.iteration: waypoint``) runs on mdm_montecarlo.engines.waypoint_swarm."""
+    profile = configuration.profile
     if profile.policy.swarm.iteration == "waypoint":
-        return run_waypoint_swarm_block(profile, seed, block, n_runs)
-    scenario = Scenario.from_profile(profile)
-    config = swarm_config(profile)
+        return run_waypoint_swarm_block(configuration, seed, block, n_runs)
+    scenario = configuration.scenario
+    config = configuration.swarm_rules
     spec = profile.policy.swarm
-    explorer = CompiledWaypoints(policy_config(profile))
+    explorer = configuration.search
     rng_targets, rng_start, rng = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
     shape = (n_runs, n_vehicles)
@@ -201,7 +198,7 @@ def run_swarm_block(
         real=real,
         appear=targets.appear_times,
         confirm_radius=scenario.confirmation.radius,
-        signal_radius=signal_radius(profile),
+        signal_radius=configuration.signal_radius,
         dt=dt,
     )
     position = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)

@@ -35,33 +35,30 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from mdm_core.search.from_profile import policy_config, signal_radius, swarm_config
 from mdm_core.search.pso import Best, SwarmConfig
-from mdm_core.world import Scenario
+from mdm_montecarlo.engines.configuration import Configuration
 from mdm_montecarlo.engines.engine import BlockResult, block_rngs, departures
 from mdm_montecarlo.engines.swarm_sensors import NEAR
 from mdm_montecarlo.kernels import swarm_kernels as kernels
 from mdm_montecarlo.kernels import waypoint_legs
-from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
-from mdm_montecarlo.kernels.compiled_waypoints import RULES
+from mdm_montecarlo.kernels.swarm_state import Found, Particles, Sensing, Steps, Swarm
 from mdm_montecarlo.kernels.waypoint_rounds import RULE_COLUMNS, VARIANTS, fly_waypoints
-from mdm_profiles import MissionProfile
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 
 def run_waypoint_swarm_block(
-    profile: MissionProfile, seed: int, block: int, n_runs: int
+    configuration: Configuration, seed: int, block: int, n_runs: int
 ) -> BlockResult:
     """Simulate ``n_runs`` missions of a pso/spso/arpso profile whose swarm iterates per
     waypoint (block ``block`` of ``seed``). ``events`` counts the particles' iterations
     (arrivals), ``followed`` those that went for a best held by another vehicle."""
-    scenario = Scenario.from_profile(profile)
+    profile, scenario = configuration.profile, configuration.scenario
     spec = profile.policy.swarm
-    config = swarm_rules(profile)
-    explorer = CompiledPolicy(policy_config(profile))
+    config = swarm_rules(configuration)
+    explorer = configuration.search
     rng_targets, rng_start, rng = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
     shape = (n_runs, n_vehicles)
@@ -73,7 +70,7 @@ def run_waypoint_swarm_block(
     targets = scenario.targets
     tracks = shared_tracks(scenario, n_runs, rng_targets, stop)
     seg_start, seg_velocity = tracks.segments(float(times[-1]))
-    radius = signal_radius(profile)
+    radius = configuration.signal_radius
     position = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
     # The step at which each run first confirms each target (last + 1: not by the last step).
     known_step = np.full((n_runs, targets.count), last + 1, dtype=np.intp)
@@ -84,27 +81,30 @@ def run_waypoint_swarm_block(
     if config.variant == "spso":
         links = kernels.informants(rng.random((n_runs, n_vehicles, n_vehicles)), spec.informants)
     waypoint = explorer.explore(position.reshape(n, 2), rng).reshape(*shape, 2)
-    assert explorer.table is not None  # else explore raised the numpy draws' error
-    end, iterations, followed = fly_waypoints(
-        VARIANTS[config.variant],
-        rules_of(config),
-        spec.informants,
+    assert explorer.draws is not None  # else explore raised the numpy draws' error
+    swarm = Swarm(VARIANTS[config.variant], rules_of(config), spec.informants, explorer.draws)
+    steps = Steps(
         times,
         dt,
         profile.fleet.speed * dt,
         # The time-stepped loop stops from the first step past the mission duration on.
         max(int(np.searchsorted(times, profile.mission.duration)), 1),
+        np.asarray(scenario.area.size, dtype=float),
+    )
+    particles = Particles(
         position,
         waypoint,
         waypoint - position,
         own.position,
         own.fitness,
         own.source,
-        np.zeros(shape),  # each particle's reading at its last waypoint
-        np.full(shape, -1, dtype=np.intp),  # and the target it came from
-        np.zeros(shape),  # the reading as its current fitness (ARPSO's aggregation degree)
+        np.zeros(shape),
+        np.full(shape, -1, dtype=np.intp),
+        np.zeros(shape),
         links,
-        np.zeros(shape),  # SPSO: the local best each particle steered by at its last arrival
+        np.zeros(shape),
+    )
+    sensing = Sensing(
         seg_start,
         seg_velocity,
         tracks.grid_dt,
@@ -117,17 +117,9 @@ def run_waypoint_swarm_block(
         radius * radius * NEAR,
         not spec.read_confirmed,
         spec.after_confirmation == "forget",
-        explorer.table,
-        explorer.area,
-        RULES[explorer.config.out_of_area],
-        explorer.config.waypoint_origin == "anchor",
-        explorer.config.confine_to_detection,
-        np.asarray(scenario.area.size, dtype=float),
-        known_step,
-        conf_time,
-        conf_step,
-        rng,
     )
+    found = Found(known_step, conf_time, conf_step)
+    end, iterations, followed = fly_waypoints(swarm, steps, particles, sensing, found, rng)
     first = waypoint_legs.keep_first(conf_time, conf_step, known_step, end, n_vehicles)
     gone = departures(profile, tracks, stop)
     return BlockResult(
@@ -135,11 +127,11 @@ def run_waypoint_swarm_block(
     )
 
 
-def swarm_rules(profile: MissionProfile) -> SwarmConfig:
-    """The profile's swarm with |v| at most the single-sensor step delta_1 (level 1's step)."""
-    return replace(
-        swarm_config(profile), max_step=profile.policy.levels[0].step, constant_speed=False
-    )
+def swarm_rules(configuration: Configuration) -> SwarmConfig:
+    """The configuration's swarm with |v| at most the single-sensor step delta_1 (level 1's
+    step)."""
+    step = configuration.profile.policy.levels[0].step
+    return replace(configuration.swarm_rules, max_step=step, constant_speed=False)
 
 
 def rules_of(config: SwarmConfig) -> FloatArray:

@@ -2,7 +2,7 @@
 
 A round moves every active lane to its next event: ``legs``, the remembered targets
 (``remembered.eligible``), ``advance``, the policy step and its memory update
-(``compiled_step``), ``record``. Called from Python, each round cost two dozen numpy calls
+(``policy_step``), ``record``. Called from Python, each round cost two dozen numpy calls
 and six kernel dispatches around those loops, about a sixth of the MDM rows' CPU time over
 their 18 000 rounds (benchmarks/README.md, "2026-11-23 to 2026-11-26: reproduce's speed, change
 by change"). Here the same kernels run in the same
@@ -24,9 +24,18 @@ from numpy.typing import NDArray
 
 from mdm_core.jit import compiled
 from mdm_core.world.targets import NODE_EPS
-from mdm_montecarlo.kernels.compiled_step import CONFIRMED, EXACT, remember_confirmed, step_lanes
-from mdm_montecarlo.kernels.remembered import eligible
+from mdm_montecarlo.kernels.policy_step import (
+    CONFIRMED,
+    EXACT,
+    LaneState,
+    PolicyRules,
+    Seen,
+    remember_confirmed,
+    step_lanes,
+)
+from mdm_montecarlo.kernels.remembered import Remembered, eligible
 from mdm_montecarlo.kernels.round_kernels import advance, legs, record
+from mdm_montecarlo.kernels.round_state import Block, Events, Flight, Legs, Paths, Stepped
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -38,56 +47,25 @@ DONE, GROW = 0, 1
 
 @compiled
 def fly_rounds(
-    level: IntArray,
-    entered: FloatArray,
-    blind_until: FloatArray,
-    anchor: FloatArray,
-    waypoint: FloatArray,
-    memory: FloatArray,
-    memory_count: IntArray,
-    position: FloatArray,
-    time: FloatArray,
-    active: BoolArray,
-    first: FloatArray,
-    stop: FloatArray,
-    gone: FloatArray,
-    known: BoolArray,
-    known_until: FloatArray,
-    known_speed: FloatArray,
-    visible: float,
-    grown: float,
-    seg_start: FloatArray,
-    seg_velocity: FloatArray,
-    filled: int,
-    grid_dt: float,
-    moving: bool,
-    false_mask: BoolArray,
-    appear: FloatArray,
-    real: BoolArray,
-    lifetimes: FloatArray,
-    radii: FloatArray,
-    memory_rule: int,
-    memory_radius: float,
-    blind_time: float,
-    table: FloatArray,
-    area: FloatArray,
-    rule: int,
-    from_anchor: bool,
-    confine: bool,
-    n_vehicles: int,
-    speed: float,
-    duration: float,
-    cap: float,
+    state: LaneState,
+    flight: Flight,
+    remembered: Remembered,
+    paths: Paths,
+    block: Block,
+    rules: PolicyRules,
     rng: np.random.Generator,
 ) -> tuple[int, float, int, FloatArray]:
-    """Rounds until no lane is active (DONE) or a leg ends past the ``filled`` path segments
-    (GROW). Returns why, the time the tracks must reach, the rounds flown and the memory (a
-    grown copy once a lane remembers more targets than it has room for)."""
+    """Rounds until no lane is active (DONE) or a leg ends past the ``paths.filled`` path
+    segments (GROW). Returns why, the time the tracks must reach, the rounds flown and the
+    memory (a grown copy once a lane remembers more targets than it has room for)."""
+    radii = rules.radii
     last = radii.shape[0] - 1
+    n_vehicles = block.n_vehicles
     rounds = 0
+    visible = paths.visible
     # One round's arrays, allocated once for every lane of the block and cut to the round's
     # lanes: allocated afresh each round, they cost page faults and zeroing as big as their use.
-    total, m = first.shape
+    total, m = flight.first.shape
     lane_buf = np.empty(total, dtype=np.intp)
     run_buf = np.empty(total, dtype=np.intp)
     t_buf = np.empty(total)
@@ -107,148 +85,65 @@ def fly_rounds(
     while True:
         n = 0
         for lane in range(total):
-            if active[lane]:
+            if flight.active[lane]:
                 lane_buf[n] = lane
                 n += 1
         if n == 0:
-            return DONE, 0.0, rounds, memory
+            return DONE, 0.0, rounds, state.memory
         lanes = lane_buf[:n]
         runs = run_buf[:n]
         t = t_buf[:n]
         exact = exact_buf[:n]
         for i in range(n):
             runs[i] = lanes[i] // n_vehicles
-            t[i] = time[lanes[i]]
-            exact[i] = memory_rule == EXACT or level[lanes[i]] == last
-        unit = unit_buf[:n]
-        leg = leg_buf[:n]
-        left = left_buf[:n]
-        horizon = horizon_buf[:n]
-        until = legs(
-            waypoint,
-            position,
-            time,
-            level,
-            entered,
-            blind_until,
-            lifetimes,
-            stop,
-            lanes,
-            runs,
-            speed,
-            unit,
-            leg,
-            left,
-            horizon,
-        )
-        if moving and math.floor(until / grid_dt + NODE_EPS) >= filled:
-            return GROW, until, rounds, memory
-        sensed = eligible(
-            known,
-            known_until,
-            known_speed,
+            t[i] = flight.time[lanes[i]]
+            exact[i] = rules.memory_rule == EXACT or state.level[lanes[i]] == last
+        stepped = Stepped(lanes, runs, t, exact)
+        leg = Legs(unit_buf[:n], leg_buf[:n], left_buf[:n], horizon_buf[:n])
+        until = legs(state, flight, rules.lifetimes, block.speed, stepped, leg)
+        if paths.moving and math.floor(until / paths.grid_dt + NODE_EPS) >= paths.filled:
+            return GROW, until, rounds, state.memory
+        seen_paths = Paths(
+            paths.seg_start,
+            paths.seg_velocity,
+            paths.filled,
+            paths.grid_dt,
+            paths.moving,
             visible,
-            memory,
-            memory_count,
-            lanes,
-            runs,
-            t,
-            exact,
-            seg_start,
-            seg_velocity,
-            grid_dt,
-            moving,
-            memory_radius,
-            sensed_buf[:n],
+            paths.grown,
         )
-        visible = grown  # the next rounds see this call's paths
-        reached = reached_buf[:n]
-        contacts = contacts_buf[:n]
-        where = where_buf[:n]
-        advance(
-            level,
-            blind_until,
-            memory,
-            memory_count,
-            position,
-            time,
-            waypoint,
-            lanes,
-            runs,
-            unit,
-            leg,
-            left,
-            horizon,
-            sensed,
-            radii,
-            memory_rule,
-            false_mask,
-            appear,
-            seg_start,
-            seg_velocity,
-            grid_dt,
-            grown,
-            moving,
-            speed,
-            entry,
-            reached,
-            contacts,
-            where,
+        sensed = eligible(
+            remembered, state, stepped, seen_paths, rules.memory_radius, sensed_buf[:n]
         )
+        visible = paths.grown  # the next rounds see this call's paths
+        events = Events(sensed, entry, reached_buf[:n], contacts_buf[:n], where_buf[:n])
+        advance(state, flight, stepped, leg, paths, block, rules, events)
         now = now_buf[:n]
         at = at_buf[:n]
         for i in range(n):
-            now[i] = time[lanes[i]]
-            at[i, 0] = position[lanes[i], 0]
-            at[i, 1] = position[lanes[i], 1]
-        new = contacts  # the step turns the contacts into the new confirmations in place
+            now[i] = flight.time[lanes[i]]
+            at[i, 0] = flight.position[lanes[i], 0]
+            at[i, 1] = flight.position[lanes[i], 1]
+        # The step turns the contacts into the new confirmations in place.
+        new = events.contacts
         flags = flags_buf[:n]
-        step_lanes(
-            level,
-            entered,
-            blind_until,
-            anchor,
-            memory,
-            memory_count,
-            lanes,
-            now,
-            at,
-            reached,
-            contacts,
-            where,
-            lifetimes,
-            radii,
-            memory_radius,
-            memory_rule,
-            blind_time,
-            waypoint,
-            table,
-            area,
-            rule,
-            from_anchor,
-            confine,
-            rng,
-            new,
-            flags,
-        )
+        seen = Seen(now, at, events.reached, events.contacts, events.where)
+        step_lanes(state, lanes, seen, rules, rng, new, flags)
         confirmed = flags[:, CONFIRMED]
-        memory = remember_confirmed(memory, memory_count, lanes, new, where, confirmed)
+        memory = remember_confirmed(
+            state.memory, state.memory_count, lanes, new, events.where, confirmed
+        )
+        state = LaneState(
+            state.level,
+            state.entered,
+            state.blind_until,
+            state.anchor,
+            state.waypoint,
+            memory,
+            state.memory_count,
+        )
         for i in range(n):
             if confirmed[i]:
-                known_until[lanes[i]] = -np.inf
+                remembered.until[lanes[i]] = -np.inf
         rounds += 1
-        record(
-            first,
-            stop,
-            gone,
-            active,
-            confirmed,
-            new,
-            lanes,
-            runs,
-            time,
-            real,
-            n_vehicles,
-            duration,
-            cap,
-        )
+        record(flight, stepped, confirmed, new, block)

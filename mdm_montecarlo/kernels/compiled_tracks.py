@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from mdm_core.jit import compiled
 from mdm_core.world import Scenario, TargetTracks
 from mdm_core.world.targets import CHUNK_NODES
-from mdm_montecarlo.kernels.compiled_waypoints import clip
+from mdm_montecarlo.kernels.policy_waypoints import clip
 
 FloatArray = NDArray[np.float64]
 

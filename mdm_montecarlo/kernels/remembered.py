@@ -1,5 +1,8 @@
 """Which targets each lane remembers confirming, kept between events instead of recomputed.
 
+Twin of mdm_core/search/policy.py's ``SearchPolicy.known`` (its memory_distance2 against the
+radius), cached: a change to one is made in the other.
+
 A target is 'remembered' by a lane while it lies within the policy's memory_radius R of a
 position the lane confirmed (SearchPolicy.memory_distance2). That answer only changes when the
 lane confirms again or a target crosses the R circle. Targets move at most at the tracks' top
@@ -13,6 +16,7 @@ as memory_distance2 finds it), which also gives the engine its eligible contacts
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,11 +25,23 @@ from mdm_core.jit import compiled
 from mdm_core.search.policy import PolicyState
 from mdm_core.world import TargetTracks
 from mdm_core.world.targets import NODE_EPS
-from mdm_montecarlo.kernels.compiled_step import nearest2
+from mdm_montecarlo.kernels.policy_step import LaneState, lane_state, nearest2
+from mdm_montecarlo.kernels.round_state import Paths, Stepped
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 IntArray = NDArray[np.intp]
+
+
+class Remembered(NamedTuple):
+    """RememberedTargets' arrays as the kernels read and update them."""
+
+    known: BoolArray
+    """(lanes, m) the cached answers."""
+    until: FloatArray
+    """(lanes,) the time each lane's answers hold until."""
+    speed: FloatArray
+    """(1,) the target speed the windows were computed with."""
 
 
 class RememberedTargets:
@@ -45,28 +61,32 @@ class RememberedTargets:
         self.speed = np.array([tracks.max_speed])
         """(1,) the target speed the windows were computed with."""
 
+    @property
+    def arrays(self) -> Remembered:
+        """``known``, ``until`` and ``speed`` as the kernels take them (the same arrays)."""
+        return Remembered(self.known, self.until, self.speed)
+
     def eligible(
         self, state: PolicyState, lanes: IntArray, runs: IntArray, t: FloatArray, exact: BoolArray
     ) -> BoolArray:
         """(len(lanes), m): False for the targets the lanes (of the given runs, at their times
         t) with ``exact`` set know they confirmed (SearchPolicy.known), True elsewhere."""
-        visible = self._tracks.max_speed
-        seg_start, seg_velocity = self._tracks.segments(float(t.max(initial=0.0)))
-        return eligible(
-            self.known,
-            self.until,
-            self.speed,
-            visible,
-            state.memory,
-            state.memory_count,
-            lanes,
-            runs,
-            t,
-            exact,
+        tracks = self._tracks
+        seg_start, seg_velocity = tracks.segments(float(t.max(initial=0.0)))
+        paths = Paths(
             seg_start,
             seg_velocity,
-            self._tracks.grid_dt,
-            self._tracks.moving,
+            tracks.filled,
+            tracks.grid_dt,
+            tracks.moving,
+            tracks.max_speed,
+            tracks.max_speed,
+        )
+        return eligible(
+            self.arrays,
+            lane_state(state),
+            Stepped(lanes, runs, t, exact),
+            paths,
             self.radius,
             np.empty((lanes.shape[0], self.known.shape[1]), dtype=bool),
         )
@@ -78,27 +98,22 @@ class RememberedTargets:
 
 @compiled
 def eligible(
-    known: BoolArray,
-    until: FloatArray,
-    speed: FloatArray,
-    visible: float,
-    memory: FloatArray,
-    memory_count: IntArray,
-    lanes: IntArray,
-    runs: IntArray,
-    t: FloatArray,
-    exact: BoolArray,
-    seg_start: FloatArray,
-    seg_velocity: FloatArray,
-    grid_dt: float,
-    moving: bool,
+    remembered: Remembered,
+    state: LaneState,
+    stepped: Stepped,
+    paths: Paths,
     radius: float,
     out: BoolArray,
 ) -> BoolArray:
     """RememberedTargets.eligible's loop: the answers of the stale lanes recomputed in place
     (``known``, ``until``), then every lane's row of ``out`` (n, m), which it returns: not
-    known on the exact lanes, True on the others. ``visible`` is the tracks' top speed before
-    this round's growth: a higher one than ``speed[0]`` voids every window first."""
+    known on the exact lanes, True on the others. ``paths.visible`` is the tracks' top speed
+    before this round's growth: a higher one than ``speed[0]`` voids every window first."""
+    known, until, speed = remembered
+    lanes, runs, t, exact = stepped
+    memory, memory_count = state.memory, state.memory_count
+    seg_start, seg_velocity, grid_dt = paths.seg_start, paths.seg_velocity, paths.grid_dt
+    moving, visible = paths.moving, paths.visible
     if visible > speed[0]:
         speed[0] = visible
         until[:] = -np.inf

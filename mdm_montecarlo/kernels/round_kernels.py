@@ -26,8 +26,9 @@ from numpy.typing import NDArray
 
 from mdm_core.jit import compiled
 from mdm_core.world.targets import NODE_EPS
-from mdm_montecarlo.kernels.compiled_step import DISC, nearest2
 from mdm_montecarlo.kernels.entry_kernel import entry_row
+from mdm_montecarlo.kernels.policy_step import DISC, LaneState, PolicyRules, nearest2
+from mdm_montecarlo.kernels.round_state import Block, Events, Flight, Legs, Paths, Stepped
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -41,26 +42,26 @@ STOP_EPS = 1e-9
 
 @compiled
 def legs(
-    waypoint: FloatArray,
-    position: FloatArray,
-    time: FloatArray,
-    level: IntArray,
-    entered: FloatArray,
-    blind_until: FloatArray,
+    state: LaneState,
+    flight: Flight,
     lifetimes: FloatArray,
-    stop: FloatArray,
-    lanes: IntArray,
-    runs: IntArray,
     speed: float,
-    unit: FloatArray,
-    leg: FloatArray,
-    left: FloatArray,
-    horizon: FloatArray,
+    stepped: Stepped,
+    out: Legs,
 ) -> float:
     """Per lane, written to the (n,) and (n, 2) arrays it is given: unit vector to the waypoint
     ``unit``, leg seconds ``leg``, seconds to the deadline ``left`` (SearchPolicy.deadline),
     horizon seconds ``horizon``. Returns the latest time any leg reaches (for the tracks'
     growth)."""
+    waypoint, level, entered, blind_until = (
+        state.waypoint,
+        state.level,
+        state.entered,
+        state.blind_until,
+    )
+    position, time, stop = flight.position, flight.time, flight.stop
+    lanes, runs = stepped.lanes, stepped.runs
+    unit, leg, left, horizon = out
     until = 0.0
     for i in range(lanes.shape[0]):
         lane = lanes[i]
@@ -86,34 +87,14 @@ def legs(
 
 @compiled
 def advance(
-    level: IntArray,
-    blind_until: FloatArray,
-    memory: FloatArray,
-    memory_count: IntArray,
-    position: FloatArray,
-    time: FloatArray,
-    waypoint: FloatArray,
-    lanes: IntArray,
-    runs: IntArray,
-    unit: FloatArray,
-    leg: FloatArray,
-    left: FloatArray,
-    horizon: FloatArray,
-    eligible: BoolArray,
-    radii: FloatArray,
-    detection_memory: int,
-    false_mask: BoolArray,
-    appear: FloatArray,
-    seg_start: FloatArray,
-    seg_velocity: FloatArray,
-    grid_dt: float,
-    target_speed: float,
-    moving: bool,
-    speed: float,
-    entry: FloatArray,
-    reached: BoolArray,
-    contacts: BoolArray,
-    where: FloatArray,
+    state: LaneState,
+    flight: Flight,
+    stepped: Stepped,
+    legs: Legs,
+    paths: Paths,
+    block: Block,
+    rules: PolicyRules,
+    events: Events,
 ) -> None:
     """Fly every lane to its next event: ``position`` and ``time`` are updated in place.
 
@@ -123,6 +104,16 @@ def advance(
     contacts' entries are written: the policy step reads no other). ``entry`` (m,) holds one
     lane's entry times at a time. A lane's event depends on its own state and the targets
     only, so each lane is flown through before the next."""
+    level, blind_until, waypoint = state.level, state.blind_until, state.waypoint
+    memory, memory_count = state.memory, state.memory_count
+    position, time = flight.position, flight.time
+    lanes, runs = stepped.lanes, stepped.runs
+    unit, leg, left, horizon = legs
+    radii, detection_memory = rules.radii, rules.memory_rule
+    speed, false_mask, appear = block.speed, block.false_mask, block.appear
+    seg_start, seg_velocity, grid_dt = paths.seg_start, paths.seg_velocity, paths.grid_dt
+    target_speed, moving = paths.grown, paths.moving
+    eligible, entry, reached, contacts, where = events
     n, m = eligible.shape
     last = radii.shape[0] - 1
     for i in range(n):
@@ -193,19 +184,11 @@ def advance(
 
 @compiled
 def record(
-    first: FloatArray,
-    stop: FloatArray,
-    gone: FloatArray,
-    active: BoolArray,
+    flight: Flight,
+    stepped: Stepped,
     confirmed: BoolArray,
     confirmations: BoolArray,
-    lanes: IntArray,
-    runs: IntArray,
-    time: FloatArray,
-    real: BoolArray,
-    n_vehicles: int,
-    duration: float,
-    cap: float,
+    block: Block,
 ) -> None:
     """Keep each lane's first confirmation time of each real target, move the stop time of the
     runs that confirmed (the latest time a confirmation can still change T_nc or T_S: the
@@ -213,6 +196,15 @@ def record(
     ``confirmations`` (n, m) are the new ones; only the ``confirmed`` lanes (n,) have any.
     ``gone`` (runs, m): when a target left the area (inf: never, or T_S counts confirmations
     only); a target is done at its confirmation or departure, whichever is first."""
+    first, stop, gone, active, time = (
+        flight.first,
+        flight.stop,
+        flight.gone,
+        flight.active,
+        flight.time,
+    )
+    lanes, runs, real = stepped.lanes, stepped.runs, block.real
+    n_vehicles, duration, cap = block.n_vehicles, block.duration, block.cap
     m = first.shape[1]
     changed = np.zeros(stop.shape[0], dtype=np.bool_)
     for i in range(lanes.shape[0]):

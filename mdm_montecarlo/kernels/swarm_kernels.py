@@ -1,5 +1,8 @@
 """Compiled (numba) pieces of one iteration of the swarm baselines (mdm_montecarlo.engines.social_engine).
 
+Twin of mdm_core/search/pso.py and mdm_core/search/swarm_iteration.py: a change to one is made
+in the other.
+
 The time-stepped engine moves (runs, vehicles) particles through a dozen small numpy passes per
 step (sensing, swarm bests, the PSO rules, personal bests, SPSO's informants), each allocating
 (runs, vehicles, ...) temporaries; those passes were most of the engine's time. Here each is one

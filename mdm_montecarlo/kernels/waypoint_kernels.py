@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mdm_core.jit import compiled
+from mdm_montecarlo.kernels.swarm_state import Particles
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -15,20 +16,21 @@ IntArray = NDArray[np.intp]
 
 
 @compiled
-def take_readings(
-    run: IntArray,
-    lane: IntArray,
-    position: FloatArray,
-    reading: FloatArray,
-    source: IntArray,
-    current: FloatArray,
-    own_position: FloatArray,
-    own_fitness: FloatArray,
-    own_source: IntArray,
-) -> FloatArray:
+def take_readings(run: IntArray, lane: IntArray, particles: Particles) -> FloatArray:
     """For every arrival (``run``, ``lane``): its ``reading`` there becomes its ``current``
     fitness, and a strictly better one its personal best (``own_*``), in place. Returns the
     arrivals' personal bests' fitness before (ARPSO's evolution speed)."""
+    position, reading, source, current = (
+        particles.position,
+        particles.reading,
+        particles.source,
+        particles.current,
+    )
+    own_position, own_fitness, own_source = (
+        particles.own_position,
+        particles.own_fitness,
+        particles.own_source,
+    )
     previous = np.empty(run.shape[0])
     for a in range(run.shape[0]):
         r = run[a]

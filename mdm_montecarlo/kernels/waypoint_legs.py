@@ -26,6 +26,7 @@ from mdm_core.jit import compiled
 from mdm_core.world.targets import NODE_EPS
 from mdm_montecarlo.kernels.entry_kernel import disc_entry
 from mdm_montecarlo.kernels.swarm_kernels import signal
+from mdm_montecarlo.kernels.swarm_state import Arrivals, Found, Sensing, Steps
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -41,37 +42,30 @@ def walk_legs(
     position: FloatArray,
     waypoint: FloatArray,
     begin: int,
-    times: FloatArray,
-    dt: float,
-    distance: float,
-    area: FloatArray,
-    n_vehicles: int,
-    seg_start: FloatArray,
-    seg_velocity: FloatArray,
-    grid_dt: float,
-    moving: bool,
-    top_speed: float,
-    appear: FloatArray,
-    real: BoolArray,
-    radius: float,
-    known_step: IntArray,
-    conf_time: FloatArray,
-    conf_step: IntArray,
-    arrival_step: IntArray,
-    arrival: FloatArray,
+    steps: Steps,
+    sensing: Sensing,
+    found: Found,
+    arrivals: Arrivals,
 ) -> None:
     """The legs of the ``starting`` particles (flat indices run * n_vehicles + vehicle), which
     start at step ``begin`` from ``position`` (particles, 2) towards ``waypoint``: step q flies
-    from times[q - 1] to times[q] (``dt`` apart), at most ``distance`` per step, clipped to ``area``, until
-    the waypoint is within 1e-6 m or the last step (len(times) - 1) is flown. Writes each
-    particle's ``arrival_step`` (len(times) if it does not arrive) and ``arrival`` position,
-    and for every real target that the run does not know by step ``begin`` and whose
-    confirmation disc of ``radius`` the particle enters: ``conf_time``, ``conf_step``
-    (particles, targets) and the run's earliest ``known_step`` (runs, targets), in place.
+    from times[q - 1] to times[q] (``dt`` apart), at most ``distance`` per step, clipped to
+    ``area`` (``steps``), until the waypoint is within 1e-6 m or the last step (len(times) - 1)
+    is flown. Writes each particle's arrival step (len(times) if it does not arrive) and
+    position (``arrivals``), and for every real target that the run does not know by step
+    ``begin`` and whose confirmation disc (``sensing.confirm_radius``) the particle enters:
+    ``found``'s conf_time, conf_step (particles, targets) and the run's earliest known_step
+    (runs, targets), in place.
 
     Targets follow ``seg_start`` / ``seg_velocity`` (TargetTracks.segments, drawn to the last
     step; row 0 for fixed targets) at most at ``top_speed``; only those that come within
     ``radius`` of the leg's line are solved."""
+    times, dt, distance, area = steps.times, steps.dt, steps.distance, steps.area
+    seg_start, seg_velocity = sensing.seg_start, sensing.seg_velocity
+    grid_dt, moving, top_speed = sensing.grid_dt, sensing.moving, sensing.top_speed
+    appear, real, radius = sensing.appear, sensing.real, sensing.confirm_radius
+    known_step = found.known_step
+    n_vehicles = found.conf_time.shape[0] // known_step.shape[0]
     last = times.shape[0] - 1
     m = appear.shape[0]
     legs = starting.shape[0]
@@ -92,46 +86,24 @@ def walk_legs(
         wy[i] = waypoint[p, 1]
         gap[i] = math.sqrt((wx[i] - x[i]) * (wx[i] - x[i]) + (wy[i] - y[i]) * (wy[i] - y[i]))
         # At most this many steps: the leg's length over the step, and one for the rounding.
-        steps = min(last - begin, int(gap[i] / distance) + 2)
-        reach = radius + top_speed * steps * dt + MARGIN
+        most = min(last - begin, int(gap[i] / distance) + 2)
+        reach = radius + top_speed * most * dt + MARGIN
         for j in range(m):
-            if not real[j] or known_step[run, j] <= begin or appear[j] > times[begin + steps]:
+            if not real[j] or known_step[run, j] <= begin or appear[j] > times[begin + most]:
                 continue
             tx, ty = _target_at(seg_start, seg_velocity, grid_dt, moving, run, j, times[begin])
             if _segment_distance(tx, ty, x[i], y[i], wx[i], wy[i]) <= reach:
                 candidate[i, count[i]] = j
                 count[i] += 1
         if count[i] > 0:
-            _confirm_on_leg(
-                p,
-                x[i],
-                y[i],
-                wx[i],
-                wy[i],
-                gap[i],
-                candidate[i, : count[i]],
-                begin,
-                times,
-                dt,
-                distance,
-                area,
-                n_vehicles,
-                seg_start,
-                seg_velocity,
-                grid_dt,
-                moving,
-                appear,
-                radius,
-                known_step,
-                conf_time,
-                conf_step,
-            )
+            leg = (x[i], y[i], wx[i], wy[i], gap[i])
+            _confirm_on_leg(p, leg, candidate[i, : count[i]], begin, steps, sensing, found)
     _fly(x, y, wx, wy, gap, arrived, distance, area[0], area[1], begin, last)
     for i in range(legs):
         p = starting[i]
-        arrival_step[p] = arrived[i]
-        arrival[p, 0] = x[i]
-        arrival[p, 1] = y[i]
+        arrivals.step[p] = arrived[i]
+        arrivals.position[p, 0] = x[i]
+        arrivals.position[p, 1] = y[i]
 
 
 @compiled
@@ -171,30 +143,23 @@ def _fly(
 @compiled
 def _confirm_on_leg(
     p: int,
-    x: float,
-    y: float,
-    wx: float,
-    wy: float,
-    gap: float,
+    leg: tuple[float, float, float, float, float],
     candidates: IntArray,
     begin: int,
-    times: FloatArray,
-    dt: float,
-    distance: float,
-    area: FloatArray,
-    n_vehicles: int,
-    seg_start: FloatArray,
-    seg_velocity: FloatArray,
-    grid_dt: float,
-    moving: bool,
-    appear: FloatArray,
-    radius: float,
-    known_step: IntArray,
-    conf_time: FloatArray,
-    conf_step: IntArray,
+    steps: Steps,
+    sensing: Sensing,
+    found: Found,
 ) -> None:
-    """The confirmations of particle p on its leg from (x, y) to (wx, wy), step by step (the
-    steps as _fly flies them), for its ``candidates`` targets; in place."""
+    """The confirmations of particle p on its ``leg`` (x, y, wx, wy, gap) from (x, y) to (wx,
+    wy), step by step (the steps as _fly flies them), for its ``candidates`` targets; in
+    place."""
+    x, y, wx, wy, gap = leg
+    times, dt, distance, area = steps.times, steps.dt, steps.distance, steps.area
+    seg_start, seg_velocity = sensing.seg_start, sensing.seg_velocity
+    grid_dt, moving = sensing.grid_dt, sensing.moving
+    appear, radius = sensing.appear, sensing.confirm_radius
+    known_step, conf_time, conf_step = found
+    n_vehicles = conf_time.shape[0] // known_step.shape[0]
     last = times.shape[0] - 1
     run = p // n_vehicles
     q = begin
@@ -332,26 +297,23 @@ def _entry(
 def read_arrivals(
     arrived: IntArray,
     position: FloatArray,
-    seg_start: FloatArray,
-    seg_velocity: FloatArray,
-    grid_dt: float,
-    moving: bool,
-    appear: FloatArray,
     t: float,
-    radius: float,
-    near: float,
-    known_step: IntArray,
     now: int,
-    unread_known: bool,
-    n_vehicles: int,
+    sensing: Sensing,
+    known_step: IntArray,
     fitness: FloatArray,
     source: IntArray,
 ) -> None:
     """swarm_kernels.sense's reading for the ``arrived`` particles (flat indices) alone, at
     ``position`` (particles, 2), the targets where TargetTracks.motion puts them at time t:
-    the strongest exp(-d / radius) above THRESHOLD of a present target within ``radius``, the
-    targets the run confirmed by step ``now`` left out where ``unread_known``; ``fitness`` and
-    ``source`` (particles,) in place (0 and -1 if none)."""
+    the strongest exp(-d / radius) above THRESHOLD of a present target within ``radius``
+    (``sensing.signal_radius``), the targets the run confirmed by step ``now`` left out where
+    ``sensing.unread_known``; ``fitness`` and ``source`` (particles,) in place (0 and -1 if
+    none)."""
+    seg_start, seg_velocity = sensing.seg_start, sensing.seg_velocity
+    grid_dt, moving, appear = sensing.grid_dt, sensing.moving, sensing.appear
+    radius, near, unread_known = sensing.signal_radius, sensing.near, sensing.unread_known
+    n_vehicles = position.shape[0] // known_step.shape[0]
     m = appear.shape[0]
     for p in arrived:
         run = p // n_vehicles

@@ -19,7 +19,8 @@ from numpy.typing import NDArray
 from mdm_core.jit import compiled
 from mdm_montecarlo.kernels import swarm_kernels as kernels
 from mdm_montecarlo.kernels import waypoint_kernels
-from mdm_montecarlo.kernels.compiled_waypoints import next_waypoints
+from mdm_montecarlo.kernels.policy_waypoints import next_waypoints
+from mdm_montecarlo.kernels.swarm_state import Arrivals, Found, Particles, Sensing, Steps, Swarm
 from mdm_montecarlo.kernels.waypoint_legs import forget_confirmed, read_arrivals, walk_legs
 
 FloatArray = NDArray[np.float64]
@@ -56,27 +57,10 @@ RULE_COLUMNS = (
 
 @compiled
 def arrive(
-    variant: int,
-    rules: FloatArray,
-    informants: int,
+    swarm: Swarm,
     run: IntArray,
     lane: IntArray,
-    own_position: FloatArray,
-    own_fitness: FloatArray,
-    own_source: IntArray,
-    position: FloatArray,
-    reading: FloatArray,
-    source: IntArray,
-    current: FloatArray,
-    velocity: FloatArray,
-    waypoint: FloatArray,
-    links: BoolArray,
-    local_fitness: FloatArray,
-    table: FloatArray,
-    bounds: FloatArray,
-    rule: int,
-    from_anchor: bool,
-    confine: bool,
+    particles: Particles,
     area: FloatArray,
     rng: np.random.Generator,
 ) -> int:
@@ -89,12 +73,15 @@ def arrive(
     belong to). The random numbers are drawn for them alone: PSO/ARPSO r1 then r2, (2,
     arrivals, 1, 2); SPSO the normals (arrivals, 1, 2), the radii's uniforms (arrivals, 1),
     then the informant keys (stuck, vehicles) of those stuck; then the explorers' level-1
-    waypoints (SearchPolicy.start's draw, compiled_waypoints.next_waypoints)."""
+    waypoints (SearchPolicy.start's draw, policy_waypoints.next_waypoints)."""
+    variant, rules, informants = swarm.variant, swarm.rules, swarm.informants
+    position, waypoint, velocity = particles.position, particles.waypoint, particles.velocity
+    own_position, own_fitness = particles.own_position, particles.own_fitness
+    own_source, current, links = particles.own_source, particles.current, particles.links
+    local_fitness = particles.local_fitness
     count = run.shape[0]
     n = own_fitness.shape[1]
-    previous = waypoint_kernels.take_readings(
-        run, lane, position, reading, source, current, own_position, own_fitness, own_source
-    )
+    previous = waypoint_kernels.take_readings(run, lane, particles)
     # The runs with arrivals (``run`` is sorted) and each arrival's row among them.
     slot = np.empty(count, dtype=np.intp)
     hits = 0
@@ -224,15 +211,7 @@ def arrive(
                 start[k, 1] = position[run[a], lane[a], 1]
                 k += 1
         drawn_waypoints = next_waypoints(
-            table,
-            np.zeros(lost, dtype=np.intp),
-            start.copy(),
-            start,
-            bounds,
-            rule,
-            from_anchor,
-            confine,
-            rng,
+            swarm.draws, np.zeros(lost, dtype=np.intp), start.copy(), start, rng
         )
         k = 0
         for a in range(count):
@@ -250,45 +229,11 @@ def arrive(
 
 @compiled
 def fly_waypoints(
-    variant: int,
-    rules: FloatArray,
-    informants: int,
-    times: FloatArray,
-    dt: float,
-    distance: float,
-    past_duration: int,
-    position: FloatArray,
-    waypoint: FloatArray,
-    velocity: FloatArray,
-    own_position: FloatArray,
-    own_fitness: FloatArray,
-    own_source: IntArray,
-    reading: FloatArray,
-    source: IntArray,
-    current: FloatArray,
-    links: BoolArray,
-    local_fitness: FloatArray,
-    seg_start: FloatArray,
-    seg_velocity: FloatArray,
-    grid_dt: float,
-    moving: bool,
-    top_speed: float,
-    appear: FloatArray,
-    real: BoolArray,
-    confirm_radius: float,
-    signal_radius: float,
-    near: float,
-    unread_known: bool,
-    forget: bool,
-    table: FloatArray,
-    bounds: FloatArray,
-    rule: int,
-    from_anchor: bool,
-    confine: bool,
-    area: FloatArray,
-    known_step: IntArray,
-    conf_time: FloatArray,
-    conf_step: IntArray,
+    swarm: Swarm,
+    steps: Steps,
+    particles: Particles,
+    sensing: Sensing,
+    found: Found,
     rng: np.random.Generator,
 ) -> tuple[int, int, int]:
     """The whole block: every particle's first leg from step 0, then round after round to the
@@ -297,42 +242,25 @@ def fly_waypoints(
     step). The particles' arrays are (runs, vehicles, ...) and updated in place, as are
     ``known_step``, ``conf_time`` and ``conf_step`` (waypoint_legs.walk_legs). Returns the last
     step, the iterations (arrivals) and how many of them followed another vehicle's best."""
+    times, past_duration, area = steps.times, steps.past_duration, steps.area
+    position, waypoint = particles.position, particles.waypoint
+    own_fitness, own_source = particles.own_fitness, particles.own_source
+    reading, source = particles.reading, particles.source
+    real, known_step = sensing.real, found.known_step
     runs, n_vehicles = own_fitness.shape
     n = runs * n_vehicles
     last = times.shape[0] - 1
     flat = position.reshape(n, 2)
     arrival_step = np.empty(n, dtype=np.intp)
     arrival = np.empty((n, 2))
+    arrivals = Arrivals(arrival_step, arrival)
     # Every particle's first leg from step 0, then the legs of each step's arrivals.
     starting = np.arange(n)
     begin = 0
     iterations = 0
     followed = 0
     while True:
-        walk_legs(
-            starting,
-            flat,
-            waypoint.reshape(n, 2),
-            begin,
-            times,
-            dt,
-            distance,
-            area,
-            n_vehicles,
-            seg_start,
-            seg_velocity,
-            grid_dt,
-            moving,
-            top_speed,
-            appear,
-            real,
-            confirm_radius,
-            known_step,
-            conf_time,
-            conf_step,
-            arrival_step,
-            arrival,
-        )
+        walk_legs(starting, flat, waypoint.reshape(n, 2), begin, steps, sensing, found, arrivals)
         due = arrival_step.min()
         all_known = 0
         for r in range(runs):
@@ -349,53 +277,14 @@ def fly_waypoints(
             flat[p, 1] = arrival[p, 1]
         t = times[due]
         read_arrivals(
-            arrived,
-            flat,
-            seg_start,
-            seg_velocity,
-            grid_dt,
-            moving,
-            appear,
-            t,
-            signal_radius,
-            near,
-            known_step,
-            due,
-            unread_known,
-            n_vehicles,
-            reading.reshape(n),
-            source.reshape(n),
+            arrived, flat, t, due, sensing, known_step, reading.reshape(n), source.reshape(n)
         )
-        if forget:
+        if sensing.forget:
             forget_confirmed(
                 own_fitness.reshape(n), own_source.reshape(n), known_step, due, n_vehicles
             )
         iterations += arrived.size
-        followed += arrive(
-            variant,
-            rules,
-            informants,
-            arrived // n_vehicles,
-            arrived % n_vehicles,
-            own_position,
-            own_fitness,
-            own_source,
-            position,
-            reading,
-            source,
-            current,
-            velocity,
-            waypoint,
-            links,
-            local_fitness,
-            table,
-            bounds,
-            rule,
-            from_anchor,
-            confine,
-            area,
-            rng,
-        )
+        followed += arrive(swarm, arrived // n_vehicles, arrived % n_vehicles, particles, area, rng)
         if end == due:
             # The stepped loop stops after this step's arrivals: their next legs are not flown.
             return end, iterations, followed

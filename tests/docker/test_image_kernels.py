@@ -13,7 +13,7 @@ from tests.docker.engine import docker
 
 ENGINE_KERNELS = (
     "block_rounds.fly_rounds",
-    "compiled_waypoints.next_waypoints",
+    "policy_waypoints.next_waypoints",
     "compiled_tracks._append",
     "swarm_kernels.sense",
     "swarm_kernels.spso_steps",

@@ -8,16 +8,17 @@ from __future__ import annotations
 import numpy as np
 
 from mdm_core.search.from_profile import policy_config, signal_radius
-from mdm_core.search.pso import Best, SwarmConfig
+from mdm_core.search.pso import Best
 from mdm_core.search.swarm_iteration import explore
 from mdm_core.world import Scenario
+from mdm_montecarlo.engines.configuration import configure
 from mdm_montecarlo.engines.engine import BlockResult, block_rngs
 from mdm_montecarlo.engines.swarm_sensors import SwarmSensors
 from mdm_montecarlo.engines.waypoint_swarm import rules_of, swarm_rules
 from mdm_montecarlo.kernels import swarm_kernels as kernels
-from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
 from mdm_montecarlo.kernels.compiled_tracks import compiled_tracks
-from mdm_montecarlo.kernels.compiled_waypoints import RULES
+from mdm_montecarlo.kernels.policy_step import CompiledPolicy
+from mdm_montecarlo.kernels.swarm_state import Particles, Swarm
 from mdm_montecarlo.kernels.waypoint_rounds import VARIANTS, arrive
 from mdm_profiles import MissionProfile
 
@@ -26,7 +27,7 @@ def stepped_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -
     """run_waypoint_swarm_block, every particle flown, sensed and confirmed on every step."""
     scenario = Scenario.from_profile(profile)
     spec = profile.policy.swarm
-    config = swarm_rules(profile)
+    config = swarm_rules(configure(profile))
     explorer = CompiledPolicy(policy_config(profile))
     rng_targets, rng_start, rng = block_rngs(seed, block)
     n_vehicles = profile.fleet.vehicles
@@ -62,6 +63,8 @@ def stepped_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -
         links = kernels.informants(rng.random((n_runs, n_vehicles, n_vehicles)), spec.informants)
     local_fitness = np.zeros(shape)
     waypoint = explore(explorer, position.reshape(n, 2), rng).reshape(*shape, 2)
+    assert explorer.draws is not None
+    swarm = Swarm(VARIANTS[config.variant], rules_of(config), spec.informants, explorer.draws)
     velocity = waypoint - position
     no_move = np.zeros((*shape, 2))
     no_follow = np.zeros(shape, dtype=bool)
@@ -83,72 +86,32 @@ def stepped_block(profile: MissionProfile, seed: int, block: int, n_runs: int) -
         kernels.forget_known(own.fitness, own.source, forget_by)
         if reached.any():
             iterations += int(np.count_nonzero(reached))
-            followed += arrive_reached(
-                config,
-                spec.informants,
-                explorer,
-                own,
-                reached,
+            particles = Particles(
                 position,
+                waypoint,
+                velocity,
+                own.position,
+                own.fitness,
+                own.source,
                 reading,
                 source,
                 current,
-                velocity,
-                waypoint,
                 links,
                 local_fitness,
-                area,
-                rng,
             )
+            followed += arrive_reached(swarm, reached, particles, area, rng)
         if t >= profile.mission.duration and bool(np.isfinite(first.min(axis=1)[:, real]).all()):
             break
     return BlockResult(block, first, iterations, float(t * n), followed)
 
 
 def arrive_reached(
-    config: SwarmConfig,
-    informants: int,
-    explorer: CompiledPolicy,
-    own: Best,
+    swarm: Swarm,
     reached: np.ndarray,
-    position: np.ndarray,
-    reading: np.ndarray,
-    source: np.ndarray,
-    current: np.ndarray,
-    velocity: np.ndarray,
-    waypoint: np.ndarray,
-    links: np.ndarray,
-    local_fitness: np.ndarray,
+    particles: Particles,
     area: np.ndarray,
     rng: np.random.Generator,
 ) -> int:
     """waypoint_rounds.arrive for the particles where ``reached`` (runs, vehicles)."""
     run, lane = np.nonzero(reached)
-    assert explorer.table is not None
-    return int(
-        arrive(
-            VARIANTS[config.variant],
-            rules_of(config),
-            informants,
-            run,
-            lane,
-            own.position,
-            own.fitness,
-            own.source,
-            position,
-            reading,
-            source,
-            current,
-            velocity,
-            waypoint,
-            links,
-            local_fitness,
-            explorer.table,
-            explorer.area,
-            RULES[explorer.config.out_of_area],
-            explorer.config.waypoint_origin == "anchor",
-            explorer.config.confine_to_detection,
-            area,
-            rng,
-        )
-    )
+    return int(arrive(swarm, run, lane, particles, area, rng))

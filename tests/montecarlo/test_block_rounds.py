@@ -8,6 +8,7 @@ import pytest
 
 from mdm_core.world import Scenario, TargetTracks
 from mdm_montecarlo.engines import engine
+from mdm_montecarlo.engines.configuration import configure
 from mdm_montecarlo.kernels.compiled_tracks import compiled_tracks
 from mdm_profiles import builtin_profile
 
@@ -34,7 +35,7 @@ def test_paths_drawn_as_needed_give_the_same_block_as_paths_drawn_first(
         return tracks
 
     monkeypatch.setattr(engine, "shared_tracks", counted)
-    lazy = engine.run_block(profile, 5, 0, 40)
+    lazy = engine.run_block(configure(profile), 5, 0, 40)
     # Not vacuous: the loop came back for more path many times, mid-block.
     assert sum(g > 0 for g in growths) >= 3
 
@@ -46,7 +47,7 @@ def test_paths_drawn_as_needed_give_the_same_block_as_paths_drawn_first(
         return tracks
 
     monkeypatch.setattr(engine, "shared_tracks", drawn_first)
-    eager = engine.run_block(profile, 5, 0, 40)
+    eager = engine.run_block(configure(profile), 5, 0, 40)
     np.testing.assert_array_equal(lazy.per_vehicle, eager.per_vehicle)
     assert lazy.events == eager.events
     assert np.isfinite(lazy.per_vehicle).sum() > 100

@@ -18,6 +18,7 @@ import pytest
 from scipy import stats
 
 from mdm_core import metrics
+from mdm_montecarlo.engines.configuration import configure
 from mdm_montecarlo.engines.engine import run_block
 from mdm_montecarlo.engines.reference import run_reference, run_reference_block
 from mdm_montecarlo.engines.runner import run_missions
@@ -104,7 +105,7 @@ def _assert_not_before_appearance(per_vehicle: np.ndarray, profile: MissionProfi
 
 def test_popup_engine_never_confirms_before_appearance() -> None:
     profile = _profile("paper-popup")
-    block = run_block(profile, SEED, 0, 60)
+    block = run_block(configure(profile), SEED, 0, 60)
     _assert_not_before_appearance(block.per_vehicle, profile)
 
 
@@ -121,7 +122,7 @@ def test_false_targets_never_confirmed_by_engine(name: str) -> None:
     profile = _profile(name)
     false = np.array([t.false_target for t in profile.targets])
     assert false.any()
-    block = run_block(profile, SEED, 0, 80)
+    block = run_block(configure(profile), SEED, 0, 80)
     assert np.isinf(block.per_vehicle[:, :, false]).all()
     assert np.isfinite(block.per_vehicle[:, :, ~false]).any()
     team = run_missions(profile, runs=80, seed=SEED).team_times

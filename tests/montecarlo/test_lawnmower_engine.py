@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mdm_montecarlo.engines.configuration import configure
 from mdm_montecarlo.engines.lawnmower_engine import run_lawnmower_block
 from mdm_montecarlo.engines.runner import run_missions
 from mdm_montecarlo.study.variants import with_method
@@ -47,7 +48,7 @@ def _site(method: str, scenario: str) -> MissionProfile:
 def test_engine_matches_the_stepped_reference(method: str, scenario: str) -> None:
     profile = _site(method, scenario)
     runs = 3
-    engine = run_lawnmower_block(profile, SEED, 0, runs).per_vehicle.min(axis=1)
+    engine = run_lawnmower_block(configure(profile), SEED, 0, runs).per_vehicle.min(axis=1)
     stepped = stepped_lawnmower(profile, SEED, 0, runs, DT)
     real = np.array([not t.false_target for t in profile.targets])
     assert np.isfinite(engine[:, real]).sum() >= runs * 2  # most real targets found

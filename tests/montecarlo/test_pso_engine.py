@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mdm_montecarlo.engines.configuration import configure
 from mdm_montecarlo.engines.runner import run_missions
 from mdm_montecarlo.engines.social_engine import run_swarm_block
 from mdm_montecarlo.study.variants import with_method
@@ -49,9 +50,13 @@ def test_two_workers_match_one() -> None:
 def test_shared_confirmations_are_not_repeated_and_lost_ones_are() -> None:
     """With messages, a vehicle leaves a target another confirmed; with drop = 1 it does not
     know, so the same targets get confirmed again by other vehicles."""
-    shared = run_swarm_block(_profile("PSO", "policy.swarm.signal_radius=2000"), 5, 0, 100)
+    shared = run_swarm_block(
+        configure(_profile("PSO", "policy.swarm.signal_radius=2000")), 5, 0, 100
+    )
     alone = run_swarm_block(
-        _profile("PSO", "policy.swarm.signal_radius=2000", "policy.swarm.message_drop=1.0"),
+        configure(
+            _profile("PSO", "policy.swarm.signal_radius=2000", "policy.swarm.message_drop=1.0")
+        ),
         5,
         0,
         100,
@@ -66,10 +71,14 @@ def test_shared_confirmations_are_not_repeated_and_lost_ones_are() -> None:
 def test_no_messages_means_no_sharing_whatever_the_delay() -> None:
     """drop = 1: nothing arrives, so the delay cannot change a single bit (independent particles)."""
     settings = ("policy.swarm.signal_radius=2000", "policy.swarm.message_drop=1.0")
-    now = run_swarm_block(_profile("ARPSO", *settings), 9, 0, 40)
-    late = run_swarm_block(_profile("ARPSO", *settings, "policy.swarm.message_delay=120"), 9, 0, 40)
+    now = run_swarm_block(configure(_profile("ARPSO", *settings)), 9, 0, 40)
+    late = run_swarm_block(
+        configure(_profile("ARPSO", *settings, "policy.swarm.message_delay=120")), 9, 0, 40
+    )
     assert np.array_equal(now.per_vehicle, late.per_vehicle)
-    shared = run_swarm_block(_profile("ARPSO", "policy.swarm.signal_radius=2000"), 9, 0, 40)
+    shared = run_swarm_block(
+        configure(_profile("ARPSO", "policy.swarm.signal_radius=2000")), 9, 0, 40
+    )
     assert not np.array_equal(now.per_vehicle, shared.per_vehicle)
 
 
@@ -129,8 +138,8 @@ def test_views_of_the_own_bests_give_the_inbox_results(scenario: str, method: st
         ),
         method,
     )
-    fast = run_swarm_block(profile, 11, 2, 40)
-    inbox = run_swarm_block(profile, 11, 2, 40, keep_inbox=True)
+    fast = run_swarm_block(configure(profile), 11, 2, 40)
+    inbox = run_swarm_block(configure(profile), 11, 2, 40, keep_inbox=True)
     assert np.array_equal(fast.per_vehicle, inbox.per_vehicle)
     assert (fast.events, fast.sim_seconds, fast.followed) == (
         inbox.events,

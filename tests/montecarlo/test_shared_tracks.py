@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from mdm_core.world import Scenario, TargetTracks
+from mdm_montecarlo.engines.configuration import configure
 from mdm_montecarlo.engines.engine import block_rngs
 from mdm_montecarlo.engines.runner import simulate_block
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
@@ -60,12 +61,12 @@ def test_results_with_paths_grown_by_another_configuration_are_those_of_fresh_pa
     profile = apply_overrides(Case("dynamic", method, 20.0, 12, 0).profile(), settings)
     # T_S to 40 000 s: this configuration grows the shared paths far past the first one's.
     longer = Case("dynamic", "MDM:LS+BS", 20.0, 12, 0).profile()
-    fresh = simulate_block(profile, seed, 3, 40)
+    fresh = simulate_block(configure(profile), seed, 3, 40)
     tracks = _tracks(seed, 3, 40)
     reach = tracks.filled
-    simulate_block(longer, seed, 3, 40)
+    simulate_block(configure(longer), seed, 3, 40)
     assert tracks.filled > reach  # the paths were grown further
-    again = simulate_block(profile, seed, 3, 40)
+    again = simulate_block(configure(profile), seed, 3, 40)
     assert _tracks(seed, 3, 40) is tracks
     assert np.array_equal(fresh.per_vehicle, again.per_vehicle)
     assert (fresh.events, fresh.sim_seconds, fresh.followed) == (

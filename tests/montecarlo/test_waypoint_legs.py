@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mdm_montecarlo.engines.configuration import configure
 from mdm_montecarlo.engines.waypoint_swarm import run_waypoint_swarm_block
 from mdm_montecarlo.study.cases import Case
 from mdm_profiles import MissionProfile
@@ -35,7 +36,7 @@ def _profile(scenario: str, method: str, *settings: str) -> MissionProfile:
 
 
 def _same(profile: MissionProfile, seed: int, runs: int) -> None:
-    legs = run_waypoint_swarm_block(profile, seed, 1, runs)
+    legs = run_waypoint_swarm_block(configure(profile), seed, 1, runs)
     stepped = stepped_block(profile, seed, 1, runs)
     assert np.array_equal(legs.per_vehicle, stepped.per_vehicle)
     assert (legs.events, legs.followed, legs.sim_seconds) == (
@@ -61,7 +62,7 @@ def test_a_run_that_confirms_everything_ends_the_loop_as_the_stepped_one_does() 
     engine must stop at the same step."""
     only_t2 = [f"targets.{k}.false_target=true" for k in range(10) if k != 1]
     profile = _profile("fixed", "PSO", *TEXT, "mission.ts_cap=40000", *only_t2)
-    legs = run_waypoint_swarm_block(profile, 5, 0, 3)
+    legs = run_waypoint_swarm_block(configure(profile), 5, 0, 3)
     stepped = stepped_block(profile, 5, 0, 3)
     assert stepped.sim_seconds < 40000 * 3 * 12  # it did stop early
     assert stepped.sim_seconds > profile.mission.duration * 3 * 12
@@ -79,4 +80,6 @@ def test_false_targets_are_never_confirmed() -> None:
     """False targets give a signal but are never confirmed (the detection reading reads them)."""
     profile = _profile("popup", "SPSO", *DETECTION, "targets.2.false_target=true")
     _same(profile, seed=9, runs=30)
-    assert not np.isfinite(run_waypoint_swarm_block(profile, 9, 1, 30).per_vehicle[..., 2]).any()
+    assert not np.isfinite(
+        run_waypoint_swarm_block(configure(profile), 9, 1, 30).per_vehicle[..., 2]
+    ).any()

@@ -8,10 +8,13 @@ import pytest
 
 from mdm_core.search.from_profile import policy_config
 from mdm_core.search.pso import Best
+from mdm_montecarlo.engines.configuration import configure
 from mdm_montecarlo.engines.runner import run_missions
 from mdm_montecarlo.engines.social_engine import run_swarm_block
-from mdm_montecarlo.engines.waypoint_swarm import swarm_rules
-from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
+from mdm_montecarlo.engines.waypoint_swarm import rules_of, swarm_rules
+from mdm_montecarlo.kernels.policy_step import CompiledPolicy
+from mdm_montecarlo.kernels.swarm_state import Particles, Swarm
+from mdm_montecarlo.kernels.waypoint_rounds import VARIANTS
 from mdm_montecarlo.study.cases import Case
 from mdm_profiles import MissionProfile
 from mdm_profiles.loader import ProfileError
@@ -51,9 +54,9 @@ def test_an_iteration_lasts_until_the_waypoint_is_reached() -> None:
     """Per interval, every particle iterates every 5 s step; per waypoint, only on arrival:
     a 4 km exploration leg takes many steps, so there are far fewer iterations."""
     interval = run_swarm_block(
-        _profile("fixed", "PSO", "policy.swarm.iteration=interval"), 4, 0, 30
+        configure(_profile("fixed", "PSO", "policy.swarm.iteration=interval")), 4, 0, 30
     )
-    waypoint = run_swarm_block(_profile("fixed", "PSO", *WAYPOINT), 4, 0, 30)
+    waypoint = run_swarm_block(configure(_profile("fixed", "PSO", *WAYPOINT)), 4, 0, 30)
     steps = 1000 / 5
     assert interval.events == steps * 30 * 12
     assert waypoint.events < 0.5 * interval.events
@@ -64,8 +67,8 @@ def test_confirmation_sensor_alone_forms_no_best_when_confirmed_targets_leave_it
     """Read only within r_2, a signal comes from a target already confirmed on the way in; if
     confirmed targets are not read, no best ever forms: nobody follows anyone, and PSO and
     ARPSO (which differ only by their inertia) fly the same missions."""
-    pso = run_swarm_block(_profile("fixed", "PSO", *CONFIRMATION), 8, 0, 40)
-    arpso = run_swarm_block(_profile("fixed", "ARPSO", *CONFIRMATION), 8, 0, 40)
+    pso = run_swarm_block(configure(_profile("fixed", "PSO", *CONFIRMATION)), 8, 0, 40)
+    arpso = run_swarm_block(configure(_profile("fixed", "ARPSO", *CONFIRMATION)), 8, 0, 40)
     assert pso.followed == 0
     assert np.array_equal(pso.per_vehicle, arpso.per_vehicle)
     assert np.isfinite(pso.per_vehicle).any()
@@ -91,30 +94,30 @@ def _arrive_one(
     (fitness 0.5, vehicle 1's) 15 km east and SPSO's last local best ``local_fitness``; 1 and 2
     fly on. Returns (followed, position, waypoint, velocity, links) after the arrival step."""
     profile = _profile("fixed", method, *TEXT)
-    config = swarm_rules(profile)
+    config = swarm_rules(configure(profile))
     position = np.array([[[1000.0, 1000.0], [16000.0, 1000.0], [500.0, 500.0]]])
     own = Best(position.copy(), np.array([[0.0, 0.5, 0.0]]), np.array([[-1, 3, -1]]))
     reached = np.array([[True, False, False]])
     waypoint = np.array([[[1000.0, 1000.0], [16000.0, 1000.0], [900.0, 900.0]]])
     velocity = np.zeros((1, 3, 2))
     links = np.ones((1, 3, 3), dtype=bool) & ~np.eye(3, dtype=bool)
-    followed = arrive_reached(
-        config,
-        informants,
-        CompiledPolicy(policy_config(profile)),
-        own,
-        reached,
+    draws = CompiledPolicy(policy_config(profile)).draws
+    assert draws is not None
+    swarm = Swarm(VARIANTS[config.variant], rules_of(config), informants, draws)
+    particles = Particles(
         position,
+        waypoint,
+        velocity,
+        own.position,
+        own.fitness,
+        own.source,
         np.zeros((1, 3)),
         np.full((1, 3), -1),
         np.zeros((1, 3)),
-        velocity,
-        waypoint,
         links,
         np.full((1, 3), local_fitness),
-        np.array([20000.0, 20000.0]),
-        rng,
     )
+    followed = arrive_reached(swarm, reached, particles, np.array([20000.0, 20000.0]), rng)
     return followed, position, waypoint, velocity, links
 
 

@@ -1,5 +1,8 @@
 """The batch engine's waypoint draws, compiled (numba), bit-identical to the numpy policy's.
 
+Twin of mdm_core/search/policy.py's ``SearchPolicy._next_waypoints`` and ``_draw``, and of
+mdm_core/search/swarm_iteration.py's ``explore``: a change to one is made in the other.
+
 ``SearchPolicy._next_waypoints`` draws, level by level, a step length (Levy step law), a
 direction, folds into the detection disc and into the area, and redraws candidates that land
 outside: a dozen numpy calls on small arrays per level and per redraw round, about a third of
@@ -13,6 +16,7 @@ numpy policy's (tests/montecarlo/test_compiled_waypoints.py); so are the streams
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,7 +26,7 @@ from mdm_core.search.distributions import Brownian, Levy, Uniform
 from mdm_core.search.levels import PolicyConfig
 from mdm_core.search.policy import _BATCH, _REDRAWS, _STUCK, PolicyState
 from mdm_core.search.swarm_iteration import explore
-from mdm_montecarlo.kernels.compiled_memory import CompiledMemoryPolicy
+from mdm_montecarlo.kernels.policy_memory import CompiledMemoryPolicy
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -41,6 +45,22 @@ RULES = {"reflect": REFLECT, "clip": CLIP, "redraw": REDRAW}
     _STEP_CAP,
     _DISC,
 ) = range(8)
+
+
+class Draws(NamedTuple):
+    """A configuration's waypoint draws as the kernels read them, built once per policy
+    (``CompiledWaypoints.draws``)."""
+
+    table: FloatArray
+    """(levels, 8) each level's sampler and step law (``level_table``)."""
+    area: FloatArray
+    """The area's (north, east) size, then the fence's half-planes (``_inside``)."""
+    rule: int
+    """out_of_area: REFLECT, CLIP or REDRAW."""
+    from_anchor: bool
+    """waypoint_origin == "anchor": levels above 1 draw from the anchor."""
+    confine: bool
+    """confine_to_detection: fold the draws into the detection disc."""
 
 
 @compiled
@@ -159,17 +179,15 @@ def _inside(x: float, y: float, area: FloatArray) -> bool:
 
 @compiled
 def _draw(
-    table: FloatArray,
+    draws: Draws,
     k: int,
     origin: FloatArray,
     anchor: FloatArray,
     position: FloatArray,
-    area: FloatArray,
-    rule: int,
-    confine: bool,
     rng: np.random.Generator,
 ) -> FloatArray:
     """SearchPolicy._draw for the lanes of one level."""
+    table, area, rule, confine = draws.table, draws.area, draws.rule, draws.confine
     points = _candidates(table, k, origin, anchor, confine, rng)
     n = points.shape[0]
     if rule != REDRAW:
@@ -224,25 +242,21 @@ def _draw(
 
 @compiled
 def next_waypoints(
-    table: FloatArray,
+    draws: Draws,
     level: IntArray,
     anchor: FloatArray,
     position: FloatArray,
-    area: FloatArray,
-    rule: int,
-    from_anchor: bool,
-    confine: bool,
     rng: np.random.Generator,
 ) -> FloatArray:
     """SearchPolicy._next_waypoints for lanes at ``level`` (n,) with anchors and positions (n, 2)."""
     n = level.shape[0]
     out = np.empty((n, 2))
-    for k in range(table.shape[0]):
+    for k in range(draws.table.shape[0]):
         rows = np.flatnonzero(level == k)
         if rows.size == 0:
             continue
-        origin = anchor[rows] if k > 0 and from_anchor else position[rows]
-        points = _draw(table, k, origin, anchor[rows], position[rows], area, rule, confine, rng)
+        origin = anchor[rows] if k > 0 and draws.from_anchor else position[rows]
+        points = _draw(draws, k, origin, anchor[rows], position[rows], rng)
         for p in range(rows.size):
             out[rows[p], 0] = points[p, 0]
             out[rows[p], 1] = points[p, 1]
@@ -279,30 +293,46 @@ class CompiledWaypoints(CompiledMemoryPolicy):
     def __init__(self, config: PolicyConfig) -> None:
         super().__init__(config)
         self._table = level_table(config)
+        self._draws = (
+            None
+            if self._table is None
+            else Draws(
+                self._table,
+                self._bounds,
+                RULES[config.out_of_area],
+                config.waypoint_origin == "anchor",
+                config.confine_to_detection,
+            )
+        )
+
+    @property
+    def draws(self) -> Draws | None:
+        """The waypoint draws as the kernels read them; None where only numpy's can draw."""
+        return self._draws
 
     def _next_waypoints(
         self, state: PolicyState, lanes: IntArray, position: FloatArray, rng: np.random.Generator
     ) -> FloatArray:
-        if self._table is None:
+        if self._draws is None:
             return super()._next_waypoints(state, lanes, position, rng)
         return self._compiled_draw(
-            self._table, state.level[lanes], state.anchor[lanes], position, rng
+            self._draws, state.level[lanes], state.anchor[lanes], position, rng
         )
 
     def explore(self, position: FloatArray, rng: np.random.Generator) -> FloatArray:
         """swarm_iteration.explore(self, position, rng): fresh level-1 waypoints (k, 2) from
         positions (k, 2), the same draws, without the PolicyState that start builds around
         them (about 70 us a call, thousands of calls in a swarm block)."""
-        if self._table is None:
+        if self._draws is None:
             return explore(self, position, rng)
         start = np.array(position, dtype=float)
         return self._compiled_draw(
-            self._table, np.zeros(len(start), dtype=np.intp), start.copy(), start, rng
+            self._draws, np.zeros(len(start), dtype=np.intp), start.copy(), start, rng
         )
 
+    @staticmethod
     def _compiled_draw(
-        self,
-        table: FloatArray,
+        draws: Draws,
         level: IntArray,
         anchor: FloatArray,
         position: FloatArray,
@@ -311,14 +341,6 @@ class CompiledWaypoints(CompiledMemoryPolicy):
         """next_waypoints for lanes at ``level`` with these anchors and positions."""
         return np.asarray(
             next_waypoints(
-                table,
-                level,
-                anchor,
-                np.ascontiguousarray(position, dtype=np.float64),
-                self._bounds,
-                RULES[self.config.out_of_area],
-                self.config.waypoint_origin == "anchor",
-                self.config.confine_to_detection,
-                rng,
+                draws, level, anchor, np.ascontiguousarray(position, dtype=np.float64), rng
             )
         )

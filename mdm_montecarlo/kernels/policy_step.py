@@ -1,9 +1,13 @@
 """The batch engine's policy step, compiled (numba), bit-identical to ``SearchPolicy.step``.
 
+Twin of mdm_core/search/policy.py's ``SearchPolicy.step`` (its waypoint draws, and
+``CompiledPolicy.explore``, the twin of mdm_core/search/swarm_iteration.py's ``explore``, are
+policy_waypoints.py's): a change to one is made in the other.
+
 ``SearchPolicy.step`` is some forty numpy calls on (lanes,) and (lanes, targets) arrays per
 event: the memory checks of the contacts, the level changes, the decaying index, the blind
 period, the anchor. Here one loop per lane makes the same comparisons and the same sums in the
-same order; the waypoints are then drawn by the compiled draws of ``compiled_waypoints`` and the
+same order; the waypoints are then drawn by the compiled draws of ``policy_waypoints`` and the
 confirmed targets remembered in one more loop, as ``step`` and ``remember`` do. The companion
 keeps the numpy policy (tests/montecarlo/test_compiled_policy.py compares the two on random
 states).
@@ -12,6 +16,7 @@ states).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,7 +24,7 @@ from numpy.typing import NDArray
 from mdm_core.jit import compiled
 from mdm_core.search.levels import PolicyConfig
 from mdm_core.search.policy import Observation, PolicyState, StepOutcome
-from mdm_montecarlo.kernels.compiled_waypoints import RULES, CompiledWaypoints, next_waypoints
+from mdm_montecarlo.kernels.policy_waypoints import CompiledWaypoints, Draws, next_waypoints
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -29,6 +34,58 @@ DISC, EXACT, NONE = 0, 1, 2
 _MEMORY = {"disc": DISC, "exact": EXACT, "none": NONE}
 # Columns of the flags the kernel returns per lane.
 DETECTED, CONFIRMED, EXPIRED, REDRAW = range(4)
+
+
+class PolicyRules(NamedTuple):
+    """A configuration's policy as the kernels read it, built once per policy
+    (``CompiledPolicy.rules``)."""
+
+    lifetimes: FloatArray
+    """Seconds each level lasts before its decaying index ends it (inf on level 1)."""
+    radii: FloatArray
+    """Sensor radius of each level, metres."""
+    memory_radius: float
+    memory_rule: int
+    """detection_memory: DISC, EXACT or NONE."""
+    blind_time: float
+    """fallback_blind_time, seconds."""
+    draws: Draws
+
+
+class LaneState(NamedTuple):
+    """PolicyState's arrays as the kernels read them. A kernel that grows the memory (a new,
+    larger array: ``remember_confirmed``) goes on with a new LaneState holding it."""
+
+    level: IntArray
+    entered: FloatArray
+    blind_until: FloatArray
+    anchor: FloatArray
+    waypoint: FloatArray
+    memory: FloatArray
+    memory_count: IntArray
+
+
+def lane_state(state: PolicyState) -> LaneState:
+    """The kernels' view of ``state`` (the same arrays)."""
+    return LaneState(
+        state.level,
+        state.entered,
+        state.blind_until,
+        state.anchor,
+        state.waypoint,
+        state.memory,
+        state.memory_count,
+    )
+
+
+class Seen(NamedTuple):
+    """What the stepped lanes report (Observation's arrays, one row per stepped lane)."""
+
+    time: FloatArray
+    position: FloatArray
+    reached: BoolArray
+    contacts: BoolArray
+    contact_positions: FloatArray
 
 
 @compiled
@@ -85,29 +142,10 @@ def remember_confirmed(
 
 @compiled
 def step_lanes(
-    level: IntArray,
-    entered: FloatArray,
-    blind_until: FloatArray,
-    anchor: FloatArray,
-    memory: FloatArray,
-    memory_count: IntArray,
+    state: LaneState,
     lanes: IntArray,
-    time: FloatArray,
-    position: FloatArray,
-    reached: BoolArray,
-    contacts: BoolArray,
-    contact_positions: FloatArray,
-    lifetimes: FloatArray,
-    radii: FloatArray,
-    memory_radius: float,
-    detection_memory: int,
-    blind_time: float,
-    waypoint: FloatArray,
-    table: FloatArray,
-    area: FloatArray,
-    rule: int,
-    from_anchor: bool,
-    confine: bool,
+    observed: Seen,
+    rules: PolicyRules,
     rng: np.random.Generator,
     new: BoolArray,
     flags: BoolArray,
@@ -118,6 +156,9 @@ def step_lanes(
     confirmations ``new`` (n, m) and the flags ``flags`` (n, 4) DETECTED, CONFIRMED, EXPIRED,
     REDRAW. ``new`` may be ``contacts`` itself: a lane's row of contacts is read only before
     its row of ``new`` is written."""
+    level, entered, blind_until, anchor, waypoint, memory, memory_count = state
+    time, position, reached, contacts, contact_positions = observed
+    lifetimes, radii, memory_radius, detection_memory, blind_time, draws = rules
     n, m = contacts.shape
     last = radii.shape[0] - 1
     known2 = memory_radius**2
@@ -203,17 +244,7 @@ def step_lanes(
             chosen_position[c, 1] = position[i, 1]
             c += 1
     if count:
-        points = next_waypoints(
-            table,
-            chosen_level,
-            chosen_anchor,
-            chosen_position,
-            area,
-            rule,
-            from_anchor,
-            confine,
-            rng,
-        )
+        points = next_waypoints(draws, chosen_level, chosen_anchor, chosen_position, rng)
         for c in range(count):
             waypoint[chosen[c], 0] = points[c, 0]
             waypoint[chosen[c], 1] = points[c, 1]
@@ -224,33 +255,23 @@ class CompiledPolicy(CompiledWaypoints):
 
     def __init__(self, config: PolicyConfig) -> None:
         super().__init__(config)
-        self._memory_rule = _MEMORY[config.detection_memory]
+        self._rules = (
+            None
+            if self.draws is None
+            else PolicyRules(
+                self._lifetimes,
+                self._radii,
+                float(config.memory_radius),
+                _MEMORY[config.detection_memory],
+                float(config.fallback_blind_time),
+                self.draws,
+            )
+        )
 
     @property
-    def lifetimes(self) -> FloatArray:
-        """Seconds each level lasts before its decaying index ends it (inf on level 1)."""
-        return self._lifetimes
-
-    @property
-    def radii(self) -> FloatArray:
-        """Sensor radius of each level, metres."""
-        return self._radii
-
-    @property
-    def table(self) -> FloatArray | None:
-        """The levels' parameters as the compiled draws read them (compiled_waypoints)."""
-        return self._table
-
-    @property
-    def area(self) -> FloatArray:
-        """The search area's (north, east) size, metres, then the fence's half-planes (what
-        compiled_waypoints._inside reads)."""
-        return self._bounds
-
-    @property
-    def memory_rule(self) -> int:
-        """detection_memory as the kernels read it (DISC, EXACT or NONE)."""
-        return self._memory_rule
+    def rules(self) -> PolicyRules | None:
+        """The policy as the kernels read it; None where only numpy's draws can draw."""
+        return self._rules
 
     def step(
         self,
@@ -260,39 +281,13 @@ class CompiledPolicy(CompiledWaypoints):
         rng: np.random.Generator,
     ) -> StepOutcome:
         """SearchPolicy.step for distinct ``lanes`` (as the engine steps them)."""
-        if self._table is None:
+        if self._rules is None:
             return super().step(state, lanes, obs, rng)
         n, m = obs.contacts.shape
         new_confirmations = np.empty((n, m), dtype=bool)
         flags = np.empty((n, 4), dtype=bool)
-        step_lanes(
-            state.level,
-            state.entered,
-            state.blind_until,
-            state.anchor,
-            state.memory,
-            state.memory_count,
-            lanes,
-            obs.time,
-            obs.position,
-            obs.reached,
-            obs.contacts,
-            obs.contact_positions,
-            self._lifetimes,
-            self._radii,
-            float(self.config.memory_radius),
-            self._memory_rule,
-            float(self.config.fallback_blind_time),
-            state.waypoint,
-            self._table,
-            self._bounds,
-            RULES[self.config.out_of_area],
-            self.config.waypoint_origin == "anchor",
-            self.config.confine_to_detection,
-            rng,
-            new_confirmations,
-            flags,
-        )
+        observed = Seen(obs.time, obs.position, obs.reached, obs.contacts, obs.contact_positions)
+        step_lanes(lane_state(state), lanes, observed, self._rules, rng, new_confirmations, flags)
         confirmed = flags[:, CONFIRMED]
         state.memory = remember_confirmed(
             state.memory,

@@ -1,5 +1,8 @@
 """The policy of the batch engine, with its memory check compiled (numba).
 
+Twin of mdm_core/search/policy.py's ``SearchPolicy.memory_distance2``: a change to one is made
+in the other.
+
 ``SearchPolicy.memory_distance2`` gathers every (lane, remembered slot) pair into a
 (pairs, targets) temporary and reduces it per lane: about a tenth of the engine's time over
 thousands of lanes (docs/model.md, "Speed of reproduce"). Here one loop per lane does the same
