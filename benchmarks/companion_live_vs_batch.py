@@ -4,7 +4,7 @@
 
 Runs ``--live`` full fleet missions (emulator + one companion process per vehicle, seeds
 FIRST..FIRST+N-1, one fleet at a time) and ``--batch`` missions of
-mdm_montecarlo.engine.run_block with the same profile, mission duration and start rule, then
+mdm_montecarlo.engines.engine.run_block with the same profile, mission duration and start rule, then
 two-sided Mann-Whitney U and Kolmogorov-Smirnov tests of the T_nc samples at 5 % (T_nc is a
 small integer: the KS p-value is conservative with ties). Live T_nc counts each vehicle's
 confirmations within ``--duration`` of its own search start (takeoff excluded), as the batch
@@ -24,7 +24,7 @@ from scipy import stats
 
 from mdm_core.metrics import confirmed_within, team_times
 from mdm_ground.fleet.runner import FleetOptions, run_fleet
-from mdm_montecarlo.engine import run_block
+from mdm_montecarlo.engines.engine import run_block
 from mdm_profiles import load_profile
 
 

@@ -6,7 +6,7 @@
 1. Engine: paper-fixed (or ``--profile``) flown with MDM (LS+BS) and the single-sensor searches
    US, BS, LS, ``--runs`` missions each (full T_S runs, up to the profile's ts_cap), with 1 and 2
    local workers: wall time, missions per second, simulated UAV-seconds per wall second.
-2. Reference (mdm_montecarlo.reference, full tau-lag dynamics, sensors read every dt) on
+2. Reference (mdm_montecarlo.engines.reference, full tau-lag dynamics, sensors read every dt) on
    ``--ref-runs`` missions at ``--ref-dt``: the same figures.
 3. Agreement of T_nc (targets confirmed in the mission duration) between the engine's runs of
    step 1 and the reference, same seed: means with standard errors, their difference, the
@@ -23,9 +23,9 @@ from numpy.typing import NDArray
 from scipy import stats
 
 from mdm_core import metrics
-from mdm_montecarlo.reference import run_reference
-from mdm_montecarlo.runner import MissionResults, run_missions
-from mdm_montecarlo.variants import with_method
+from mdm_montecarlo.engines.reference import run_reference
+from mdm_montecarlo.engines.runner import MissionResults, run_missions
+from mdm_montecarlo.study.variants import with_method
 from mdm_profiles import load_profile
 
 ENGINE_METHODS = ("MDM:LS+BS", "US", "BS", "LS")

@@ -14,16 +14,17 @@ from __future__ import annotations
 
 import sys
 
-from mdm_montecarlo import cli, study
-from mdm_montecarlo.study import Row
-from mdm_montecarlo.variants import SWARM_METHODS
+from mdm_montecarlo.commands import cli
+from mdm_montecarlo.study import cases
+from mdm_montecarlo.study.cases import Row
+from mdm_montecarlo.study.variants import SWARM_METHODS
 
 
-def rows_before(tables: tuple[str, ...] = study.TABLES) -> list[Row]:
+def rows_before(tables: tuple[str, ...] = cases.TABLES) -> list[Row]:
     """study_rows without the waypoint swarm rows and the 'popup_from_0' rows."""
     return [
         row
-        for row in study.study_rows(tables)
+        for row in cases.study_rows(tables)
         if row.case.variant != "popup_from_0"
         and (row.case.method not in SWARM_METHODS or row.case.variant == "swarm_detection")
     ]

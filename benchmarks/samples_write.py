@@ -17,9 +17,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from mdm_montecarlo.result_files import case_columns, write_result_files
-from mdm_montecarlo.runner import run_many
-from mdm_montecarlo.study import study_rows
+from mdm_montecarlo.commands.result_files import case_columns, write_result_files
+from mdm_montecarlo.engines.runner import run_many
+from mdm_montecarlo.study.cases import study_rows
 from mdm_provenance import collect
 
 

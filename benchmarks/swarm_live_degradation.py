@@ -2,7 +2,7 @@
 
 Live: ``companion fleet --json --mqtt 127.0.0.1 ...`` (emulator + one companion per vehicle,
 bests shared through the broker, the delay/drop knob applied by each receiver), ``--seeds``
-runs per setting, one fleet at a time. Engine: mdm_montecarlo.runner.run_missions, ``--runs``
+runs per setting, one fleet at a time. Engine: mdm_montecarlo.engines.runner.run_missions, ``--runs``
 missions per setting (what ``mdm-montecarlo run --profile FILE --method PSO --set
 policy.swarm.message_drop=P`` runs; its ``tnc_mean`` is the T_nc column here).
 
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from companion.telemetry import read_records
-from mdm_montecarlo.runner import run_missions
+from mdm_montecarlo.engines.runner import run_missions
 from mdm_profiles import MissionProfile, builtin_profile, write_profile
 from mdm_profiles.overrides import apply_overrides
 

@@ -21,8 +21,8 @@ from pathlib import Path
 
 from code_commit import commit_of
 
-from mdm_montecarlo.runner import is_swarm, simulate_block
-from mdm_montecarlo.study import study_rows
+from mdm_montecarlo.engines.runner import is_swarm, simulate_block
+from mdm_montecarlo.study.cases import study_rows
 
 
 def main() -> int:

@@ -19,9 +19,12 @@ from companion.autopilots import FlightMode
 from companion.fly import REFUSED, STOPPED_BY_SECOND_SIGNAL, check_flight, fly
 from companion.link.address import parse_address
 from companion.link.factory import BACKENDS, Backend, make_link
+from companion.link.log_transfer import FLIGHT_LOG_WAIT_S
 from companion.link.serial_device import check_serial
 from companion.mission import MissionConfig
+from companion.mission.battery_reserve import reserve_rule
 from companion.mission.mission_exit import MissionExit
+from companion.mission.safety_net import SAFETY_NET_REFUSED
 from companion.sensors.factory import SENSOR_SOURCES
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
 from mavlink_wire import ENV_VAR, load_signing_key
@@ -56,6 +59,12 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.add_argument("--duration", type=float, help="search time, vehicle s (default: profile)")
     p.add_argument("--end-action", choices=("rtl", "land"), help="default: profile site, else rtl")
     p.add_argument("--land-wait", type=float, default=600.0, help="vehicle s to wait to land")
+    p.add_argument(
+        "--flight-log-wait",
+        type=float,
+        default=FLIGHT_LOG_WAIT_S,
+        help="wall s to download the autopilot's own log once landed (0: none)",
+    )
     p.add_argument(
         "--max-speedup",
         type=float,
@@ -145,7 +154,9 @@ def run_command(args: argparse.Namespace) -> int:
         duration=args.duration,
         end_action=FlightMode(end_action),
         battery_min=site.battery_min if site is not None else 20.0,
+        battery_reserve=reserve_rule(site, profile.fleet.speed, end_action),
         land_wait=args.land_wait,
+        flight_log_wait=args.flight_log_wait,
         dedicated_link=args.dedicated_link,
         target_system=args.system_id,
         max_speedup=args.max_speedup,
@@ -194,11 +205,14 @@ def _map(config: MissionConfig, reason: str, skip: bool) -> None:
 
 
 def _exit_status(reason: str, end: MissionExit | None) -> int:
-    """130 when a second signal cut the mission short; 1 when the companion refused to start;
+    """130 when a second signal cut the mission short; 2 when the vehicle's safety net is not
+    as needed (failsafe.safety_net); 1 when the companion refused to start;
     else the mission's own (:class:`MissionExit`): 0 only when the vehicle was seen landed and
     disarmed, or the end action accepted where ``--land-wait 0`` asked not to wait."""
     if reason == STOPPED_BY_SECOND_SIGNAL:
         return 130
+    if reason.startswith(SAFETY_NET_REFUSED):
+        return 2
     if reason.startswith(REFUSED) or end is None:
         return 1
     return end.status

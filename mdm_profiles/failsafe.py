@@ -4,6 +4,8 @@ failsafes")."""
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import BaseModel, ConfigDict, Field
 
 
@@ -40,3 +42,30 @@ class FailsafeSpec(BaseModel):
         description="A position that moved faster than this times fleet.speed (plus 5 m), or "
         "reports such a velocity, is dropped.",
     )
+    safety_net: Literal["set", "check", "off"] | None = Field(
+        default=None,
+        description="The autopilot's own safety net before the first arm (fence action and "
+        "ceiling, companion-loss and battery failsafes, RTL altitude): 'set' writes and reads "
+        "back each parameter, 'check' refuses to arm (exit 2) when one is not as needed, "
+        "'off' leaves them. Default: 'set' for profiles with a site, 'off' without.",
+    )
+    autopilot_battery: float = Field(
+        default=10.0,
+        gt=0,
+        le=50,
+        description="Battery left (%) at which the autopilot itself returns (its battery "
+        "failsafe): under the companion's site.battery_min, which acts first while it runs.",
+    )
+    companion_loss: float = Field(
+        default=5.0,
+        ge=2,
+        le=60,
+        description="Wall s without the companion (heartbeat or setpoints) after which the "
+        "autopilot returns by itself; written in the vehicle's seconds (x its clock rate).",
+    )
+
+    def safety_net_mode(self, has_site: bool) -> Literal["set", "check", "off"]:
+        """The safety net's mode: as given, else 'set' with a site and 'off' without."""
+        if self.safety_net is not None:
+            return self.safety_net
+        return "set" if has_site else "off"

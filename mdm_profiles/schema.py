@@ -205,6 +205,28 @@ class SiteSpec(_Strict):
     )
     end_action: Literal["rtl", "land"] = "rtl"
     battery_min: float = Field(default=25.0, ge=0, le=100, description="End below this, %.")
+    battery_reserve: float | None = Field(
+        default=10.0,
+        ge=0,
+        le=100,
+        description="Also end when what is left is what the flight home needs, at the drain "
+        "measured so far in this flight, plus this reserve, %; null: battery_min only.",
+    )
+    return_speed: float | None = Field(
+        default=None,
+        gt=0,
+        le=100,
+        description="The end action's speed toward home (m/s) the reserve rule counts with; "
+        "None: fleet.speed (ArduCopter's RTL at WPNAV_SPEED, which the companion sets to it; "
+        "PX4 returns at MPC_XY_CRUISE, stock 5 m/s: set it here).",
+    )
+    descent_speed: float = Field(
+        default=1.0,
+        gt=0,
+        le=20,
+        description="The end action's descent speed to the ground (m/s) the reserve rule "
+        "counts with.",
+    )
     start_margin: float = Field(
         default=100.0,
         ge=0,

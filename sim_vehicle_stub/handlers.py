@@ -73,8 +73,10 @@ class MessageHandler:
             fn(node, msg)
 
     def _heartbeat(self, node: VehicleNode, msg: Any) -> None:
-        if msg.type in _CONTROLLER_TYPES or msg.autopilot == d.MAV_AUTOPILOT_INVALID:
-            node.vehicle.last_gcs_heartbeat = self.now()
+        v = node.vehicle
+        controller = msg.type in _CONTROLLER_TYPES or msg.autopilot == d.MAV_AUTOPILOT_INVALID
+        if controller and v.persona.watches_heartbeat(v.params, msg.get_srcSystem()):
+            v.last_gcs_heartbeat = self.now()
 
     def _command_long(self, node: VehicleNode, msg: Any) -> None:
         p = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)

@@ -1,5 +1,5 @@
 """The table of the search policy's compiled twins in docs/architecture.md is true: each
-reference it names exists in mdm_core/search, each twin in mdm_montecarlo, and each test named
+reference it names exists in mdm_core/search, each twin in mdm_montecarlo/kernels, and each test named
 for a pair imports the reference and the twin (or the compiled policy that calls it, named
 beside it)."""
 
@@ -11,7 +11,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 _ROW = re.compile(r"^\| (`[^|]+`[^|]*) \| (`[^|]+`) \| (`[^|]+`) \|$", re.MULTILINE)
 _NAME = re.compile(r"`([^`]+)`")
-_IMPORT = re.compile(r"mdm_montecarlo(?:\.| import )(\w+)")
+_IMPORT = re.compile(r"mdm_montecarlo\.kernels(?:\.| import )(\w+)")
 
 
 def _rows() -> list[tuple[list[str], list[str], list[str]]]:
@@ -36,7 +36,7 @@ def test_every_pair_names_code_that_exists_and_a_test_that_reads_both() -> None:
                 or (REPO / "mdm_core/search" / ref).exists()
             ), ref
         for twin in twins:
-            assert (REPO / "mdm_montecarlo" / twin).exists(), twin
+            assert (REPO / "mdm_montecarlo/kernels" / twin).exists(), twin
         for test in tests:
             source = (REPO / "tests/montecarlo" / test).read_text()
             assert "mdm_core.search" in source, test

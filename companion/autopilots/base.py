@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import enum
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import ClassVar
+
+from companion.autopilots.safety_params import SafetyNeeds, SafetyParam
 
 
 class FlightMode(enum.Enum):
@@ -62,6 +65,17 @@ class Autopilot(ABC):
     """The parameter that caps horizontal speed and its units per m/s, where there is one."""
     fence_params: ClassVar[FenceParams | None] = None
     """How the vehicle's own polygon fence is switched on, where the companion does it."""
+    safety_reads: ClassVar[tuple[str, ...]] = ()
+    """Parameters read before :meth:`safety_params` (the values it depends on)."""
+    safety_fallbacks: ClassVar[dict[str, str]] = {}
+    """An older name of one of ``safety_reads``, read only where the vehicle lacks the new."""
+
+    def safety_params(
+        self, needs: SafetyNeeds, read: Mapping[str, float | None]
+    ) -> list[SafetyParam] | str:
+        """The safety net's parameters (``read``: the values of ``safety_reads``, None where
+        the vehicle has no such parameter), or why there can be none."""
+        return f"no safety net is known for {self.name}"
 
     @abstractmethod
     def custom_mode(self, mode: FlightMode) -> int:

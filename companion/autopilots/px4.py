@@ -2,9 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import ClassVar
 
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
 from companion.autopilots.base import Autopilot, FenceParams, FlightMode, ModeCommand
+from companion.autopilots.safety_params import SafetyNeeds, SafetyParam
+
+_INT32, _REAL32 = mavlink2.MAV_PARAM_TYPE_INT32, mavlink2.MAV_PARAM_TYPE_REAL32
 
 _MAIN_SUB: dict[FlightMode, tuple[int, int]] = {
     FlightMode.GUIDED: (6, 0),
@@ -40,6 +46,29 @@ class PX4(Autopilot):
     # parameter: GF_ACTION (stock 2, HOLD) is what a breach does, also before arming
     # ("outside geofence" refuses the arming).
     fence_params: ClassVar[FenceParams | None] = FenceParams(None, action="GF_ACTION")
+
+    def safety_params(
+        self, needs: SafetyNeeds, read: Mapping[str, float | None]
+    ) -> list[SafetyParam] | str:
+        # Sources: src/modules/commander/commander_params.c (COM_OBL_RC_ACT 3 = Return after
+        # COM_OF_LOSS_T s without offboard setpoints; COM_LOW_BAT_ACT 3 = Return at the
+        # critical level), src/modules/battery_status (BAT_CRIT_THR), navigator/geofence_params.c
+        # (GF_ACTION 3 = Return, GF_MAX_VER_DIST m above home), navigator/rtl_params.c
+        # (RTL_RETURN_ALT m: the return altitude, current if higher).
+        top = min(needs.layer + needs.layer_band, needs.ceiling)
+        return [
+            SafetyParam("GF_ACTION", 3, _INT32, "fence breach: Return"),
+            SafetyParam("GF_MAX_VER_DIST", needs.ceiling, _REAL32, "fence: the ceiling, m",
+                        low=needs.layer + needs.layer_band, high=needs.ceiling),
+            SafetyParam("COM_OBL_RC_ACT", 3, _INT32, "companion's setpoints lost: Return"),
+            SafetyParam("COM_OF_LOSS_T", needs.loss_s, _REAL32, "setpoints lost after, vehicle s",
+                        low=0.0, high=needs.loss_s),
+            SafetyParam("COM_LOW_BAT_ACT", 3, _INT32, "battery critical: Return"),
+            SafetyParam("BAT_CRIT_THR", needs.battery, _REAL32, "battery critical below",
+                        low=needs.battery, high=0.5),
+            SafetyParam("RTL_RETURN_ALT", needs.layer, _REAL32, "RTL altitude, m",
+                        low=needs.layer - needs.layer_band, high=top),
+        ]  # fmt: skip
 
     def custom_mode(self, mode: FlightMode) -> int:
         main, sub = _MAIN_SUB[mode]

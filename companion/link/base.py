@@ -11,6 +11,7 @@ import time
 from abc import ABC, abstractmethod
 from collections import deque
 from collections.abc import Callable
+from pathlib import Path
 from typing import Literal
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
@@ -20,6 +21,7 @@ from companion.guidance import NedSetpoint
 from companion.link.errors import LinkError
 from companion.link.fence_protocol import FenceTransferError
 from companion.link.local_frame import LocalFrame
+from companion.link.log_transfer import FlightLog
 from companion.link.messages import GlobalPosition, LinkEvent, LocalPosition
 from companion.link.outcome import CommandResult, Outcome
 from companion.link.position_answerer import PositionAnswerer
@@ -53,6 +55,8 @@ class VehicleLink(StreamRequests, SpeedPolicy, SensorParameter, ABC):
     autopilot: Autopilot | None
     """Set from the first HEARTBEAT of the vehicle."""
     target_system: int
+    own_system: int = 245
+    """The companion's own system id (its HEARTBEAT's): the GCS ArduCopter's failsafe watches."""
     uploads_fence: bool = False
     """The backend implements :meth:`upload_fence` and :meth:`download_fence`."""
     alignment: FrameAlignment | None = None
@@ -286,6 +290,13 @@ class VehicleLink(StreamRequests, SpeedPolicy, SensorParameter, ABC):
     async def download_fence(self) -> list[tuple[int, int]]:
         """The inclusion-polygon vertices the vehicle stores."""
         raise FenceTransferError(f"the {type(self).__name__} backend does not read fences")
+
+    # -- the autopilot's own log -------------------------------------------------------------
+
+    async def download_log(self, stem: Path, limit: float) -> FlightLog:
+        """The autopilot's newest log (the flight just flown) into ``stem`` + its format's
+        suffix, within ``limit`` wall s; where it cannot be had, why (log_transfer.py)."""
+        return FlightLog(None, note=f"the {type(self).__name__} backend does not download logs")
 
     # -- the vehicle's words ---------------------------------------------------------------
 

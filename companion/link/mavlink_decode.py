@@ -15,6 +15,7 @@ from companion.autopilots import UnknownAutopilotError, autopilot_for
 from companion.link import fast_frames
 from companion.link.base import VehicleLink
 from companion.link.fence_protocol import MISSION_KINDS
+from companion.link.log_transfer import LOG_KINDS
 from companion.link.messages import (
     Heartbeat,
     LinkEvent,
@@ -33,7 +34,7 @@ _NOT_AUTOPILOT_TYPES = {
     mavlink2.MAV_TYPE_ADSB,
 }
 _HEALTH_BITS = mavlink2.MAV_SYS_STATUS_SENSOR_GPS | mavlink2.MAV_SYS_STATUS_PREARM_CHECK
-REPLY_KINDS = MISSION_KINDS | {"COMMAND_ACK", "PARAM_VALUE"}
+REPLY_KINDS = MISSION_KINDS | LOG_KINDS | {"COMMAND_ACK", "PARAM_VALUE"}
 """Answers to what the link asked: to :meth:`MavlinkDecoding._reply`, never events."""
 
 
@@ -49,7 +50,7 @@ class MavlinkDecoding(VehicleLink):
 
     @abstractmethod
     def _reply(self, kind: str, msg: Any) -> None:
-        """A message of :data:`REPLY_KINDS`, to the command, parameter or fence transfer
+        """A message of :data:`REPLY_KINDS`, to the command, parameter, fence or log transfer
         waiting for it."""
 
     def _event(self, msg_id: int, frame: bytes, received: float) -> LinkEvent | None:

@@ -28,6 +28,8 @@ from companion.autopilots import FlightMode, UnknownAutopilotError, autopilot_fo
 from companion.guidance import NedSetpoint
 from companion.link.address import parse_address
 from companion.link.base import LinkError, SetpointKind, VehicleLink
+from companion.link.log_transfer import FlightLog
+from companion.link.mavsdk_logs import download_newest
 from companion.link.messages import (
     Heartbeat,
     LinkEvent,
@@ -51,6 +53,12 @@ _SUBSCRIBED = (
     "GPS_GLOBAL_ORIGIN",
     "HOME_POSITION",
 )
+_INTEGER_TYPES = (
+    mavlink2.MAV_PARAM_TYPE_INT8,
+    mavlink2.MAV_PARAM_TYPE_INT16,
+    mavlink2.MAV_PARAM_TYPE_INT32,
+)
+"""Parameter types set with the plugin's set_param_int first."""
 _HEALTH_BITS = mavlink2.MAV_SYS_STATUS_SENSOR_GPS | mavlink2.MAV_SYS_STATUS_PREARM_CHECK
 _NOT_AUTOPILOT_TYPES = (
     mavlink2.MAV_TYPE_GCS,
@@ -85,10 +93,12 @@ class MavsdkLink(VehicleLink):
         self.address = parse_address(url)
         self.target_system = target_system
         self._ids = (system_id, component_id)
+        self.own_system = system_id
         self._tlog_path = tlog
         self._tlog: TelemetryLog | None = None
         self._discover_timeout = discover_timeout
         self._mavsdk: Mavsdk | None = None
+        self._system: Any = None
         self._direct: MavlinkDirect | None = None
         self._offboard_sync: Offboard | None = None
         self._action: ActionAsync | None = None
@@ -126,6 +136,7 @@ class MavsdkLink(VehicleLink):
                     self.target_system,
                     self.address.url(),
                 )
+        self._system = system
         raw = system._system
         self._direct = MavlinkDirect(raw)
         self._action = ActionAsync(system)
@@ -144,7 +155,7 @@ class MavsdkLink(VehicleLink):
         self._handles.clear()
         if self._mavsdk is not None:
             self._mavsdk.destroy()
-        self._mavsdk = self._direct = self._offboard_sync = None
+        self._mavsdk = self._direct = self._offboard_sync = self._system = None
         self._action = self._offboard = self._param = None
         self._offboard_started = False
         if self._tlog is not None:
@@ -421,15 +432,33 @@ class MavsdkLink(VehicleLink):
     async def set_param(self, name: str, value: float, param_type: int) -> float | None:
         if self._param is None:
             return None
-        try:
-            if param_type == mavlink2.MAV_PARAM_TYPE_INT32:
-                await self._param.set_param_int(name, round(value))
-            else:
-                await self._param.set_param_float(name, value)
-        except Exception as exc:
-            log.warning("MAVSDK %s=%g: %s", name, value, exc)
-            return None
+        param = self._param
+
+        async def as_int() -> None:
+            await param.set_param_int(name, round(value))
+
+        async def as_float() -> None:
+            await param.set_param_float(name, value)
+
+        setters = [as_int, as_float]
+        # The plugin checks the type against what the autopilot reported (ArduPilot: INT8,
+        # INT16...): the other setter where the first is refused as of another type.
+        if param_type not in _INTEGER_TYPES:
+            setters.reverse()
+        for k, setter in enumerate(setters):
+            try:
+                await setter()
+                break
+            except Exception as exc:
+                if k == len(setters) - 1:
+                    log.warning("MAVSDK %s=%g: %s", name, value, exc)
+                    return None
         return await self.read_param(name)
+
+    async def download_log(self, stem: Path, limit: float) -> FlightLog:
+        if self._system is None:
+            return FlightLog(None, note="the MAVSDK link is closed")
+        return await download_newest(self._system, stem, limit)
 
     async def _set_sensor(self, index: int) -> CommandResult:
         if self._param is None:

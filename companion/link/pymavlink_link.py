@@ -16,6 +16,7 @@ from companion.guidance import NedSetpoint
 from companion.link import fast_frames
 from companion.link.base import LinkError, SetpointKind
 from companion.link.fence_protocol import FenceTransfer
+from companion.link.log_transfer import LOG_KINDS, FlightLog, LogTransfer
 from companion.link.mavlink_commands import PARAM_INT32, MavlinkCommands
 from companion.link.mavlink_decode import text_field
 from companion.link.mavlink_receiver import MavlinkReceiver
@@ -63,7 +64,9 @@ class PymavlinkLink(MavlinkReceiver):
             tlog=tlog,
             signing_key=signing_key,
         )
+        self.own_system = system_id
         self._fence = FenceTransfer(self._mav, self._send, target_system)
+        self._logs = LogTransfer(self._mav, self._send, target_system)
         self._commands = MavlinkCommands(
             self._mav,
             self._send,
@@ -79,6 +82,8 @@ class PymavlinkLink(MavlinkReceiver):
             self._commands.on_ack(msg.command, msg.result)
         elif kind == "PARAM_VALUE":
             self._commands.on_param_value(text_field(msg.param_id), msg.param_value, msg.param_type)
+        elif kind in LOG_KINDS:
+            self._logs.inbox.put_nowait(msg)
         else:
             self._fence.inbox.put_nowait(msg)
 
@@ -169,6 +174,9 @@ class PymavlinkLink(MavlinkReceiver):
 
     async def download_fence(self) -> list[tuple[int, int]]:
         return await self._fence.download()
+
+    async def download_log(self, stem: Path, limit: float) -> FlightLog:
+        return await self._logs.download(stem, limit)
 
     async def command_long(self, command: int, *params: float) -> CommandResult:
         return await self._commands.command_long(command, *params)

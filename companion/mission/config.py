@@ -7,6 +7,8 @@ from pathlib import Path
 
 from companion.autopilots import FlightMode
 from companion.link.base import SetpointKind
+from companion.link.log_transfer import FLIGHT_LOG_WAIT_S
+from companion.mission.battery_reserve import ReserveRule
 from mdm_profiles import MissionProfile
 
 
@@ -29,6 +31,9 @@ class MissionConfig:
     """RTL or LAND at the end of the mission."""
     battery_min: float = 20.0
     """End the mission below this remaining battery, percent."""
+    battery_reserve: ReserveRule | None = None
+    """Also end it when what is left is what the flight home needs plus a reserve
+    (battery_reserve.py); None: the fixed minimum only (profiles without a site)."""
     link_timeout: float = 3.0
     """Wall seconds without HEARTBEAT before the link counts as lost (vehicle time stops with
     the link, so this one timer cannot be in vehicle time)."""
@@ -38,6 +43,9 @@ class MissionConfig:
     """Wall seconds between 'waiting for system N' lines while the vehicle is not heard."""
     land_wait: float = 600.0
     """Vehicle seconds to wait for touchdown after the end action; 0 = exit at once."""
+    flight_log_wait: float = FLIGHT_LOG_WAIT_S
+    """Wall seconds to download the autopilot's own log once landed (log_transfer.py); 0 =
+    none."""
     climb_timeout: float = 120.0
     """Vehicle seconds allowed to reach the search altitude before the mission is aborted."""
     dedicated_link: bool = False
@@ -71,3 +79,7 @@ class MissionConfig:
 
     def tlog_path(self) -> Path:
         return self.log_dir / f"vehicle-{self.vehicle}.tlog"
+
+    def autopilot_log_stem(self) -> Path:
+        """The autopilot's own log, without its suffix (.bin, .ulg)."""
+        return self.log_dir / f"autopilot-{self.vehicle}"

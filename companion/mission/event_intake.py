@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import math
 import time
 from collections.abc import Callable, Coroutine
 from typing import Any, Protocol
@@ -22,6 +23,7 @@ from companion.link.messages import (
     StraySource,
     SystemStatus,
 )
+from companion.mission.battery_reserve import percent_home
 from companion.mission.config import MissionConfig
 from companion.mission.control import ModeReport
 from companion.mission.core_for import MissionCore
@@ -180,8 +182,22 @@ class EventIntake:
             m.emit("stray", address=event.address, locked=event.locked)
         elif isinstance(event, SystemStatus):
             m.seen.status = event
-            m.feed(Battery(event.battery_remaining, m.config.battery_min))
+            self._on_battery(event.battery_remaining)
         m.waits.wake()
+
+    def _on_battery(self, remaining: int) -> None:
+        """The fixed minimum, and the reserve rule once airborne: the percent the flight home
+        needs at the drain measured so far (from where the vehicle was first seen on the
+        ground; the descent alone where that is not known)."""
+        m, seen, rule = self.m, self.m.seen, self.m.config.battery_reserve
+        pos, home = seen.position, None
+        if rule is not None and pos is not None and -pos.down > 1.0 and remaining >= 0:
+            rate = seen.drain.note(seen.clock.now, remaining)
+            start = seen.home or (pos.north, pos.east)
+            away = math.hypot(pos.north - start[0], pos.east - start[1])
+            home = percent_home(rate, rule, away, -pos.down)
+        reserve = rule.reserve if rule is not None else 0.0
+        m.feed(Battery(remaining, m.config.battery_min, home, reserve))
 
     def _on_text(self, text: StatusText) -> None:
         """The autopilot's own words on the console and in the mission log."""

@@ -99,6 +99,21 @@ def _same(m: Mission, _e: Any) -> Mission:
     return m
 
 
+def _short_of_home(m: Mission, e: Battery) -> bool:
+    """Searching, and no more left than the flight home needs plus the reserve."""
+    home = e.home
+    return (
+        m.phase is Phase.SEARCH
+        and e.remaining >= 0
+        and home is not None
+        and (e.remaining <= home + e.reserve)
+    )
+
+
+def _home_reason(e: Battery) -> str:
+    return f"battery {e.remaining}%: home needs {e.home:g}% + {e.reserve:g}% reserve"
+
+
 def _end(reason: Callable[[Any], str]) -> Change:
     """Set the end reason unless one is set already (the first reason stands)."""
     return lambda m, e: m if m.ending else replace(m, end_reason=reason(e))
@@ -208,6 +223,9 @@ TABLE: tuple[Row, ...] = (
     Row((Battery,), "searching, known and below the minimum", None, (),
         lambda m, e: m.phase is Phase.SEARCH and 0 <= e.remaining < e.minimum,
         _end(lambda e: f"battery {e.remaining}%"), sets="end: `battery <n>%`"),
+    Row((Battery,), "searching, known and at most what home needs plus the reserve", None,
+        (), _short_of_home, _end(_home_reason),
+        sets="end: `battery <n>%: home needs <h>% + <r>% reserve`"),
     Row((Battery,), "otherwise", None, ()),
     Row((Gps,), "not in transit or search", None, (), lambda m, e: m.phase not in _WATCHED),
     Row((Gps,), "inside the fence", None, (), lambda m, e: e.breach is None,

@@ -181,6 +181,11 @@ class Battery:
     remaining: int
     """Per cent; -1 when the autopilot does not know."""
     minimum: float
+    home: float | None = None
+    """Per cent the flight home needs at the drain measured so far (battery_reserve.py); None:
+    no reserve rule (a profile without a site), or not airborne yet."""
+    reserve: float = 0.0
+    """Per cent that must be left at landing, above ``home``."""
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,7 @@ from companion.mission.lifecycle_events import (
 )
 from companion.mission.mission_exit import MissionExit
 from companion.mission.phase import Phase
+from companion.mission.safety_net import install_safety_net
 from companion.telemetry import events
 
 log = logging.getLogger(__name__)
@@ -59,6 +60,8 @@ class LifecycleSteps:
         self._speed_report: str | None = None
         """What setting the profile's speed on the vehicle gave (once per process)."""
         self._transit_t0 = 0.0
+        self._safety_net_done = False
+        """The safety net went into the vehicle (before the first arm of this process)."""
         self._steps: dict[Do, Callable[[], Awaitable[Outcome | None]]] = {
             Do.CONNECT: self._connect, Do.INSTALL_FENCE: self._install_fence,
             Do.LOCATE: self._locate, Do.AWAIT_CONTROL: self._await_control,
@@ -124,6 +127,10 @@ class LifecycleSteps:
             return Prepared(ok=False, takeoff=False)
         hb = m.seen.heartbeat
         if hb is not None and not hb.armed:
+            if not self._safety_net_done:
+                if not await install_safety_net(m):
+                    return Prepared(ok=False, takeoff=False)
+                self._safety_net_done = True
             result = await self.link.arm()
             if not result:
                 self._refused("arm", result, "vehicle %d refused to arm: %s")

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 from companion.link.messages import GlobalPosition, Heartbeat, LocalPosition, SystemStatus
+from companion.mission.battery_reserve import DrainMeter
 from companion.mission.vehicle_clock import VehicleClock
 
 
@@ -37,6 +38,10 @@ class Observed:
         """Mission time the search began (None: not yet)."""
         self.max_search_speed = 0.0
         """Fastest horizontal speed the vehicle reported while searching, m/s."""
+        self.flew = False
+        """The vehicle was seen more than 1 m up in this run."""
+        self.drain = DrainMeter()
+        """The battery's drain in this flight (the reserve rule's measure)."""
 
     def note_received(self, vehicle_time: float) -> None:
         """A position of ``vehicle_time`` came in (whether or not it is acted on)."""
@@ -49,6 +54,7 @@ class Observed:
         t = self.clock.update(pos.time)
         if self.home is None and -pos.down < 1.0:
             self.home = (pos.north, pos.east)
+        self.flew |= -pos.down > 1.0
         if prev is not None and pos.time > prev.time:
             self.period += 0.2 * (min(pos.time - prev.time, 1.0) - self.period)
         self.position = pos

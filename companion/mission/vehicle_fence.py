@@ -35,10 +35,25 @@ class VehicleFence:
         self.installed = False
         """Uploaded, read back equal, its fence type set: ready to switch on."""
         self.enabling = False
+        self.settled = False
+        """:meth:`install` is over, whatever its outcome (the safety net waits for it: both
+        write the fence type)."""
 
     async def install(self) -> None:
         """Upload, read back, compare; set the fence type. Says why where it cannot. Where
         the autopilot enforces any fence it holds (PX4), the upload waits for :meth:`enable`."""
+        try:
+            await self._install()
+        finally:
+            self.settled = True
+
+    def home_inside(self) -> bool:
+        """The vehicle's home (its latest HOME_POSITION) is inside the fence."""
+        home = self.link.home
+        # Containment is the same ray casting on (lat, lon) degrees as on metres.
+        return home is not None and Geofence(np.array(self.polygon)).contains(home)
+
+    async def _install(self) -> None:
         ap = self.link.autopilot
         params = ap.fence_params if ap is not None else None
         if params is None or not self.link.uploads_fence:
@@ -56,8 +71,7 @@ class VehicleFence:
             return
         if params.enable is None:
             home = self.link.home
-            # Containment is the same ray casting on (lat, lon) degrees as on metres.
-            if home is not None and not Geofence(np.array(self.polygon)).contains(home):
+            if home is not None and not self.home_inside():
                 why = (
                     f"home {home[0]:.6f}, {home[1]:.6f} is outside the fence: the "
                     "autopilot would stop the RTL at the fence"

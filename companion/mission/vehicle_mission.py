@@ -178,12 +178,24 @@ class VehicleMission:
                     self.lifecycle.run(), name=f"v{self.config.vehicle}-lifecycle"
                 )
                 life.add_done_callback(lambda _: [t.cancel() for t in loops])
+            await self._keep_flight_log()
         finally:
             self._emit_latency()
             self.position_failsafe.flush()
             self._record_exit()
             await self.link.close()
         return self.end_reason or "stopped"
+
+    async def _keep_flight_log(self) -> None:
+        """Landed and disarmed after a flight: the autopilot's own log into the run directory,
+        or why there is none; printed and recorded (``flight_log``)."""
+        hb, limit = self.seen.heartbeat, self.config.flight_log_wait
+        if limit <= 0 or hb is None or hb.armed or not self.seen.flew:
+            return
+        kept = await self.link.download_log(self.config.autopilot_log_stem(), limit)
+        print(f"vehicle {self.config.vehicle}: {kept.describe()}", flush=True)
+        self.emit("flight_log", path=str(kept.path) if kept.path else None, size=kept.size,
+                  note=kept.note or None)  # fmt: skip
 
     def _record_exit(self) -> None:
         """The ``exit`` record (mission_exit.final_exit)."""

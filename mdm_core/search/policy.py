@@ -12,7 +12,7 @@ to draw from; it keeps no clock and does no I/O. One ``step`` call applies, for 
 
 This is the reference implementation of the policy. The companion runs it (a batch of one);
 the Monte-Carlo engine runs compiled twins of its hot parts, each tested bit for bit against
-this code: ``step`` in ``mdm_montecarlo/compiled_step.py``, the waypoint draws
+this code: ``step`` in ``mdm_montecarlo/kernels/compiled_step.py``, the waypoint draws
 (``_next_waypoints``, the start waypoints) in ``compiled_waypoints.py`` (both
 tests/montecarlo/test_compiled_policy.py), ``memory_distance2`` in ``compiled_memory.py``
 (test_compiled_memory.py) and ``remembered.py`` (test_remembered.py). A change here is made in
@@ -117,7 +117,7 @@ class SearchPolicy:
         self._fence = np.array(config.fence, dtype=float).reshape(-1, 3)
         self._bounds = np.concatenate([self._area, self._fence.ravel()])
         """The area's size, then each fence half-plane's three numbers: what the compiled
-        draws read (mdm_montecarlo.compiled_waypoints._inside)."""
+        draws read (mdm_montecarlo.kernels.compiled_waypoints._inside)."""
 
     @property
     def n_levels(self) -> int:

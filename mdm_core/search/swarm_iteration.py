@@ -1,6 +1,6 @@
 """One iteration of the social-cognitive baselines around the pure rules of pso.py.
 
-What the Monte-Carlo engine (mdm_montecarlo.social_engine, batched over runs x vehicles) and
+What the Monte-Carlo engine (mdm_montecarlo.engines.social_engine, batched over runs x vehicles) and
 the live companion (companion.mission.swarm_core, one vehicle) both do each update interval:
 pick the move (the PSO step of the variant when the particle has a best to follow, else the
 single-sensor exploration of the profile's level 1), take a new reading into the personal best,

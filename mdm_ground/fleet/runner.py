@@ -14,6 +14,7 @@ import time
 from dataclasses import dataclass, field, replace
 
 from companion.link.factory import check_signing_support
+from companion.link.log_transfer import FLIGHT_LOG_WAIT_S
 from companion.mission.phase import Phase
 from mavlink_wire import load_signing_key
 from mdm_ground.fleet import processes
@@ -407,15 +408,18 @@ def _end_hung(
     done_at: dict[int, float],
     now: float,
 ) -> None:
-    """SIGKILL a companion still running _EXIT_GRACE_S after its mission log said done: a
-    process that never exits would hold the whole fleet (its outcome shows the kill)."""
+    """SIGKILL a companion still running _EXIT_GRACE_S after its mission log said done (real
+    vehicles: and the download of the autopilot's log): a process that never exits would hold
+    the whole fleet (its outcome shows the kill)."""
+    real = o.sitl is not None or o.vehicles_file is not None
+    grace = _EXIT_GRACE_S + (FLIGHT_LOG_WAIT_S if real else 0.0)
     for i, p in alive.items():
         if views[i].phase != Phase.DONE.value:
             continue
         since = done_at.setdefault(i, now)
-        if now - since > _EXIT_GRACE_S:
+        if now - since > grace:
             _say(
-                f"fleet: vehicle {i}'s companion still running {_EXIT_GRACE_S:.0f} s after its "
+                f"fleet: vehicle {i}'s companion still running {grace:.0f} s after its "
                 f"mission ended; killing it (its tasks: {o.out / f'companion-{i}.log'})"
             )
             processes.signal_one(p, signal.SIGUSR1)  # `companion run` logs its asyncio tasks

@@ -66,6 +66,9 @@ class FleetResult:
     """How every companion and the emulator ended."""
     flight_checks: list[FlightCheck] = field(default_factory=list)
     """Per vehicle: its altitude layer kept, its share of search time near the fence."""
+    safety_net: dict[int, dict[str, Any]] = field(default_factory=dict)
+    """Per vehicle, its companion's ``safety_net`` record: the mode, and each autopilot
+    parameter before and after (companion/mission/safety_net.py)."""
 
     def as_json(self) -> dict[str, Any]:
         out = asdict(self)
@@ -186,6 +189,18 @@ def score(
     return _result(profile, log_dir, vehicles, duration, per_vehicle, real, found, reasons)
 
 
+def safety_nets(log_dir: Path, vehicles: int) -> dict[int, dict[str, Any]]:
+    """Each vehicle's latest ``safety_net`` record (a restarted companion writes none: its
+    vehicle was armed already), without the record's own keys."""
+    out: dict[int, dict[str, Any]] = {}
+    for i in range(vehicles):
+        path = log_dir / f"mission-{i}.jsonl"
+        nets = [r for r in read_records(path) if r.get("event") == "safety_net"]
+        if nets:
+            out[i] = {k: v for k, v in nets[-1].items() if k not in ("event", "t")}
+    return out
+
+
 def flown_times(log_dir: Path, vehicles: int) -> tuple[float, float]:
     """The latest mission time logged and the longest search flown (end, else last record,
     less the search start), sim s."""
@@ -229,6 +244,7 @@ def _result(
         false_confirmations=sum(not c.real for c in found),
         confirmations=found,
         end_reasons=reasons,
+        safety_net=safety_nets(log_dir, vehicles),
     )
 
 

@@ -7,6 +7,7 @@ import signal
 from pathlib import Path
 
 from mdm_ground.fleet.flight_checks import NEAR_FENCE_M
+from mdm_ground.fleet.flight_logs import flight_log_lines
 from mdm_ground.fleet.outcome import ProcessEnd
 from mdm_ground.fleet.scoring import FleetResult
 
@@ -90,5 +91,6 @@ def summary_lines(r: FleetResult, out: Path, wall: float) -> list[str]:
             lines.append(
                 f"  stray: {e.name} heard another sender with its system id, {stray}; ignored"
             )
+    lines.extend(flight_log_lines(out, r.vehicles))
     lines.append(f"  results: {out / 'results.json'}")
     return lines

@@ -94,7 +94,8 @@ class ArduCopterPersona(Persona):
         i8, i32 = ParamType.INT8, ParamType.INT32
         return [
             ParamSpec("SYSID_THISMAV", facts.system_id, i8, 1, 255),
-            ParamSpec("SYSID_MYGCS", 255, i8, 1, 255, "listed only: any GCS heartbeat counts"),
+            # ArduCopter 4.7's name (SYSID_MYGCS before): only this system's HEARTBEAT counts.
+            ParamSpec("MAV_GCS_SYSID", 255, i32, 1, 255, "the GCS the GCS failsafe watches"),
             ParamSpec("GUID_TIMEOUT", 3.0 * s, low=0.1, doc="guided velocity target time-out, s"),
             ParamSpec("FS_GCS_ENABLE", 0, i8, 0, 7, "GCS loss: 0 off, 1/2/3/6 RTL, 4/5 land"),
             ParamSpec("FS_GCS_TIMEOUT", 5.0 * s, low=2.0, high=1e6),
@@ -162,6 +163,10 @@ class ArduCopterPersona(Persona):
         elif act in (4, 5):
             action = Action.LAND
         return params.get("FS_GCS_TIMEOUT"), action
+
+    def watches_heartbeat(self, params: ParamTable, sysid: int) -> bool:
+        # GCS_MAVLINK::handle_heartbeat: only MAV_GCS_SYSID's heartbeat resets the failsafe.
+        return sysid == int(params.get("MAV_GCS_SYSID"))
 
     def fence_action(self, params: ParamTable) -> Action:
         if int(params.get("FENCE_ENABLE")) == 0:

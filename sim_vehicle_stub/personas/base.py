@@ -237,6 +237,11 @@ class Persona(ABC):
     def link_loss(self, params: ParamTable) -> tuple[float, Action]:
         """Time-out (sim s) of the companion/GCS heartbeat and the reaction."""
 
+    def watches_heartbeat(self, params: ParamTable, sysid: int) -> bool:
+        """Whether a GCS or companion HEARTBEAT from system ``sysid`` is the one the link-loss
+        failsafe watches (PX4: any)."""
+        return True
+
     @abstractmethod
     def fence_action(self, params: ParamTable) -> Action:
         """Reaction to leaving the search area plus margin."""

@@ -20,6 +20,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 _STREAMS = (
     mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
     mavlink2.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
+    mavlink2.MAVLINK_MSG_ID_SYS_STATUS,  # the battery: ArduCopter's SERIAL1 sends it only if asked
 )
 
 
@@ -49,6 +50,12 @@ class Trace:
     boot_s: float = 0.0
     """The vehicle's own clock (time since boot of its latest position), s: runs at the SITL's
     speed-up as far as the host lets it, not at the nominal one."""
+    battery: int = -1
+    """SYS_STATUS battery_remaining, percent (-1: not known)."""
+    mode_battery: list[int] = field(default_factory=list)
+    """``battery`` when each of ``modes`` was first seen."""
+    params: dict[str, float] = field(default_factory=dict)
+    """Every PARAM_VALUE on this link (the echoes of :meth:`Observer.set_param`)."""
 
 
 class Observer:
@@ -113,6 +120,7 @@ class Observer:
             if msg.custom_mode != t.mode:  # type: ignore[attr-defined]
                 t.mode = msg.custom_mode  # type: ignore[attr-defined]
                 t.modes.append(t.mode)
+                t.mode_battery.append(t.battery)
         elif kind == "GLOBAL_POSITION_INT":
             t.boot_s = msg.time_boot_ms / 1000.0  # type: ignore[attr-defined]
             t.alt = msg.relative_alt / 1000.0  # type: ignore[attr-defined]
@@ -124,6 +132,11 @@ class Observer:
                 t.stamps.append(time.monotonic())
             t.last_position = here
             t.max_speed = max(t.max_speed, math.hypot(msg.vx, msg.vy) / 100.0)  # type: ignore[attr-defined]
+        elif kind == "PARAM_VALUE":
+            name = msg.param_id  # type: ignore[attr-defined]
+            t.params[name.decode() if isinstance(name, bytes) else name] = msg.param_value  # type: ignore[attr-defined]
+        elif kind == "SYS_STATUS":
+            t.battery = msg.battery_remaining  # type: ignore[attr-defined]
         elif kind == "EXTENDED_SYS_STATE":
             t.landed_state = msg.landed_state  # type: ignore[attr-defined]
         elif kind == "STATUSTEXT":
@@ -152,6 +165,14 @@ class Observer:
         full = [*params, *[0.0] * (7 - len(params))]
         with self._send_lock:
             self._conn.mav.command_long_send(self.sysid, 1, command, 0, *full)
+
+    def set_param(self, name: str, value: float) -> None:
+        """PARAM_SET (REAL32), as a ground station sends it (the echo not awaited): the SITL's
+        own SIM_* parameters change the simulated world mid-flight."""
+        with self._send_lock:
+            self._conn.mav.param_set_send(
+                self.sysid, 1, name.encode(), value, mavlink2.MAV_PARAM_TYPE_REAL32
+            )
 
     def read_fence(self) -> list[tuple[int, int, int]]:
         """The fence items the vehicle stores, (command, lat, lon) in 1e-7 degrees, downloaded
@@ -205,6 +226,9 @@ class Observer:
                 list(t.track),
                 list(t.stamps),
                 t.boot_s,
+                t.battery,
+                list(t.mode_battery),
+                dict(t.params),
             )
 
     def hold(

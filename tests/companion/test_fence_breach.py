@@ -18,7 +18,11 @@ from mdm_profiles import load_profile
 from tests.emulator_harness import free_udp_base, make_config, running_emulator
 from tests.waiting import wait_until_async
 
-FIELD = load_profile("field-duebendorf")
+_SITE = load_profile("field-duebendorf")
+# The vehicle's own safety net off: GF_ACTION stays as the test sets it (below).
+FIELD = _SITE.model_copy(
+    update={"failsafe": _SITE.failsafe.model_copy(update={"safety_net": "off"})}
+)
 
 
 def test_a_wrong_frame_is_caught_at_the_fence_and_flown_home(tmp_path: Path) -> None:

@@ -12,7 +12,7 @@ from companion.fly import fly
 from companion.link.pymavlink_link import PymavlinkLink
 from companion.mission.phase import Phase
 from companion.telemetry import events
-from companion.telemetry.mission_log import read_log
+from companion.telemetry.mission_log import read_log, read_records
 from tests.emulator_harness import PROFILE, free_udp_base, make_config, running_emulator
 from tests.waiting import wait_until_async
 
@@ -41,6 +41,11 @@ def test_a_script_flies_a_mission_to_its_end(tmp_path: Path) -> None:
         "return",
         "done",
     ]
+    # The emulator keeps no autopilot log: the companion asked for one, after the landing, and
+    # says why there is none.
+    (kept,) = [r for r in read_records(tmp_path / "mission-0.jsonl") if r["event"] == "flight_log"]
+    assert kept["path"] is None
+    assert kept["note"] == "the vehicle did not answer LOG_REQUEST_LIST in 3 s"
 
 
 def test_leaving_the_block_early_ends_with_the_end_action_and_waits(tmp_path: Path) -> None:

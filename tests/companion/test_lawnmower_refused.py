@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from companion.cli import main
-from mdm_montecarlo.variants import with_method
+from mdm_montecarlo.study.variants import with_method
 from mdm_profiles import builtin_profile, write_profile
 
 

@@ -109,7 +109,7 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
             "virtual: confirmed, RTL, landed, disarmed",
             context=context(virtual),
         )
-        assert flights[-1].wait(timeout=60) == 0, context(virtual)()
+        assert flights[-1].wait(timeout=400) == 0, context(virtual)()  # the autopilot log first
         records = events(virtual)
         (confirmation,) = [r for r in records if r["event"] == "confirmation"]
         assert (confirmation["north"], confirmation["east"]) == (220.0, 160.0)
@@ -158,7 +158,7 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
         wait_until(
             landed_after_rtl, 300.0, "mqtt: confirmed, RTL, landed, disarmed", context=context(mqtt)
         )
-        assert flights[-1].wait(timeout=60) == 0, context(mqtt)()
+        assert flights[-1].wait(timeout=400) == 0, context(mqtt)()  # the autopilot log first
         records = events(mqtt)
         (confirmation,) = [r for r in records if r["event"] == "confirmation"]
         assert (confirmation["north"], confirmation["east"]) == (400.0, 450.0)

@@ -277,7 +277,7 @@ def test_flies_through_takeover_kill_and_restart(
         )
         # The companion draws its run map after the landing (0.7 s alone; a first matplotlib
         # use builds its font cache, 44 s in one CI container under load): a hang guard only.
-        assert comp.process.wait(timeout=180) == 0, context()
+        assert comp.process.wait(timeout=480) == 0, context()
         out = comp.output()
         assert f"ending ({ending}): flying RTL and waiting until it lands and disarms" in out
         assert f"mission ended ({ending})" in out
@@ -336,7 +336,7 @@ def test_field_profile_on_px4_keeps_its_own_fence_and_stays_inside(
         )
         # The companion draws its run map after the landing (0.7 s alone; a first matplotlib
         # use builds its font cache, 44 s in one CI container under load): a hang guard only.
-        assert comp.process.wait(timeout=180) == 0, context()
+        assert comp.process.wait(timeout=480) == 0, context()
         trace = obs.snapshot()
         fence = fence_for(profile)
         frame = LocalFrame(origin.lat, origin.lon, origin.alt)

@@ -4,7 +4,7 @@ with the engine's defaults (one iteration per waypoint, kept memory) is refused 
 from __future__ import annotations
 
 from companion.mission.swarm_core import live_swarm_refusal
-from mdm_montecarlo.variants import with_method
+from mdm_montecarlo.study.variants import with_method
 from mdm_profiles import builtin_profile
 
 

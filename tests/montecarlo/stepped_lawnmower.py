@@ -1,5 +1,5 @@
 """The lawnmower teams stepped every ``dt`` in plain Python: the reference the compiled engine
-(mdm_montecarlo.lawnmower_kernel) is tested against.
+(mdm_montecarlo.kernels.lawnmower_kernel) is tested against.
 
 Each vehicle spends a distance budget of speed x dt per step along its course (a waypoint
 reached within a step hands the rest of the step to the next one, so the path is the engine's
@@ -20,9 +20,9 @@ import numpy as np
 
 from mdm_core.search.lawnmower import Plan
 from mdm_core.world import Scenario, TargetTracks
-from mdm_montecarlo.compiled_tracks import compiled_tracks
-from mdm_montecarlo.engine import block_rngs
-from mdm_montecarlo.lawnmower_engine import search_hold, search_spiral, team_plan
+from mdm_montecarlo.engines.engine import block_rngs
+from mdm_montecarlo.engines.lawnmower_engine import search_hold, search_spiral, team_plan
+from mdm_montecarlo.kernels.compiled_tracks import compiled_tracks
 from mdm_profiles import MissionProfile
 
 

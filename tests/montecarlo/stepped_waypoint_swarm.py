@@ -1,5 +1,5 @@
 """The waypoint swarm stepped the plain way, every particle every update interval: the
-reference that mdm_montecarlo.waypoint_swarm's leg-by-leg engine must match to the bit
+reference that mdm_montecarlo.engines.waypoint_swarm's leg-by-leg engine must match to the bit
 (tests/montecarlo/test_waypoint_legs.py). It is the engine as it was before the legs were
 solved in one piece (swarm_kernels.fly, SwarmSensors.sense and confirm on every step)."""
 
@@ -11,14 +11,14 @@ from mdm_core.search.from_profile import policy_config, signal_radius
 from mdm_core.search.pso import Best, SwarmConfig
 from mdm_core.search.swarm_iteration import explore
 from mdm_core.world import Scenario
-from mdm_montecarlo import swarm_kernels as kernels
-from mdm_montecarlo.compiled_step import CompiledPolicy
-from mdm_montecarlo.compiled_tracks import compiled_tracks
-from mdm_montecarlo.compiled_waypoints import RULES
-from mdm_montecarlo.engine import BlockResult, block_rngs
-from mdm_montecarlo.swarm_sensors import SwarmSensors
-from mdm_montecarlo.waypoint_rounds import VARIANTS, arrive
-from mdm_montecarlo.waypoint_swarm import rules_of, swarm_rules
+from mdm_montecarlo.engines.engine import BlockResult, block_rngs
+from mdm_montecarlo.engines.swarm_sensors import SwarmSensors
+from mdm_montecarlo.engines.waypoint_swarm import rules_of, swarm_rules
+from mdm_montecarlo.kernels import swarm_kernels as kernels
+from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
+from mdm_montecarlo.kernels.compiled_tracks import compiled_tracks
+from mdm_montecarlo.kernels.compiled_waypoints import RULES
+from mdm_montecarlo.kernels.waypoint_rounds import VARIANTS, arrive
 from mdm_profiles import MissionProfile
 
 

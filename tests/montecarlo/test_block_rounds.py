@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from mdm_core.world import Scenario, TargetTracks
-from mdm_montecarlo import engine
-from mdm_montecarlo.compiled_tracks import compiled_tracks
+from mdm_montecarlo.engines import engine
+from mdm_montecarlo.kernels.compiled_tracks import compiled_tracks
 from mdm_profiles import builtin_profile
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from mdm_montecarlo.cli import main
+from mdm_montecarlo.commands.cli import main
 
 PAPER_COLUMNS = ("table", "scenario", "method", "level1", "level2", "tnc_mean", "tnc_std")
 
@@ -118,8 +118,6 @@ def test_unwritable_out_is_refused_before_any_simulation(
 def test_matplotlib_and_scipy_special_wait_until_the_workers_start() -> None:
     """reproduce imports them while the simulation workers run (cli._import_report); numba
     imports the top-level scipy package only."""
-    code = (
-        "import sys, mdm_montecarlo.cli; print({'matplotlib', 'scipy.special'} & set(sys.modules))"
-    )
+    code = "import sys, mdm_montecarlo.commands.cli; print({'matplotlib', 'scipy.special'} & set(sys.modules))"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "set()"

@@ -14,9 +14,9 @@ import sys
 import time
 from pathlib import Path
 
-from mdm_montecarlo.study import study_rows
+from mdm_montecarlo.study.cases import study_rows
 
-EXE = [sys.executable, "-m", "mdm_montecarlo.cli"]
+EXE = [sys.executable, "-m", "mdm_montecarlo.commands.cli"]
 _DONE = re.compile(rb"\| *(\d+)/\d+ \[")
 
 

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from mdm_montecarlo.cli import main
-from mdm_montecarlo.compare import compare_samples
+from mdm_montecarlo.commands.cli import main
+from mdm_montecarlo.study.compare import compare_samples
 
 
 def _rows(capsys: pytest.CaptureFixture[str]) -> dict[str, dict[str, Any]]:

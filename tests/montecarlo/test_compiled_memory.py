@@ -6,7 +6,7 @@ import numpy as np
 
 from mdm_core.search import SearchPolicy
 from mdm_core.search.from_profile import policy_config
-from mdm_montecarlo.compiled_memory import CompiledMemoryPolicy
+from mdm_montecarlo.kernels.compiled_memory import CompiledMemoryPolicy
 from mdm_profiles import builtin_profile
 
 LANES = 500

@@ -13,7 +13,7 @@ from mdm_core.search.from_profile import policy_config
 from mdm_core.search.levels import PolicyConfig
 from mdm_core.search.policy import PolicyState
 from mdm_core.search.swarm_iteration import explore
-from mdm_montecarlo.compiled_step import CompiledPolicy
+from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
 from mdm_profiles import builtin_profile
 
 LANES = 2000

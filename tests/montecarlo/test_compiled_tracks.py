@@ -8,7 +8,7 @@ import pytest
 
 from mdm_core.world.area import Area
 from mdm_core.world.targets import RandomWalk, TargetSpec, TargetTracks, WalkBoundary
-from mdm_montecarlo.compiled_tracks import CompiledTracks
+from mdm_montecarlo.kernels.compiled_tracks import CompiledTracks
 
 RUNS = 25
 SPEC = TargetSpec(

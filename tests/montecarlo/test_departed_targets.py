@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 
 from mdm_core.world import Scenario
-from mdm_montecarlo.engine import block_rngs
-from mdm_montecarlo.runner import run_many
-from mdm_montecarlo.study import Case
+from mdm_montecarlo.engines.engine import block_rngs
+from mdm_montecarlo.engines.runner import run_many
+from mdm_montecarlo.study.cases import Case
 from mdm_profiles.overrides import apply_overrides
 
 GONE = ["target_motion.boundary=free", "mission.ts_rule=confirmed_or_gone"]

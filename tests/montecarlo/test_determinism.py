@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from distributed import LocalCluster
 
-from mdm_montecarlo.runner import MissionResults, job_order, run_many, run_missions
-from mdm_montecarlo.variants import with_method
+from mdm_montecarlo.engines.runner import MissionResults, job_order, run_many, run_missions
+from mdm_montecarlo.study.variants import with_method
 from mdm_profiles import MissionProfile, load_profile
 
 RUNS = 120

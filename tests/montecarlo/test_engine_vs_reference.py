@@ -18,10 +18,10 @@ import pytest
 from scipy import stats
 
 from mdm_core import metrics
-from mdm_montecarlo.engine import run_block
-from mdm_montecarlo.reference import run_reference, run_reference_block
-from mdm_montecarlo.runner import run_missions
-from mdm_montecarlo.variants import with_method
+from mdm_montecarlo.engines.engine import run_block
+from mdm_montecarlo.engines.reference import run_reference, run_reference_block
+from mdm_montecarlo.engines.runner import run_missions
+from mdm_montecarlo.study.variants import with_method
 from mdm_profiles import MissionProfile, load_profile
 
 SEED = 20240607

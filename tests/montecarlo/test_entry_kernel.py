@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mdm_core.world import Scenario, TargetTracks, first_entry_time
-from mdm_montecarlo.entry_kernel import entry_row
+from mdm_montecarlo.kernels.entry_kernel import entry_row
 from mdm_profiles import builtin_profile
 
 RUNS = 200

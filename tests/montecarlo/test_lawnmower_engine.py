@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mdm_montecarlo.lawnmower_engine import run_lawnmower_block
-from mdm_montecarlo.runner import run_missions
-from mdm_montecarlo.variants import with_method
+from mdm_montecarlo.engines.lawnmower_engine import run_lawnmower_block
+from mdm_montecarlo.engines.runner import run_missions
+from mdm_montecarlo.study.variants import with_method
 from mdm_profiles import MissionProfile, RandomWalkSpec, builtin_profile
 from mdm_profiles.overrides import apply_overrides
 from tests.montecarlo.stepped_lawnmower import stepped_lawnmower

@@ -1,4 +1,4 @@
-"""mdm_montecarlo.local_pool: every job's result once, errors raised in the parent, workers
+"""mdm_montecarlo.engines.local_pool: every job's result once, errors raised in the parent, workers
 gone after the iterator is closed (as on Ctrl-C)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import os
 
 import pytest
 
-from mdm_montecarlo.local_pool import imap_unordered
+from mdm_montecarlo.engines.local_pool import imap_unordered
 
 
 def _square(x: int) -> tuple[int, int]:

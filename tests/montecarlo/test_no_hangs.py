@@ -10,9 +10,9 @@ from mdm_core.search.distributions import Uniform
 from mdm_core.search.levels import Level, OutOfArea, PolicyConfig
 from mdm_core.search.planar import length
 from mdm_core.search.policy import SearchPolicy
-from mdm_montecarlo.cli import main
-from mdm_montecarlo.runner import run_missions
-from mdm_montecarlo.variants import with_method
+from mdm_montecarlo.commands.cli import main
+from mdm_montecarlo.engines.runner import run_missions
+from mdm_montecarlo.study.variants import with_method
 from mdm_profiles import ProfileError, load_profile
 from mdm_profiles.overrides import apply_overrides
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from mdm_core.world import first_entry_time
-from mdm_montecarlo.pair_entry import pair_entry_times
+from mdm_montecarlo.kernels.pair_entry import pair_entry_times
 
 PAIRS = 5000
 DT = 5.0

@@ -6,7 +6,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from mdm_montecarlo.plots import _boxes
+from mdm_montecarlo.study.plots import _boxes
 
 
 def _layout(in_layout: bool, data: list[list[float]]) -> tuple[tuple[float, ...], bool]:

@@ -1,4 +1,4 @@
-"""The time-stepped engine of the swarm baselines (mdm_montecarlo.social_engine), flying the
+"""The time-stepped engine of the swarm baselines (mdm_montecarlo.engines.social_engine), flying the
 labelled reading "swarm given MDM's detection sensor" (one iteration per update
 interval, the detection sensor's signal, bests of confirmed targets forgotten)."""
 
@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mdm_montecarlo.runner import run_missions
-from mdm_montecarlo.social_engine import run_swarm_block
-from mdm_montecarlo.variants import with_method
+from mdm_montecarlo.engines.runner import run_missions
+from mdm_montecarlo.engines.social_engine import run_swarm_block
+from mdm_montecarlo.study.variants import with_method
 from mdm_profiles import MissionProfile, load_profile
 from mdm_profiles.overrides import apply_overrides
 

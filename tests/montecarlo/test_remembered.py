@@ -9,8 +9,8 @@ import pytest
 from mdm_core.search import SearchPolicy
 from mdm_core.search.from_profile import policy_config
 from mdm_core.world import Scenario
-from mdm_montecarlo.compiled_tracks import compiled_tracks
-from mdm_montecarlo.remembered import RememberedTargets
+from mdm_montecarlo.kernels.compiled_tracks import compiled_tracks
+from mdm_montecarlo.kernels.remembered import RememberedTargets
 from mdm_profiles import builtin_profile
 
 RUNS, VEHICLES = 30, 4

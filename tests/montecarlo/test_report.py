@@ -10,12 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mdm_montecarlo.known_causes import CAUSES, slug
-from mdm_montecarlo.report import write_report
-from mdm_montecarlo.runner import run_many
-from mdm_montecarlo.section3b import SearchGeometry, confirmed_share, p_cm, p_cm_given, p_cs
-from mdm_montecarlo.study import Case, study_rows
-from mdm_montecarlo.tables import format_table, measured_rows
+from mdm_montecarlo.engines.runner import run_many
+from mdm_montecarlo.study.cases import Case, study_rows
+from mdm_montecarlo.study.known_causes import CAUSES, slug
+from mdm_montecarlo.study.report import write_report
+from mdm_montecarlo.study.section3b import SearchGeometry, confirmed_share, p_cm, p_cm_given, p_cs
+from mdm_montecarlo.study.tables import format_table, measured_rows
 from mdm_profiles.overrides import apply_overrides
 
 MODEL = Path(__file__).resolve().parents[2] / "docs" / "model.md"

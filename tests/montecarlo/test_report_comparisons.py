@@ -6,9 +6,9 @@ import re
 
 import pytest
 
-from mdm_montecarlo.report_comparisons import comparison_section
-from mdm_montecarlo.runner import run_many
-from mdm_montecarlo.study import study_rows
+from mdm_montecarlo.engines.runner import run_many
+from mdm_montecarlo.study.cases import study_rows
+from mdm_montecarlo.study.report_comparisons import comparison_section
 
 
 def test_mdm_is_set_against_the_best_single_sensor_and_every_swarm() -> None:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from mdm_montecarlo.report import _draw
+from mdm_montecarlo.study.report import _draw
 
 
 def _fails(path: str) -> None:

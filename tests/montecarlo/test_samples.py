@@ -10,11 +10,11 @@ import pyarrow.parquet as pq
 import pytest
 
 from mdm_core import metrics
-from mdm_montecarlo.cli import main
-from mdm_montecarlo.result_files import report_provenance
-from mdm_montecarlo.runner import run_missions
-from mdm_montecarlo.samples import read_provenance
-from mdm_montecarlo.variants import with_method
+from mdm_montecarlo.commands.cli import main
+from mdm_montecarlo.commands.result_files import report_provenance
+from mdm_montecarlo.engines.runner import run_missions
+from mdm_montecarlo.study.samples import read_provenance
+from mdm_montecarlo.study.variants import with_method
 from mdm_profiles import load_profile
 
 PROVENANCE_FIELDS = {

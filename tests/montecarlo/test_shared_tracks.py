@@ -1,5 +1,5 @@
 """Moving targets' paths drawn once per thread and shared by the blocks that ask for the same
-ones (mdm_montecarlo.compiled_tracks.shared_tracks): the same object for the same targets, runs
+ones (mdm_montecarlo.kernels.compiled_tracks.shared_tracks): the same object for the same targets, runs
 and stream, and the same results as paths drawn afresh, also when an earlier configuration has
 grown them further than this one needs."""
 
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from mdm_core.world import Scenario, TargetTracks
-from mdm_montecarlo.compiled_tracks import shared_tracks
-from mdm_montecarlo.engine import block_rngs
-from mdm_montecarlo.runner import simulate_block
-from mdm_montecarlo.study import Case
+from mdm_montecarlo.engines.engine import block_rngs
+from mdm_montecarlo.engines.runner import simulate_block
+from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
+from mdm_montecarlo.study.cases import Case
 from mdm_profiles.overrides import apply_overrides
 
 SEED = 918_273  # no other test draws this stream: the first block here draws fresh paths

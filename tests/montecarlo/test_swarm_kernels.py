@@ -1,4 +1,4 @@
-"""The compiled pieces of the swarm engine (mdm_montecarlo.swarm_kernels) against the numpy
+"""The compiled pieces of the swarm engine (mdm_montecarlo.kernels.swarm_kernels) against the numpy
 rules they replace, bit for bit, on random states (ties, zero fitness, every branch)."""
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ from mdm_core.search.pso import (
 )
 from mdm_core.search.swarm_iteration import arpso_weights, read_into_best, refresh_informants
 from mdm_core.world.sensors import THRESHOLD
-from mdm_montecarlo import swarm_kernels as kernels
-from mdm_montecarlo.social_engine import _refresh_informants, _swarm_best
+from mdm_montecarlo.engines.social_engine import _refresh_informants, _swarm_best
+from mdm_montecarlo.kernels import swarm_kernels as kernels
 
 RUNS, N, M = 40, 7, 5
 

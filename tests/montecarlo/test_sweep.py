@@ -17,13 +17,13 @@ import pytest
 from distributed import LocalCluster
 
 from mdm_core import metrics
-from mdm_montecarlo.cli import main
-from mdm_montecarlo.result_files import report_provenance
-from mdm_montecarlo.sweep import SweepAsk
-from mdm_montecarlo.sweep_table import PointRow, format_rows
+from mdm_montecarlo.commands.cli import main
+from mdm_montecarlo.commands.result_files import report_provenance
+from mdm_montecarlo.study.sweep import SweepAsk
+from mdm_montecarlo.study.sweep_table import PointRow, format_rows
 from tests.waiting import wait_until
 
-EXE = [sys.executable, "-m", "mdm_montecarlo.cli"]
+EXE = [sys.executable, "-m", "mdm_montecarlo.commands.cli"]
 SWEEP = [
     "sweep", "--profile", "paper-fixed", "--method", "MDM", "--seed", "9",
     "--vary", "policy.levels.1.index.kappa=90,180,360", "--vary", "policy.levels.0.step=2000,4000",

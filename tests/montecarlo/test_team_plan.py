@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mdm_montecarlo.cli import main
-from mdm_montecarlo.runner import run_many, run_missions
-from mdm_montecarlo.team_plan import PlanAsk, plan_row, profiles
+from mdm_montecarlo.commands.cli import main
+from mdm_montecarlo.engines.runner import run_many, run_missions
+from mdm_montecarlo.study.team_plan import PlanAsk, plan_row, profiles
 from mdm_profiles import builtin_profile
 
 

@@ -1,4 +1,4 @@
-"""The waypoint swarm solved leg by leg (mdm_montecarlo.waypoint_legs) against the same swarm
+"""The waypoint swarm solved leg by leg (mdm_montecarlo.kernels.waypoint_legs) against the same swarm
 stepped every interval (stepped_waypoint_swarm): every vehicle's first confirmation times, the
 iterations, the followed bests and the simulated time equal to the bit, for every scenario,
 swarm, reading and the edge cases of the stepped loop (its end before the last step, an
@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mdm_montecarlo.study import Case
-from mdm_montecarlo.waypoint_swarm import run_waypoint_swarm_block
+from mdm_montecarlo.engines.waypoint_swarm import run_waypoint_swarm_block
+from mdm_montecarlo.study.cases import Case
 from mdm_profiles import MissionProfile
 from mdm_profiles.overrides import apply_overrides
 from tests.montecarlo.stepped_waypoint_swarm import stepped_block

@@ -1,4 +1,4 @@
-"""The swarm baselines iterating per waypoint (mdm_montecarlo.waypoint_swarm) and the swarm's
+"""The swarm baselines iterating per waypoint (mdm_montecarlo.engines.waypoint_swarm) and the swarm's
 memory options (policy.swarm.after_confirmation, read_confirmed)."""
 
 from __future__ import annotations
@@ -8,11 +8,11 @@ import pytest
 
 from mdm_core.search.from_profile import policy_config
 from mdm_core.search.pso import Best
-from mdm_montecarlo.compiled_step import CompiledPolicy
-from mdm_montecarlo.runner import run_missions
-from mdm_montecarlo.social_engine import run_swarm_block
-from mdm_montecarlo.study import Case
-from mdm_montecarlo.waypoint_swarm import swarm_rules
+from mdm_montecarlo.engines.runner import run_missions
+from mdm_montecarlo.engines.social_engine import run_swarm_block
+from mdm_montecarlo.engines.waypoint_swarm import swarm_rules
+from mdm_montecarlo.kernels.compiled_step import CompiledPolicy
+from mdm_montecarlo.study.cases import Case
 from mdm_profiles import MissionProfile
 from mdm_profiles.loader import ProfileError
 from mdm_profiles.overrides import apply_overrides

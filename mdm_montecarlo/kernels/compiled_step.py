@@ -1,0 +1,307 @@
+"""The batch engine's policy step, compiled (numba), bit-identical to ``SearchPolicy.step``.
+
+``SearchPolicy.step`` is some forty numpy calls on (lanes,) and (lanes, targets) arrays per
+event: the memory checks of the contacts, the level changes, the decaying index, the blind
+period, the anchor. Here one loop per lane makes the same comparisons and the same sums in the
+same order; the waypoints are then drawn by the compiled draws of ``compiled_waypoints`` and the
+confirmed targets remembered in one more loop, as ``step`` and ``remember`` do. The companion
+keeps the numpy policy (tests/montecarlo/test_compiled_policy.py compares the two on random
+states).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mdm_core.jit import compiled
+from mdm_core.search.levels import PolicyConfig
+from mdm_core.search.policy import Observation, PolicyState, StepOutcome
+from mdm_montecarlo.kernels.compiled_waypoints import RULES, CompiledWaypoints, next_waypoints
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+IntArray = NDArray[np.intp]
+
+DISC, EXACT, NONE = 0, 1, 2
+_MEMORY = {"disc": DISC, "exact": EXACT, "none": NONE}
+# Columns of the flags the kernel returns per lane.
+DETECTED, CONFIRMED, EXPIRED, REDRAW = range(4)
+
+
+@compiled
+def nearest2(memory: FloatArray, count: int, lane: int, x: float, y: float) -> float:
+    """Squared distance from (x, y) to the nearest remembered target (memory_distance2)."""
+    best = np.inf
+    for slot in range(count):
+        north = x - memory[lane, slot, 0]
+        east = y - memory[lane, slot, 1]
+        d2 = north * north + east * east
+        if math.isnan(d2):
+            return float(d2)
+        best = min(best, d2)
+    return float(best)
+
+
+@compiled
+def remember_confirmed(
+    memory: FloatArray,
+    memory_count: IntArray,
+    lanes: IntArray,
+    new_confirmations: BoolArray,
+    contact_positions: FloatArray,
+    confirmed: BoolArray,
+) -> FloatArray:
+    """SearchPolicy.remember of the new confirmations (n, m) of the ``confirmed`` rows of
+    distinct ``lanes``, a lane's in target order, with their contact positions (n, m, 2).
+    Returns the memory: ``memory`` itself, or a copy grown as PolicyState.make_room grows it."""
+    n, m = new_confirmations.shape
+    needed = 0
+    for i in range(n):
+        if confirmed[i]:
+            count = memory_count[lanes[i]]
+            for j in range(m):
+                count += new_confirmations[i, j]
+            needed = max(needed, count)
+    room = memory.shape[1]
+    if needed > room:
+        grown = np.zeros((memory.shape[0], max(needed, 2 * room), 2))
+        grown[:, :room] = memory
+        memory = grown
+    for i in range(n):
+        if not confirmed[i]:
+            continue
+        lane = lanes[i]
+        for j in range(m):
+            if new_confirmations[i, j]:
+                slot = memory_count[lane]
+                memory[lane, slot, 0] = contact_positions[i, j, 0]
+                memory[lane, slot, 1] = contact_positions[i, j, 1]
+                memory_count[lane] = slot + 1
+    return memory
+
+
+@compiled
+def step_lanes(
+    level: IntArray,
+    entered: FloatArray,
+    blind_until: FloatArray,
+    anchor: FloatArray,
+    memory: FloatArray,
+    memory_count: IntArray,
+    lanes: IntArray,
+    time: FloatArray,
+    position: FloatArray,
+    reached: BoolArray,
+    contacts: BoolArray,
+    contact_positions: FloatArray,
+    lifetimes: FloatArray,
+    radii: FloatArray,
+    memory_radius: float,
+    detection_memory: int,
+    blind_time: float,
+    waypoint: FloatArray,
+    table: FloatArray,
+    area: FloatArray,
+    rule: int,
+    from_anchor: bool,
+    confine: bool,
+    rng: np.random.Generator,
+    new: BoolArray,
+    flags: BoolArray,
+) -> None:
+    """SearchPolicy.step without the memory update, lanes distinct.
+
+    Updates level, entered, blind_until, anchor and waypoint in place; writes the new
+    confirmations ``new`` (n, m) and the flags ``flags`` (n, 4) DETECTED, CONFIRMED, EXPIRED,
+    REDRAW. ``new`` may be ``contacts`` itself: a lane's row of contacts is read only before
+    its row of ``new`` is written."""
+    n, m = contacts.shape
+    last = radii.shape[0] - 1
+    known2 = memory_radius**2
+    for i in range(n):
+        lane = lanes[i]
+        lvl = level[lane]
+        seen = False
+        for j in range(m):
+            new[i, j] = contacts[i, j]
+            seen = seen or new[i, j]
+        if seen:
+            count = memory_count[lane]
+            if detection_memory == EXACT or lvl == last:
+                for j in range(m):
+                    if new[i, j]:
+                        d2 = nearest2(
+                            memory,
+                            count,
+                            lane,
+                            contact_positions[i, j, 0],
+                            contact_positions[i, j, 1],
+                        )
+                        if d2 <= known2:
+                            new[i, j] = False
+            detecting = lvl < last
+            ignored = detecting and time[i] < blind_until[lane]
+            if detection_memory == DISC:
+                near = nearest2(memory, count, lane, position[i, 0], position[i, 1])
+                ignored = ignored or (detecting and near < radii[lvl] ** 2)
+            if ignored:
+                for j in range(m):
+                    new[i, j] = False
+        has = False
+        for j in range(m):
+            has = has or new[i, j]
+        detected = has and lvl < last
+        confirmed = has and lvl == last
+        next_level = lvl + 1 if detected else lvl
+        if confirmed:
+            next_level = 0
+        deadline = entered[lane] + lifetimes[lvl]
+        expired = next_level == lvl and lvl > 0 and time[i] >= deadline
+        if expired:
+            next_level = 0
+        changed = next_level != lvl
+        blind = blind_until[lane]
+        if time[i] >= blind:
+            blind = -np.inf
+        if blind_time > 0 and expired:
+            blind = time[i] + blind_time
+        blind_until[lane] = blind
+        level[lane] = next_level
+        if changed:
+            entered[lane] = time[i]
+        if detected:
+            anchor[lane, 0] = position[i, 0]
+            anchor[lane, 1] = position[i, 1]
+        flags[i, DETECTED] = detected
+        flags[i, CONFIRMED] = confirmed
+        flags[i, EXPIRED] = expired
+        flags[i, REDRAW] = changed or reached[i]
+        if not confirmed:
+            for j in range(m):
+                new[i, j] = False
+    # The redrawn lanes' levels, anchors and positions, gathered in one loop (numba's masked
+    # and fancy indexing of the same took twice as long).
+    count = 0
+    for i in range(n):
+        count += flags[i, REDRAW]
+    chosen = np.empty(count, dtype=np.intp)
+    chosen_level = np.empty(count, dtype=level.dtype)
+    chosen_anchor = np.empty((count, 2))
+    chosen_position = np.empty((count, 2))
+    c = 0
+    for i in range(n):
+        if flags[i, REDRAW]:
+            lane = lanes[i]
+            chosen[c] = lane
+            chosen_level[c] = level[lane]
+            chosen_anchor[c, 0] = anchor[lane, 0]
+            chosen_anchor[c, 1] = anchor[lane, 1]
+            chosen_position[c, 0] = position[i, 0]
+            chosen_position[c, 1] = position[i, 1]
+            c += 1
+    if count:
+        points = next_waypoints(
+            table,
+            chosen_level,
+            chosen_anchor,
+            chosen_position,
+            area,
+            rule,
+            from_anchor,
+            confine,
+            rng,
+        )
+        for c in range(count):
+            waypoint[chosen[c], 0] = points[c, 0]
+            waypoint[chosen[c], 1] = points[c, 1]
+
+
+class CompiledPolicy(CompiledWaypoints):
+    """The engine's policy: step, memory check and waypoint draws compiled (numba)."""
+
+    def __init__(self, config: PolicyConfig) -> None:
+        super().__init__(config)
+        self._memory_rule = _MEMORY[config.detection_memory]
+
+    @property
+    def lifetimes(self) -> FloatArray:
+        """Seconds each level lasts before its decaying index ends it (inf on level 1)."""
+        return self._lifetimes
+
+    @property
+    def radii(self) -> FloatArray:
+        """Sensor radius of each level, metres."""
+        return self._radii
+
+    @property
+    def table(self) -> FloatArray | None:
+        """The levels' parameters as the compiled draws read them (compiled_waypoints)."""
+        return self._table
+
+    @property
+    def area(self) -> FloatArray:
+        """The search area's (north, east) size, metres, then the fence's half-planes (what
+        compiled_waypoints._inside reads)."""
+        return self._bounds
+
+    @property
+    def memory_rule(self) -> int:
+        """detection_memory as the kernels read it (DISC, EXACT or NONE)."""
+        return self._memory_rule
+
+    def step(
+        self,
+        state: PolicyState,
+        lanes: IntArray,
+        obs: Observation,
+        rng: np.random.Generator,
+    ) -> StepOutcome:
+        """SearchPolicy.step for distinct ``lanes`` (as the engine steps them)."""
+        if self._table is None:
+            return super().step(state, lanes, obs, rng)
+        n, m = obs.contacts.shape
+        new_confirmations = np.empty((n, m), dtype=bool)
+        flags = np.empty((n, 4), dtype=bool)
+        step_lanes(
+            state.level,
+            state.entered,
+            state.blind_until,
+            state.anchor,
+            state.memory,
+            state.memory_count,
+            lanes,
+            obs.time,
+            obs.position,
+            obs.reached,
+            obs.contacts,
+            obs.contact_positions,
+            self._lifetimes,
+            self._radii,
+            float(self.config.memory_radius),
+            self._memory_rule,
+            float(self.config.fallback_blind_time),
+            state.waypoint,
+            self._table,
+            self._bounds,
+            RULES[self.config.out_of_area],
+            self.config.waypoint_origin == "anchor",
+            self.config.confine_to_detection,
+            rng,
+            new_confirmations,
+            flags,
+        )
+        confirmed = flags[:, CONFIRMED]
+        state.memory = remember_confirmed(
+            state.memory,
+            state.memory_count,
+            lanes,
+            new_confirmations,
+            obs.contact_positions,
+            confirmed,
+        )
+        return StepOutcome(
+            flags[:, DETECTED], confirmed, new_confirmations, flags[:, EXPIRED], flags[:, REDRAW]
+        )
