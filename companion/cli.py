@@ -26,6 +26,9 @@ from companion.mission.battery_reserve import reserve_rule
 from companion.mission.mission_exit import MissionExit
 from companion.mission.safety_net import SAFETY_NET_REFUSED
 from companion.sensors.factory import SENSOR_SOURCES
+from companion.service.boot_mission import begin_boot_mission
+from companion.service.command import add_service_parser, service_command
+from companion.telemetry.log_file import add_log_file
 from companion.telemetry.mqtt.cli_args import add_mqtt_arguments, mqtt_spec
 from mavlink_wire import ENV_VAR, load_signing_key
 from mdm_core.ports import VEHICLE_UDP_BASE
@@ -35,6 +38,7 @@ from mdm_profiles.mqtt_spec import MqttSpec
 from mdm_provenance import add_version_flag
 
 log = logging.getLogger("companion")
+LOG_FORMAT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
 
 
 def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -94,6 +98,17 @@ def _run_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
         type=Path,
         help=f"MAVLink 2 signing passphrase file (default: ${ENV_VAR}; neither: off)",
     )
+    p.add_argument(
+        "--log-file",
+        type=Path,
+        help="the log lines in this file too, rotated at 5 MB, 3 kept (the service's unit)",
+    )
+    p.add_argument(
+        "--new-mission-per-boot",
+        action="store_true",
+        help="keep --log-dir's mission within a boot and when it did not end (its resume rules); "
+        "move a mission that ended in an earlier boot to LOG_DIR/ended/ (the service's unit)",
+    )
     p.add_argument("-v", "--verbose", action="store_true")
     add_mqtt_arguments(p)
 
@@ -107,17 +122,35 @@ def build_parser(
     add_version_flag(parser)
     sub = parser.add_subparsers(dest="command", required=True)
     _run_parser(sub)
+    add_service_parser(sub)
     ground_tools.add_parsers(sub, ground_tools.load() if tools is None else tools)
     return parser
 
 
+def _checked_run_options(run_argv: list[str]) -> argparse.Namespace:
+    """`companion run`'s options for `companion service`: parsed and checked as `run` would."""
+    args = build_parser("").parse_args(["run", *run_argv])
+    checked_run(args)
+    return args
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `companion` command."""
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["service"]:  # its other options are `companion run`'s, checked by it
+        try:
+            return service_command(argv[1:], _checked_run_options)
+        except ProfileError as exc:
+            print(f"companion service: {exc}", file=sys.stderr)
+            return 2
+        except ValueError as exc:
+            print(f"companion service: {exc}", file=sys.stderr)
+            return 2
     tools = ground_tools.load()
     args = build_parser(tools).parse_args(argv)
     logging.basicConfig(
         level=logging.DEBUG if getattr(args, "verbose", False) else logging.INFO,
-        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+        format=LOG_FORMAT,
     )
     try:
         if args.command == "run":
@@ -137,6 +170,40 @@ def main(argv: list[str] | None = None) -> int:
 
 def run_command(args: argparse.Namespace) -> int:
     """`companion run`: one vehicle until its mission ends."""
+    config, url, mqtt, sensor_source = checked_run(args)
+    if args.new_mission_per_boot:
+        begin_boot_mission(config.log_dir, config.vehicle)
+    if args.log_file is not None:
+        add_log_file(args.log_file, LOG_FORMAT)
+    address = parse_address(url)
+    if address.is_serial:  # missing, busy, no permission: refused now (exit 2), not retried
+        check_serial(address)
+    signing_key = load_signing_key(args.signing_key_file)
+    fly = _fly(
+        config,
+        url,
+        args.backend,
+        tlog=not args.no_tlog,
+        mqtt=mqtt,
+        signing_key=signing_key,
+        sensor_source=sensor_source,
+    )
+    if args.backend == "mavsdk":
+        reason, end = _run_mavsdk(fly)
+        _say_end(args.vehicle, reason, end)
+        _map(config, reason, args.no_map)
+        os._exit(_exit_status(reason, end))  # see _run_mavsdk: never join MAVSDK's blocked threads
+    reason, end = asyncio.run(fly)
+    _say_end(args.vehicle, reason, end)
+    _map(config, reason, args.no_map)
+    return _exit_status(reason, end)
+
+
+def checked_run(
+    args: argparse.Namespace,
+) -> tuple[MissionConfig, str, MqttSpec | None, SensorSourceKind]:
+    """`companion run`'s options checked (raises ValueError naming what is wrong) before any
+    socket or file: the mission's configuration, the link URL, MQTT, the sensor source."""
     profile = load_profile(args.profile)
     if not 0 <= args.vehicle < profile.fleet.vehicles:
         raise ValueError(f"--vehicle {args.vehicle}: profile has {profile.fleet.vehicles} vehicles")
@@ -167,29 +234,9 @@ def run_command(args: argparse.Namespace) -> int:
         url = site.connect.format(port=port)
     mqtt = mqtt_spec(args, profile.mqtt)
     sensor_source: SensorSourceKind = args.sensor_source or profile.sensor_source.kind
-    check_flight(config, mqtt, sensor_source)  # before any socket or file
-    address = parse_address(url)
-    if address.is_serial:  # missing, busy, no permission: refused now (exit 2), not retried
-        check_serial(address)
-    signing_key = load_signing_key(args.signing_key_file)
-    fly = _fly(
-        config,
-        url,
-        args.backend,
-        tlog=not args.no_tlog,
-        mqtt=mqtt,
-        signing_key=signing_key,
-        sensor_source=sensor_source,
-    )
-    if args.backend == "mavsdk":
-        reason, end = _run_mavsdk(fly)
-        _say_end(args.vehicle, reason, end)
-        _map(config, reason, args.no_map)
-        os._exit(_exit_status(reason, end))  # see _run_mavsdk: never join MAVSDK's blocked threads
-    reason, end = asyncio.run(fly)
-    _say_end(args.vehicle, reason, end)
-    _map(config, reason, args.no_map)
-    return _exit_status(reason, end)
+    check_flight(config, mqtt, sensor_source)
+    parse_address(url)
+    return config, url, mqtt, sensor_source
 
 
 def _say_end(vehicle: int, reason: str, end: MissionExit | None) -> None:

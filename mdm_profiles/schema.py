@@ -140,6 +140,13 @@ class PolicySpec(_Strict):
     out_of_area: Literal["reflect", "clip", "redraw"] = "reflect"
     waypoint_origin: Literal["position", "anchor"] = "position"
     confine_to_detection: bool = True
+    anchor_at: Literal["vehicle", "target"] = Field(
+        default="vehicle",
+        description="Where a detection puts the anchor (the centre of the next level's disc "
+        "and its waypoints' origin): the vehicle's position at the detection, or the detected "
+        "target's position then (a detection sensor that locates; docs/model.md, 'What motion "
+        "costs MDM').",
+    )
     memory_radius: float = Field(default=400.0, ge=0)
     detection_memory: Literal["disc", "exact", "none"] = Field(
         default="disc",

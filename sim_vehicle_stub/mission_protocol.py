@@ -14,11 +14,13 @@ from sim_vehicle_stub.personas.mission_rules import (
     DO_COMMANDS,
     FENCE_COMMANDS,
     GLOBAL_FRAMES,
+    LOCATION_COMMANDS,
     MISSION_FRAME,
     NAV_COMMANDS,
     NO_ANSWER,
     POSITION_COMMANDS,
     RALLY_COMMANDS,
+    YAW_MAY_BE_NAN,
 )
 
 ACCEPTED: int = d.MAV_MISSION_ACCEPTED
@@ -27,6 +29,10 @@ UNSUPPORTED: int = d.MAV_MISSION_UNSUPPORTED
 NO_SPACE: int = d.MAV_MISSION_NO_SPACE
 INVALID_SEQUENCE: int = d.MAV_MISSION_INVALID_SEQUENCE
 INVALID_X: int = d.MAV_MISSION_INVALID_PARAM5_X
+INVALID_PARAM1: int = d.MAV_MISSION_INVALID_PARAM1
+INVALID_Z: int = d.MAV_MISSION_INVALID_PARAM7
+ALT_MAX_M = 83_000.0
+"""ArduPilot's LOCATION_ALT_MAX_M: a mission item's altitude must be below it."""
 _FRAMES = GLOBAL_FRAMES | {MISSION_FRAME}
 _COMMANDS = {MISSION: NAV_COMMANDS | DO_COMMANDS, FENCE: FENCE_COMMANDS, RALLY: RALLY_COMMANDS}
 
@@ -109,7 +115,7 @@ class MissionProtocol:
         if int(msg.seq) != upload.next_seq:
             self._ask(node, peer, upload.next_seq, kind)  # out of order: asked again
             return
-        result = self._check(v.persona.mission, kind, int(msg.frame), int(msg.command))
+        result = self._check(v.persona.mission, kind, msg)
         item = _to_item(msg, legacy) if result == ACCEPTED else None
         if item is None:
             store.upload = None
@@ -125,7 +131,11 @@ class MissionProtocol:
             v.mission_run.plan_changed()
 
     @staticmethod
-    def _check(rules: Any, kind: int, frame: int, command: int) -> int:
+    def _check(rules: Any, kind: int, msg: Any) -> int:
+        frame, command = int(msg.frame), int(msg.command)
+        numbers = kind == MISSION and rules.checks_item_numbers
+        if numbers and (refused := _odd_param(msg)) is not None:
+            return refused
         if frame not in _FRAMES:
             return UNSUPPORTED_FRAME
         if command not in _COMMANDS[kind]:
@@ -139,6 +149,9 @@ class MissionProtocol:
             and command not in POSITION_COMMANDS
         ):
             return UNSUPPORTED
+        z = float(msg.z)
+        if numbers and command in LOCATION_COMMANDS and not abs(z) < ALT_MAX_M:
+            return INVALID_Z  # NaN fails the comparison too
         return ACCEPTED
 
     # ----- downloads
@@ -220,6 +233,17 @@ class MissionProtocol:
         """MISSION_SET_CURRENT (deprecated for DO_SET_MISSION_CURRENT): answered with
         MISSION_CURRENT at the next stream tick."""
         node.vehicle.mission_run.set_current(int(msg.seq))
+
+
+def _odd_param(msg: Any) -> int | None:
+    """ArduPilot's refusal of an infinite param1-4, or a NaN one (but a NaN yaw where taken):
+    INVALID_PARAM1..4 for the first such; None where all are numbers."""
+    params = (msg.param1, msg.param2, msg.param3, msg.param4)
+    for n, value in enumerate(float(p) for p in params):
+        yaw_nan = n == 3 and int(msg.command) in YAW_MAY_BE_NAN and math.isnan(value)
+        if not math.isfinite(value) and not yaw_nan:
+            return INVALID_PARAM1 + n
+    return None
 
 
 def _to_item(msg: Any, legacy: bool) -> MissionItem | None:

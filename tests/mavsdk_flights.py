@@ -14,9 +14,9 @@ from typing import Any
 
 import pymap3d
 from mavsdk.asyncio import Configuration, Mavsdk
-from mavsdk.asyncio.plugins.action import ActionAsync
+from mavsdk.asyncio.plugins.action import ActionAsync, ActionError
 from mavsdk.asyncio.plugins.manual_control import ManualControlAsync
-from mavsdk.asyncio.plugins.mission import MissionAsync, MissionItem, MissionPlan
+from mavsdk.asyncio.plugins.mission import MissionAsync, MissionError, MissionItem, MissionPlan
 from mavsdk.asyncio.plugins.mission_raw import MissionRawAsync
 from mavsdk.asyncio.plugins.offboard import OffboardAsync, PositionNedYaw
 from mavsdk.asyncio.plugins.param import ParamAsync
@@ -191,6 +191,22 @@ async def _arm_when_ready(act: ActionAsync, seconds: float) -> None:
             await asyncio.sleep(1.0)
 
 
+async def _take_off_when_ready(act: ActionAsync, seconds: float) -> None:
+    """Arm and take off (MAVSDK's mission plugin has no take-off item for ArduPilot), both again
+    while ArduCopter SITL refuses GUIDED's take-off (FAILED while its EKF has no position yet,
+    though home is set)."""
+    deadline = asyncio.get_running_loop().time() + seconds
+    while True:
+        await _arm_when_ready(act, seconds)
+        try:
+            await act.takeoff()
+            return
+        except ActionError:
+            if asyncio.get_running_loop().time() > deadline:
+                raise
+            await asyncio.sleep(1.0)
+
+
 @dataclass
 class OffboardLanding:
     corners: list[tuple[float, float]] = field(default_factory=list)
@@ -282,24 +298,48 @@ async def fly_sticks(url: str, *, seconds: float) -> StickFlight:
     return rec
 
 
+def mission_plugin_plan(
+    home: tuple[float, float, float], points: list[tuple[float, float]], alt: float
+) -> MissionPlan:
+    """MAVSDK mission items for waypoints (north, east from home) at ``alt``, 5 m/s, passed
+    through within 2 m."""
+    items = []
+    for n, e in points:
+        lat, lon, _ = pymap3d.ned2geodetic(n, e, 0.0, *home)
+        items.append(MissionItem(float(lat), float(lon), alt, 5.0, True, acceptance_radius_m=2.0))
+    return MissionPlan(items)
+
+
+async def upload_with_return(url: str, points: list[tuple[float, float]], alt: float) -> str:
+    """MAVSDK's mission plugin upload with its return to launch after the mission on: the
+    MissionResult's name (MAVSDK sends the return as an item with NaN params)."""
+    async with Mavsdk(Configuration.create_manual(245, 190, True)) as mavsdk:
+        system = await autopilot(mavsdk, url)
+        tel, mission = TelemetryAsync(system), MissionAsync(system)
+        home = await _ready(tel, 90.0)
+        await mission.set_return_to_launch_after_mission(True)
+        try:
+            await mission.upload_mission(mission_plugin_plan(home, points, alt))
+        except MissionError as e:
+            return str(e.result.name)
+    return "SUCCESS"
+
+
 async def fly_mission_plugin(
     url: str, points: list[tuple[float, float]], alt: float, *, ardupilot: bool
 ) -> tuple[list[int], int, tuple[float, float]]:
-    """MAVSDK's mission plugin (not raw): waypoints (north, east from home) at ``alt``, the
-    return to launch after the mission on; (mission progress in order, items, landed at)."""
+    """MAVSDK's mission plugin (not raw): waypoints (north, east from home) at ``alt``, then
+    home: PX4 with the plugin's return to launch after the mission; ArduPilot, which refuses
+    that item (NaN params, ``upload_with_return``), with Action's return to launch once the
+    plugin reports the mission finished. (mission progress in order, items, landed at)."""
     progress: list[int] = []
     async with Mavsdk(Configuration.create_manual(245, 190, True)) as mavsdk:
         system = await autopilot(mavsdk, url)
         tel, act, mission = TelemetryAsync(system), ActionAsync(system), MissionAsync(system)
         home = await _ready(tel, 90.0)
-        items = []
-        for n, e in points:
-            lat, lon, _ = pymap3d.ned2geodetic(n, e, 0.0, *home)
-            items.append(
-                MissionItem(float(lat), float(lon), alt, 5.0, True, acceptance_radius_m=2.0)
-            )
-        await mission.set_return_to_launch_after_mission(True)
-        await mission.upload_mission(MissionPlan(items))
+        plan = mission_plugin_plan(home, points, alt)
+        await mission.set_return_to_launch_after_mission(not ardupilot)
+        await mission.upload_mission(plan)
         if ardupilot:  # the plugin's progress reads MISSION_CURRENT
             sysid = await system.get_system_id()
             direct = MavlinkDirect(system._system)
@@ -317,14 +357,17 @@ async def fly_mission_plugin(
         try:
             if ardupilot:
                 await act.set_takeoff_altitude(alt)
-                await _arm_when_ready(act, 60.0)
-                await act.takeoff()  # MAVSDK's mission plugin has no takeoff item for ArduPilot
+                await _take_off_when_ready(act, 60.0)
                 async for pos in tel.subscribe_position():
                     if pos.relative_altitude_m > 2.0:
                         break
             else:
                 await _arm_when_ready(act, 60.0)
             await mission.start_mission()
+            if ardupilot:
+                while not await mission.is_mission_finished():
+                    await asyncio.sleep(0.2)
+                await act.return_to_launch()
             await _until_disarmed(tel, 180.0)
         finally:
             watcher.cancel()
@@ -332,4 +375,4 @@ async def fly_mission_plugin(
                 await watcher
         pos = await tel.position()
         landed = _local(home, pos.latitude_deg, pos.longitude_deg)
-    return progress, len(items), landed
+    return progress, len(plan.mission_items), landed

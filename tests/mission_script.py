@@ -8,6 +8,7 @@ code), never positions, so the emulator and SITL can be compared answer by answe
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from typing import Any
@@ -19,8 +20,25 @@ ml = mavutil.mavlink
 STEP = int(0.00027 * 1e7)
 """About 30 m of latitude, in 1e-7 degrees."""
 GEOFENCE = 0x100000
-Item = tuple[int, int, float, float, int, int, float]
-"""frame, command, param1, param2, dlat, dlon (STEP units from home), z."""
+Item = (
+    tuple[int, int, float, float, int, int, float]
+    | tuple[int, int, float, float, int, int, float, float, float]
+)
+"""frame, command, param1, param2, dlat, dlon (STEP units from home), z[, param3, param4]
+(param3 and param4 are 0 where not given)."""
+NAN, INF = math.nan, math.inf
+ODD_PARAMS: dict[str, list[Item]] = {
+    "RTL as MAVSDK's mission plugin sends it (NaN params)": [
+        (2, 20, NAN, NAN, 0, 0, 0.0, NAN, NAN)
+    ],
+    "waypoint yaw NaN": [(3, 16, 0, 2, 1, 0, 10.0, 0, NAN)],
+    "DO_CHANGE_SPEED as MAVSDK sends it (z NaN)": [(2, 178, 1, 5, 0, 0, NAN, -1, 0)],
+    "waypoint hold NaN": [(3, 16, NAN, 0, 1, 0, 10.0)],
+    "waypoint acceptance infinite": [(3, 16, 0, INF, 1, 0, 10.0)],
+    "waypoint altitude NaN": [(3, 16, 0, 0, 1, 0, NAN)],
+    "land yaw NaN": [(3, 21, 0, 0, 1, 0, 0.0, 0, NAN)],
+}
+"""One item each after home: which NaN / infinite fields each autopilot takes in a mission."""
 
 
 def _mission(rtl_frame: int) -> list[Item]:
@@ -113,17 +131,31 @@ class MissionClient:
             offset = partial[0] if partial is not None else 0
             if not 0 <= r.seq - offset < len(items):
                 return asked, "asked past the items"
-            frame, cmd, p1, p2, dlat, dlon, z = items[r.seq - offset]
+            frame, cmd, p1, p2, dlat, dlon, z, *rest = items[r.seq - offset]
+            p3, p4 = rest or (0.0, 0.0)
             lat, lon = self.home[0] + dlat * STEP, self.home[1] + dlon * STEP
             if (frame, cmd) in ((3, 20), (2, 20), (0, 20)):
                 lat = lon = 0
             if legacy:
                 mav.mission_item_send(
-                    *target, r.seq, frame, cmd, 0, 1, p1, p2, 0, 0, lat * 1e-7, lon * 1e-7, z, kind
+                    *target,
+                    r.seq,
+                    frame,
+                    cmd,
+                    0,
+                    1,
+                    p1,
+                    p2,
+                    p3,
+                    p4,
+                    lat * 1e-7,
+                    lon * 1e-7,
+                    z,
+                    kind,
                 )
             else:
                 mav.mission_item_int_send(
-                    *target, r.seq, frame, cmd, 0, 1, p1, p2, 0, 0, lat, lon, z, kind
+                    *target, r.seq, frame, cmd, 0, 1, p1, p2, p3, p4, lat, lon, z, kind
                 )
         return asked, "too many requests"
 
@@ -188,6 +220,8 @@ def walk(c: MissionClient) -> dict[str, Any]:
     out["download after count 0"] = c.download()
     out["upload frame 12"] = c.upload([(0, 16, 0, 0, 0, 0, 0.0), (12, 16, 0, 0, 0, 0, 10.0)])
     out["upload command 31999"] = c.upload([(0, 16, 0, 0, 0, 0, 0.0), (3, 31999, 0, 0, 0, 0, 10.0)])
+    for name, items in ODD_PARAMS.items():
+        out[f"upload {name}"] = c.upload([(0, 16, 0, 0, 0, 0, 0.0), *items])
     c.upload(_mission(2))
     out["partial 1..2"] = c.upload(_mission(2)[1:3], partial=(1, 2))
     out["download after partial"] = c.download()

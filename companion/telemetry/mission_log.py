@@ -40,12 +40,15 @@ class EventSink(Protocol):
 
 
 class MissionLog:
-    """Append-only JSON-lines file; ``emit`` never raises on a full disk, it logs the error."""
+    """Append-only JSON-lines file; ``emit`` never raises on a full disk: it logs the first
+    failure, counts the records lost while writes fail, and says so once they succeed again."""
 
     def __init__(self, path: Path) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         self.path = path
         self._file: TextIO = path.open("a", encoding="utf-8")
+        self.lost = 0
+        """Records not written since the last write that succeeded."""
 
     def emit(self, t: float, event: str, **fields: Any) -> None:
         record = {"t": round(t, 3), "event": event, **fields}
@@ -55,11 +58,22 @@ class MissionLog:
             if event in DURABLE_EVENTS:
                 os.fsync(self._file.fileno())
         except OSError as exc:
-            log.error("mission log %s: %s", self.path, exc)
+            if not self.lost:
+                log.error(
+                    "mission log %s: %s; records are lost until it can be written", self.path, exc
+                )
+            self.lost += 1
+            return
+        if self.lost:
+            log.warning("mission log %s written again; %d record(s) lost", self.path, self.lost)
+            self.lost = 0
 
     def close(self) -> None:
         if not self._file.closed:
-            self._file.close()
+            try:
+                self._file.close()
+            except OSError as exc:  # what was still buffered could not be written either
+                log.error("mission log %s: %s", self.path, exc)
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,7 @@ from mdm_core.search.distributions import Sampler
 StepLaw = Literal["fixed", "levy"]
 OutOfArea = Literal["reflect", "clip", "redraw"]
 WaypointOrigin = Literal["position", "anchor"]
+AnchorAt = Literal["vehicle", "target"]
 DetectionMemory = Literal["disc", "exact", "none"]
 IndexStart = Literal["printed", "max"]
 
@@ -113,6 +114,9 @@ class PolicyConfig:
     """Levels >= 2: step from the current position (eq. 7) or from the point of detection."""
     confine_to_detection: bool = True
     """Levels >= 2: keep waypoints within the previous sensor's radius of the point of detection."""
+    anchor_at: AnchorAt = "vehicle"
+    """A detection's anchor: the vehicle's position, or the detected target's (the first in
+    target order where several are detected at once)."""
     memory_radius: float = 400.0
     """A contact within this distance of a target I confirmed is that target again (metres)."""
     detection_memory: DetectionMemory = "disc"

@@ -275,7 +275,11 @@ class SearchPolicy:
         state.level[lanes] = next_level
         state.entered[lanes] = np.where(changed, obs.time, state.entered[lanes])
         anchor = state.anchor[lanes]
-        anchor[detected] = obs.position[detected]
+        if self.config.anchor_at == "target":
+            first = np.argmax(new, axis=1)  # the first detected target of each lane
+            anchor[detected] = obs.contact_positions[detected, first[detected]]
+        else:
+            anchor[detected] = obs.position[detected]
         state.anchor[lanes] = anchor
 
         redraw = changed | obs.reached

@@ -26,6 +26,12 @@ from mdm_montecarlo.commands.result_files import (
 from mdm_montecarlo.commands.sweep_command import add_sweep_parser, sweep_command
 from mdm_montecarlo.engines.runner import MissionResults, RunInterruptedError, run_many
 from mdm_montecarlo.study.cases import TABLES, Case, Row, study_rows
+from mdm_montecarlo.study.readings import (
+    add_reading_flag,
+    reading_named,
+    scenario_of,
+    with_reading,
+)
 from mdm_montecarlo.study.tables import MeasuredRow, format_table, measured_rows
 from mdm_montecarlo.study.variants import with_method
 from mdm_profiles import MissionProfile, ProfileError, load_profile
@@ -96,6 +102,7 @@ def _parser() -> argparse.ArgumentParser:
         help="folder for results.csv, the per-run samples and provenance.json "
         "(default reports/run-<UTC date>-<time>)",
     )
+    add_reading_flag(run)
     _common(run)
     rep = sub.add_parser("reproduce", help="every table of section IV beside the paper's numbers")
     rep.add_argument(
@@ -104,9 +111,10 @@ def _parser() -> argparse.ArgumentParser:
     rep.add_argument(
         "--out", default="reports/section-iv", help="report folder (default reports/section-iv)"
     )
+    add_reading_flag(rep)
     _common(rep)
     add_compare_parser(sub, _common)
-    add_sweep_parser(sub, _common)
+    add_sweep_parser(sub, _common, add_reading_flag)
     add_plan_parser(sub, _common)
     return parser
 
@@ -152,7 +160,7 @@ def _emit(rows: list[MeasuredRow], as_json: bool) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    profile = apply_overrides(load_profile(args.profile), args.set)
+    profile = apply_overrides(with_reading(load_profile(args.profile), args.reading), args.set)
     if args.method:
         profile = with_method(profile, args.method)
     out = Path(args.out or time.strftime("reports/run-%Y%m%d-%H%M%S", time.gmtime()))
@@ -172,13 +180,8 @@ def _run(args: argparse.Namespace) -> int:
     method = "MDM:" + "+".join(names) if pol.kind == "mdm" else names[0]
     if pol.kind not in ("mdm", "sss"):
         method = pol.kind.upper()
-    scenario = (
-        "dynamic"
-        if profile.target_motion
-        else ("popup" if any(t.appear > 0 for t in profile.targets) else "fixed")
-    )
     case = Case(
-        scenario,
+        scenario_of(profile),
         method,
         pol.levels[0].step / profile.area.north * 100,
         profile.fleet.vehicles,
@@ -213,6 +216,7 @@ def _import_report() -> None:
 
 
 def _reproduce(args: argparse.Namespace) -> int:
+    reading = reading_named(args.reading)
     tables = tuple(t.strip() for t in args.tables.split(",") if t.strip())
     rows = study_rows(tables)
     cases = list(dict.fromkeys(r.case for r in rows))
@@ -241,7 +245,8 @@ def _reproduce(args: argparse.Namespace) -> int:
     changed = f" Overrides: {', '.join(args.set)}." if args.set else ""
     header = (
         f"{args.runs} runs per row, seed {args.seed}, {len(cases)} configurations, "
-        f"{wall:.1f} s wall time. Paper numbers from data/paper_tables.csv.{changed}"
+        f"{wall:.1f} s wall time, reading {reading.name}. Paper numbers from "
+        f"data/paper_tables.csv.{changed}"
     )
     if partial:
         header = f"**PARTIAL REPORT: interrupted (Ctrl-C); {partial}.** " + header
@@ -258,6 +263,7 @@ def _reproduce(args: argparse.Namespace) -> int:
         header,
         workers=_workers(args.workers),
         meanwhile=lambda: write_result_files(out, configs, record),
+        reading=reading.name,
     )
     append_provenance(path, record)
     if partial:

@@ -17,6 +17,7 @@ from types import FrameType
 from tqdm import tqdm
 
 from mdm_montecarlo.commands.result_files import PROVENANCE_FILE, append_provenance, check_writable
+from mdm_montecarlo.study.readings import reading_named, scenario_of
 from mdm_montecarlo.study.samples import RUNS, write_tables
 from mdm_montecarlo.study.sweep import (
     SweepAsk,
@@ -37,8 +38,10 @@ INTERRUPTED = 130
 def add_sweep_parser(
     sub: argparse._SubParsersAction[argparse.ArgumentParser],
     common: Callable[[argparse.ArgumentParser], None],
+    reading_flag: Callable[[argparse.ArgumentParser], None],
 ) -> None:
-    """The `sweep` subcommand; ``common`` adds the options it shares with `run`."""
+    """The `sweep` subcommand; ``common`` and ``reading_flag`` add the options it shares with
+    `run`."""
     p = sub.add_parser(
         "sweep", help="one profile over the cartesian product of field values", description=__doc__
     )
@@ -60,6 +63,7 @@ def add_sweep_parser(
         "--out",
         help="sweep folder (default reports/sweep-<profile>); the same command again resumes it",
     )
+    reading_flag(p)
     common(p)
 
 
@@ -76,15 +80,16 @@ class _CtrlC:
 
 
 def sweep_command(args: argparse.Namespace) -> int:
+    base = load_profile(args.profile)
+    reading = reading_named(args.reading)
     ask = SweepAsk(
         profile=args.profile,
         method=args.method,
-        overrides=list(args.set),
+        overrides=[*reading.overrides(scenario_of(base)), *args.set],
         vary=parse_vary(args.vary),
         runs=args.runs,
         seed=args.seed,
     )
-    base = load_profile(args.profile)
     every = points(base, ask)  # every point validated before any run
     folder = Path(args.out or f"reports/sweep-{base.name}")
     check_writable(folder)

@@ -50,6 +50,8 @@ class PolicyRules(NamedTuple):
     blind_time: float
     """fallback_blind_time, seconds."""
     draws: Draws
+    on_target: bool
+    """anchor_at == "target": a detection anchors on the detected target's position."""
 
 
 class LaneState(NamedTuple):
@@ -158,7 +160,7 @@ def step_lanes(
     its row of ``new`` is written."""
     level, entered, blind_until, anchor, waypoint, memory, memory_count = state
     time, position, reached, contacts, contact_positions = observed
-    lifetimes, radii, memory_radius, detection_memory, blind_time, draws = rules
+    lifetimes, radii, memory_radius, detection_memory, blind_time, draws, on_target = rules
     n, m = contacts.shape
     last = radii.shape[0] - 1
     known2 = memory_radius**2
@@ -213,7 +215,13 @@ def step_lanes(
         level[lane] = next_level
         if changed:
             entered[lane] = time[i]
-        if detected:
+        if detected and on_target:
+            first = 0
+            while not new[i, first]:
+                first += 1
+            anchor[lane, 0] = contact_positions[i, first, 0]
+            anchor[lane, 1] = contact_positions[i, first, 1]
+        elif detected:
             anchor[lane, 0] = position[i, 0]
             anchor[lane, 1] = position[i, 1]
         flags[i, DETECTED] = detected
@@ -265,6 +273,7 @@ class CompiledPolicy(CompiledWaypoints):
                 _MEMORY[config.detection_memory],
                 float(config.fallback_blind_time),
                 self.draws,
+                config.anchor_at == "target",
             )
         )
 

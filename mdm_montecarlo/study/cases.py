@@ -77,13 +77,6 @@ targets and does not read them; 'swarm_waypoint_detection' also reads MDM's 2 km
 sensor; 'swarm_detection' is "swarm given MDM's detection sensor" (one iteration every 5 s,
 100 m). 'lawnmower': the partitioned lawnmowers LM1/LM2 (docs/model.md, "The lawnmower
 baseline"), which the paper does not fly: their rows carry no paper value."""
-READINGS: dict[str, dict[str, str]] = {
-    "default": {},
-    "closest": {"popup": "popup_from_0", "dynamic": "targets_leave"},
-}
-"""Named readings of the paper: scenario -> the VARIANTS key its rows fly ('' elsewhere: the
-defaults). 'closest' gathers the documented choices that bring most rows inside tolerance and
-do not contradict each other (docs/model.md, "One reading of the paper")."""
 SWARM_VARIANTS = ("swarm_forgets", "swarm_waypoint_detection", "swarm_detection")
 LEAVE_VARIANT_TABLES = ("simtable1", "simtablef1", "Dsimtable6", "simtable3", "scaling")
 """Tables whose dynamic rows (swarms aside) each have a 'targets_leave' row after them."""

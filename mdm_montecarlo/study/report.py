@@ -17,17 +17,17 @@ import numpy as np
 from mdm_montecarlo.engines.local_pool import imap_unordered
 from mdm_montecarlo.engines.runner import MissionResults
 from mdm_montecarlo.study.cases import (
-    READINGS,
     SECTION3B_METHODS,
     TNC_TOLERANCE,
     TS_TOLERANCE,
-    VARIANTS,
     Case,
     Row,
 )
 from mdm_montecarlo.study.figure_claims import Claim, check_claims
 from mdm_montecarlo.study.known_causes import cause_of, slug
 from mdm_montecarlo.study.plots import plot_scaling, plot_section3b, plot_table
+from mdm_montecarlo.study.reading_report import reading_rows, readings_section
+from mdm_montecarlo.study.readings import CLOSEST, DEFAULT, READINGS, reading_cases
 from mdm_montecarlo.study.report_comparisons import comparison_section
 from mdm_montecarlo.study.section3b import SearchGeometry, confirmed_share, p_cm, p_cs
 from mdm_montecarlo.study.tables import MeasuredRow, format_table
@@ -71,12 +71,15 @@ def _row_name(m: MeasuredRow) -> str:
     return f"{m.table} {m.scenario} {m.method}{levels}{variant}{delta}"
 
 
-def summary(measured: list[MeasuredRow], docs: str, claims: list[Claim]) -> list[str]:
-    """The report's first screen: how many rows are inside, and why the others are not."""
+def summary(measured: list[MeasuredRow], docs: str, claims: list[Claim], reading: str) -> list[str]:
+    """The report's first screen: how many of the reading's rows are inside, and why the
+    others are not."""
     tnc = [m.tnc_within for m in measured if m.tnc_within is not None]
     ts = [m.ts_within for m in measured if m.ts_within is not None]
     lines = [
         "## Summary",
+        "",
+        f"Reading `{reading}` ([Readings](#readings)): {READINGS[reading].label()}.",
         "",
         f"- **T_nc inside tolerance: {sum(tnc)} of {len(tnc)} rows; T_S: {sum(ts)} of "
         f"{len(ts)} rows** (tolerances: mean T_nc within "
@@ -106,87 +109,19 @@ def summary(measured: list[MeasuredRow], docs: str, claims: list[Claim]) -> list
         )
     lines += [
         "",
-        "Details: [means outside tolerance](#means-outside-tolerance), then every table.",
+        "Details: [means outside tolerance](#means-outside-tolerance) (every row), "
+        f"[outside under {CLOSEST}](#outside-under-{CLOSEST}), then every table.",
         "",
     ]
     return lines
 
 
-def _base_key(m: MeasuredRow) -> tuple[object, ...]:
-    return (m.table, m.scenario, m.method, m.level1, m.level2, m.delta1_pct_L, m.n_uav, m.n_false)
-
-
-def reading_rows(measured: list[MeasuredRow], reading: str) -> list[MeasuredRow]:
-    """The rows a reading flies: each default row, or its variant row of the reading's choice
-    for its scenario where the report has one."""
-    choice = {k: VARIANTS[v][0] for k, v in READINGS[reading].items()}
-    by_key = {(_base_key(m), m.variant): m for m in measured}
-    out = []
-    for m in measured:
-        if m.variant:
-            continue
-        wanted = choice.get(m.scenario, "")
-        out.append(by_key.get((_base_key(m), wanted), m))
-    return out
-
-
-def _mdm_ahead(rows: list[MeasuredRow]) -> list[str]:
-    """Per scenario of simtable1: is MDM ahead of US, BS and LS in mean T_nc and mean T_S."""
-    out = []
-    for scenario in ("fixed", "popup", "dynamic"):
-        mine = [m for m in rows if m.table == "simtable1" and m.scenario == scenario]
-        mdm = [m for m in mine if m.method == "MDM"]
-        if not mdm:
-            continue
-        parts = []
-        for m in mine:
-            if m.method == "MDM":
-                continue
-            tnc = mdm[0].tnc_mean > m.tnc_mean
-            ts = (mdm[0].ts_mean_s or 0) < (m.ts_mean_s or 0)
-            parts.append(f"{m.method} {'yes' if tnc else '**no**'}/{'yes' if ts else '**no**'}")
-        out.append(f"{scenario}: " + ", ".join(parts))
-    return out
-
-
-def readings_section(measured: list[MeasuredRow], docs: str) -> list[str]:
-    """Rows inside tolerance under each named reading, by scenario, and MDM's lead."""
-    lines = [
-        "## Readings",
-        "",
-        "Each reading flies every default row, or its row of the reading's choice for its "
-        f"scenario ([One reading of the paper]({docs}#one-reading-of-the-paper)).",
-        "",
-        "| reading | choices | T_nc inside | T_S inside | T_nc by scenario | T_S by scenario |"
-        " MDM ahead in simtable1 (T_nc/T_S) |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for name, choices in READINGS.items():
-        rows = reading_rows(measured, name)
-        count: dict[str, dict[str, list[bool]]] = {"tnc": {}, "ts": {}}
-        for m in rows:
-            if m.tnc_within is not None:
-                count["tnc"].setdefault(m.scenario, []).append(m.tnc_within)
-            if m.ts_within is not None:
-                count["ts"].setdefault(m.scenario, []).append(m.ts_within)
-        total = {k: [x for v in d.values() for x in v] for k, d in count.items()}
-        by = {
-            k: ", ".join(f"{s} {sum(v)}/{len(v)}" for s, v in d.items()) for k, d in count.items()
-        }
-        label = ", ".join(f"{s}: {VARIANTS[v][0]}" for s, v in choices.items()) or "the defaults"
-        lines.append(
-            f"| {name} | {label} | {sum(total['tnc'])}/{len(total['tnc'])} | "
-            f"{sum(total['ts'])}/{len(total['ts'])} | {by['tnc']} | {by['ts']} | "
-            + "; ".join(_mdm_ahead(rows))
-            + " |"
-        )
-    return [*lines, ""]
-
-
-def outside_table(measured: list[MeasuredRow], docs: str) -> list[str]:
+def outside_table(
+    measured: list[MeasuredRow], docs: str, heading: str = "Means outside tolerance"
+) -> list[str]:
     """Every mean outside tolerance, with its docs/model.md entry and closest variant."""
     rows = _outside(measured)
-    lines = ["## Means outside tolerance", ""]
+    lines = [f"## {heading}", ""]
     if not rows:
         return [*lines, "None.", ""]
     lines += [
@@ -268,6 +203,7 @@ def write_report(
     header: str,
     workers: int = 1,
     meanwhile: Callable[[], object] | None = None,
+    reading: str = DEFAULT,
 ) -> Path:
     """Write report.md, results.csv and PNGs into ``folder``; returns the report path.
 
@@ -280,15 +216,17 @@ def write_report(
     write_csv(folder / "results.csv", measured)
     docs = _model_link(folder)
     tables = list(dict.fromkeys(r.table for r in rows))
-    claims = check_claims(results) if "scaling" in tables else []
+    scaling = "scaling" in tables
+    claims = check_claims(reading_cases(results, reading)) if scaling else []
     lines = [
         "# Section IV reproduced",
         "",
         header,
         "",
-        *summary(measured, docs, claims),
-        *readings_section(measured, docs),
+        *summary(reading_rows(measured, reading), docs, claims, reading),
+        *readings_section(measured, results, docs, with_figures=scaling),
         *outside_table(measured, docs),
+        *outside_table(reading_rows(measured, CLOSEST), docs, f"Outside under {CLOSEST}"),
         *comparison_section(rows, results),
         "Single-sensor and swarm AISE/AISC are against the MDM row of the same table, scenario "
         "and variant (the default MDM row where the variant has none) "

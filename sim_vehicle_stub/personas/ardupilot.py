@@ -73,6 +73,7 @@ class ArduCopterPersona(Persona):
         takeoff_when_landed=False,
         rtl_item_switches_mode=False,
         clears_all_types=False,
+        checks_item_numbers=True,
         auto_armable=False,
     )
     # ArduCopter SITL 4.7-dev: capabilities 0xfbef, flight_sw_version 0x04070000 (4.7.0 dev).

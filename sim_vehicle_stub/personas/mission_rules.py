@@ -63,6 +63,24 @@ FENCE_COMMANDS = frozenset(
 )
 """5000 return point, 5001/5002 polygon vertex inclusion/exclusion, 5003/5004 circles."""
 RALLY_COMMANDS = frozenset((d.MAV_CMD_NAV_RALLY_POINT,))
+YAW_MAY_BE_NAN = frozenset((d.MAV_CMD_NAV_WAYPOINT, d.MAV_CMD_NAV_TAKEOFF, d.MAV_CMD_NAV_LAND))
+"""The items whose param4 (yaw) ArduPilot takes as NaN (AP_Mission::sanity_check_params)."""
+LOCATION_COMMANDS = frozenset(
+    (
+        d.MAV_CMD_NAV_WAYPOINT,
+        d.MAV_CMD_NAV_LOITER_UNLIM,
+        d.MAV_CMD_NAV_LOITER_TURNS,
+        d.MAV_CMD_NAV_LOITER_TIME,
+        d.MAV_CMD_NAV_LAND,
+        d.MAV_CMD_NAV_TAKEOFF,
+        d.MAV_CMD_NAV_LOITER_TO_ALT,
+        d.MAV_CMD_NAV_SPLINE_WAYPOINT,
+        d.MAV_CMD_DO_SET_HOME,
+        d.MAV_CMD_DO_SET_ROI,
+    )
+)
+"""The stored items ArduPilot keeps a location in (AP_Mission::stored_in_location): their
+altitude (z) must be a number below 83 km."""
 GLOBAL_FRAMES = frozenset((0, 3, 5, 6, 10, 11))
 """GLOBAL, GLOBAL_RELATIVE_ALT, GLOBAL_INT, GLOBAL_RELATIVE_ALT_INT, GLOBAL_TERRAIN_ALT(_INT)."""
 MISSION_FRAME = d.MAV_FRAME_MISSION
@@ -121,3 +139,9 @@ class MissionRules:
     clears_all_types: bool
     """MISSION_CLEAR_ALL of MAV_MISSION_TYPE_ALL clears every plan (PX4) or is UNSUPPORTED
     (ArduCopter, which clears nothing then)."""
+    checks_item_numbers: bool
+    """ArduPilot refuses a mission item (before looking at its command or frame) whose param1-4
+    is infinite, or NaN other than the yaw (param4) of YAW_MAY_BE_NAN: INVALID_PARAM1..4; and
+    one of LOCATION_COMMANDS whose altitude is NaN or 83 km or more: INVALID_PARAM7. MAVSDK's
+    mission plugin sends its return-to-launch item with four NaN params, so ArduCopter refuses
+    that upload (MAVSDK: INVALID_ARGUMENT). PX4 stores such items."""

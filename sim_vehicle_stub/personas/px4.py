@@ -77,6 +77,7 @@ class Px4Persona(Persona):
         takeoff_when_landed=True,
         rtl_item_switches_mode=True,
         clears_all_types=True,
+        checks_item_numbers=False,
         auto_armable=True,
     )
     # PX4 SITL 1.16-dev: capabilities 0xe8ff, flight_sw_version 0x01100000 (1.16.0 dev).

@@ -31,21 +31,19 @@ CEILING = 120.0  # the default ceiling of a profile without a site
 
 
 def _needed(kind: str, layer: float) -> dict[str, float]:
-    """What the autopilot's own parameters must hold (docs/companion.md)."""
+    """What the autopilot's own parameters must hold exactly (docs/companion.md)."""
     if kind == "arducopter":
         return {
             "FS_GCS_ENABLE": 1.0,  # companion lost: RTL
             "MAV_GCS_SYSID": 245.0,  # the companion is the GCS it watches
             "FENCE_ENABLE": 1.0,
             "FENCE_ACTION": 1.0,
-            "FENCE_ALT_MAX": CEILING,
             "BATT_FS_LOW_ACT": 2.0,
             "RTL_ALT": layer * 100.0,
         }
     return {
         "COM_OBL_RC_ACT": 3.0,  # offboard lost: Return
         "GF_ACTION": 3.0,
-        "GF_MAX_VER_DIST": CEILING,
         "COM_LOW_BAT_ACT": 3.0,
         "RTL_RETURN_ALT": layer,
     }
@@ -86,6 +84,9 @@ def test_a_killed_companion_leaves_the_vehicle_returning_by_its_own_safety_net(
             context=context,
         )
         held = {name: obs.read_param(name) for name in _needed(ap.kind, layer)}
+        fence_top = obs.read_param(
+            "FENCE_ALT_MAX" if ap.kind == "arducopter" else "GF_MAX_VER_DIST"
+        )
         children = descendants(comp.process.pid)
         boot = obs.snapshot().boot_s
         comp.kill()
@@ -112,5 +113,8 @@ def test_a_killed_companion_leaves_the_vehicle_returning_by_its_own_safety_net(
         f"net changed {changed}"
     )
     assert held == pytest.approx(_needed(ap.kind, layer)), held
+    # the fence's ceiling: kept where already under the ceiling and above the layer band
+    # (ArduCopter's stock FENCE_ALT_MAX 100 m), else the ceiling (PX4's stock 0: none)
+    assert layer + 2.0 <= fence_top <= CEILING, fence_top
     assert alive(children) == [], children
     assert to_rtl[0] < 15.0, to_rtl  # the companion-loss time written: 5 wall s

@@ -21,8 +21,8 @@ TARGETS = 10
 
 
 def _variants() -> list[PolicyConfig]:
-    """Every built-in paper policy's shape, with each out-of-area rule, waypoint origin, memory
-    rule, the Levy step law and a blind period."""
+    """Every built-in paper policy's shape, with each out-of-area rule, waypoint origin, anchor
+    (vehicle or target), memory rule, the Levy step law and a blind period."""
     base = [policy_config(builtin_profile(name)) for name in ("paper-fixed", "paper-popup")]
     out = []
     for config in base:
@@ -33,6 +33,8 @@ def _variants() -> list[PolicyConfig]:
         for rule in ("reflect", "clip", "redraw"):
             for origin in ("position", "anchor"):
                 out.append(dataclasses.replace(config, out_of_area=rule, waypoint_origin=origin))
+        out.append(dataclasses.replace(config, waypoint_origin="position", anchor_at="target"))
+        out.append(dataclasses.replace(config, waypoint_origin="anchor", anchor_at="target"))
         for memory in ("disc", "exact", "none"):
             out.append(
                 dataclasses.replace(

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mdm_montecarlo.engines.runner import run_many
-from mdm_montecarlo.study.cases import Case, study_rows
+from mdm_montecarlo.engines.runner import MissionResults, run_many
+from mdm_montecarlo.study.cases import Case, Row, study_rows
 from mdm_montecarlo.study.known_causes import CAUSES, slug
 from mdm_montecarlo.study.report import write_report
 from mdm_montecarlo.study.section3b import SearchGeometry, confirmed_share, p_cm, p_cm_given, p_cs
@@ -53,11 +53,20 @@ def test_one_uav_single_sensor_search_follows_eq_18() -> None:
     np.testing.assert_allclose(share, p_cs(t, PAPER), atol=0.06)
 
 
+Flown = tuple[list[Row], dict[Case, MissionResults]]
+
+
 @pytest.fixture(scope="module")
-def small_report(tmp_path_factory: pytest.TempPathFactory) -> str:
+def small_study() -> Flown:
     rows = study_rows(("simtable1", "section3b"))
     cases = list(dict.fromkeys(r.case for r in rows))
     results = dict(zip(cases, run_many([c.profile() for c in cases], runs=40, seed=1), strict=True))
+    return rows, results
+
+
+@pytest.fixture(scope="module")
+def small_report(tmp_path_factory: pytest.TempPathFactory, small_study: Flown) -> str:
+    rows, results = small_study
     folder = tmp_path_factory.mktemp("report")
     path = write_report(folder, rows, measured_rows(rows, results), results, "header line")
     for png in ("simtable1-fixed.png", "section3b-pcs-pcm.png"):
@@ -67,7 +76,7 @@ def small_report(tmp_path_factory: pytest.TempPathFactory) -> str:
 
 def test_summary_comes_first_and_outside_rows_link_their_cause(small_report: str) -> None:
     assert small_report.index("## Summary") < small_report.index("## simtable1")
-    assert re.search(r"T_nc inside tolerance: \d+ of 23 rows", small_report)
+    assert re.search(r"T_nc inside tolerance: \d+ of 12 rows", small_report)  # the reading's
     outside = small_report.split("## Means outside tolerance")[1].split("\n## ", maxsplit=1)[0]
     rows = [line for line in outside.splitlines() if line.startswith("| simtable1")]
     assert rows
@@ -197,3 +206,35 @@ def test_the_readings_section_counts_the_chosen_variant_rows(small_report: str) 
     assert re.search(r"\| \d+/12 \| \d+/12 \|", default)
     assert re.search(r"\| \d+/12 \| \d+/12 \|", closest)
     assert "popup: t_i = 200 (i - 1)" in closest
+
+
+def test_the_closest_reading_heads_the_report_with_its_own_rows(
+    tmp_path: Path, small_study: Flown, small_report: str
+) -> None:
+    """--reading closest: the summary counts the rows of the Readings table's 'closest' line
+    (its pop-up rows from t = 0), the default report the 'default' line's; the claims table
+    gives MDM's lead under both, and the rows outside under closest are listed with a cause."""
+    rows, results = small_study
+    measured = measured_rows(rows, results)
+    path = write_report(tmp_path, rows, measured, results, "header", reading="closest")
+    closest = path.read_text()
+    for text, name in ((small_report, "default"), (closest, "closest")):
+        head = re.search(r"T_nc inside tolerance: (\d+) of (\d+) rows; T_S: (\d+) of (\d+)", text)
+        assert head is not None
+        line = next(ln for ln in text.splitlines() if ln.startswith(f"| {name} |"))
+        cells = [c.strip() for c in line.split("|")]
+        assert cells[3:5] == [f"{head[1]}/{head[2]}", f"{head[3]}/{head[4]}"], line
+        assert f"Reading `{name}`" in text
+    claims = [ln for ln in closest.splitlines() if re.match(r"\| simtable1 \w+: MDM ahead", ln)]
+    assert len(claims) == 3 * 3 * 2  # three scenarios, US/BS/LS, T_nc and T_S
+    pop = next(ln for ln in claims if ln.startswith("| simtable1 popup: MDM ahead of US in T_nc"))
+    # the default cell compares the default rows, the closest cell the t_i = 200 (i - 1) rows
+    mdm = [m for m in measured if m.scenario == "popup" and m.method == "MDM"]
+    us = [m for m in measured if m.scenario == "popup" and m.method == "US"]
+    assert mdm[-1].variant == us[-1].variant == "t_i = 200 (i - 1)"
+    assert f"{mdm[0].tnc_mean:.3f} vs {us[0].tnc_mean:.3f}" in pop.split("|")[2]
+    assert f"{mdm[-1].tnc_mean:.3f} vs {us[-1].tnc_mean:.3f}" in pop.split("|")[3]
+    outside = closest.split("## Outside under closest")[1].split("\n## ", maxsplit=1)[0]
+    popup = [ln for ln in outside.splitlines() if ln.startswith("| simtable1 popup")]
+    assert popup
+    assert all("t_i = 200 (i - 1)" in ln and "model.md#" in ln for ln in popup)

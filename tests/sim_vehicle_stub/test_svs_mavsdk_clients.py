@@ -20,6 +20,7 @@ from tests.mavsdk_flights import (
     fly_offboard_square,
     fly_plan,
     fly_sticks,
+    upload_with_return,
 )
 from tests.qgc_plan import lawnmower, plan_text, survey_plan
 
@@ -142,3 +143,18 @@ def test_mavsdk_mission_plugin_flies_waypoints_and_returns(persona: str) -> None
     # total, the mission is finished" (ArduPilot: MISSION_CURRENT asked for after the upload).
     assert progress[-1] in (count - 1, count), progress
     assert math.hypot(*landed) < LAND_ERROR  # the return to launch after the mission
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize(
+    ("persona", "answer"), [("ardupilot", "INVALID_ARGUMENT"), ("px4", "SUCCESS")]
+)
+def test_mavsdk_return_after_mission_is_refused_as_arducopter_refuses_it(
+    persona: str, answer: str
+) -> None:
+    # MAVSDK sends the return as NAV_RETURN_TO_LAUNCH with NaN params: ArduCopter answers
+    # MISSION_ACK INVALID_PARAM1 (tests/sim_vehicle_stub/test_svs_mission_plugin_differential.py).
+    base = free_udp_base(1)
+    with running_emulator(make_config(1, base, personas=(persona,), speedup=10.0)):
+        got = asyncio.run(upload_with_return(_url(base), [(40.0, 0.0), (40.0, 40.0)], 12.0))
+    assert got == answer
