@@ -21,7 +21,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from mdm_ground.fleet.sitl_team import INSTANCE_BASE_ENV, companion_link, ports_free, sitl_ports
+from mdm_ground.fleet.sitl_team import (
+    INSTANCE_BASE_ENV,
+    PX4_DRAIN_S,
+    companion_link,
+    ports_free,
+    px4_param_set,
+    sitl_ports,
+)
 
 Kind = Literal["arducopter", "px4"]
 
@@ -159,6 +166,8 @@ def start(
         _await_bound(instance, tcp=5760 + 10 * index)
     else:
         _await_bound(instance, udp=18570 + index)
+        # an hour's pack, not SIH's stock minute (mdm_ground/fleet/sitl_team.py, PX4_DRAIN_S)
+        px4_param_set(folder, index, workdir, "SIM_BAT_DRAIN", PX4_DRAIN_S)
     return instance
 
 

@@ -33,7 +33,13 @@ _BIND_S = 30.0
 ARDUCOPTER_PACK_MAH = 20000
 """BATT_CAPACITY of each ArduCopter instance: SITL's stock 3300 mAh ends a search of a few
 minutes on the profile's battery_min (29 % after 300 s at Duebendorf); a rehearsal is about the
-mission, so the pack is big enough for the search to end it (PX4 SIH's battery is left stock)."""
+mission, so the pack is big enough for the search to end it."""
+PX4_DRAIN_S = 3600
+"""SIM_BAT_DRAIN of each PX4 instance (sim seconds from full to empty while armed): SIH's stock
+60 s drains half the pack in the first minute of flight (and then holds at SIM_BAT_MIN_PCT
+50 %), so the companion's battery reserve rule rightly ends every search within a minute
+(``battery 71%: home needs 74% + 10% reserve``). An hour's pack, as for ArduCopter above."""
+_PARAM_S = 30.0
 
 
 @dataclass
@@ -234,4 +240,30 @@ def _start(
                 f"within {_BIND_S:g} s (its output: {log})"
             )
         time.sleep(0.2)
+    if kind == "px4":
+        try:
+            px4_param_set(folder, index, workdir, "SIM_BAT_DRAIN", PX4_DRAIN_S)
+        except FleetInputError:
+            member.stop()
+            raise
     return member
+
+
+def px4_param_set(folder: Path, index: int, workdir: Path, name: str, value: float) -> None:
+    """Set parameter ``name`` of PX4 instance ``index`` through PX4's own shell client (the
+    ``px4-param`` alias of its binary), retried until its server answers (within 30 s)."""
+    client = workdir / "px4-param"
+    if not client.exists():
+        client.symlink_to(folder / "bin" / "px4")
+    cmd = [str(client), "--instance", str(index), "set", name, f"{value:g}"]
+    deadline = time.monotonic() + _PARAM_S
+    while True:
+        done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+        if done.returncode == 0:
+            return
+        if time.monotonic() > deadline:
+            raise FleetInputError(
+                f"--sitl: PX4 instance {index} did not take {name} {value:g}: "
+                f"{(done.stdout + done.stderr).strip()[-300:]}"
+            )
+        time.sleep(0.5)

@@ -16,7 +16,7 @@ def test_the_installed_entry_point_gives_the_ground_commands() -> None:
     (sub,) = (
         a for a in cli.build_parser(tools)._actions if isinstance(a, argparse._SubParsersAction)
     )
-    assert set(ground_tools.COMMANDS) | {"run"} == set(sub.choices)
+    assert set(ground_tools.COMMANDS) | {"run", "service"} == set(sub.choices)
 
 
 @pytest.mark.parametrize("command", sorted(ground_tools.COMMANDS))
