@@ -98,6 +98,13 @@ def add_fleet_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
         "refused (default 30; --sitl: at least 60)",
     )
     p.add_argument(
+        "--flight-log-wait",
+        type=float,
+        default=default("flight_log_wait"),
+        help="real vehicles: wall s each companion spends downloading its autopilot's own log "
+        "once landed (default 300; 0: none)",
+    )
+    p.add_argument(
         "--web",
         metavar="[HOST:]PORT",
         help="serve the live page of the run there (with --mqtt over that broker, else over "

@@ -55,6 +55,7 @@ def fleet_command(args: argparse.Namespace) -> int:
         base_port=args.base_port,
         quiet=args.quiet or args.json,
         land_wait=args.land_wait,
+        flight_log_wait=args.flight_log_wait,
         resume=args.resume,
         mqtt_args=tuple(mqtt_argv(args)),
         signing_key_file=args.signing_key_file,

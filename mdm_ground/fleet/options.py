@@ -6,6 +6,8 @@ from dataclasses import MISSING, dataclass, fields
 from pathlib import Path
 from typing import Any
 
+from companion.link.log_transfer import FLIGHT_LOG_WAIT_S
+
 
 @dataclass(frozen=True)
 class FleetOptions:
@@ -57,6 +59,9 @@ class FleetOptions:
     gcs: str | None = None
     """``udpout:HOST:PORT``: the emulator also sends every vehicle's MAVLink there (a ground
     station); the companions then leave the vehicles' streams on."""
+    flight_log_wait: float = FLIGHT_LOG_WAIT_S
+    """Real vehicles (fleet file, --sitl): wall seconds each companion spends downloading its
+    autopilot's own log once landed (`companion run --flight-log-wait`); 0: none."""
     lockstep: bool = True
     """The emulator holds sim time until every companion answered the last position
     (sim-vehicle --lockstep): a loaded host slows the run instead of the companions skipping

@@ -14,7 +14,6 @@ import time
 from dataclasses import dataclass, field, replace
 
 from companion.link.factory import check_signing_support
-from companion.link.log_transfer import FLIGHT_LOG_WAIT_S
 from companion.mission.phase import Phase
 from mavlink_wire import load_signing_key
 from mdm_ground.fleet import processes
@@ -81,7 +80,7 @@ def companion_command(
         link = ["--base-port", str(base_port), "--land-wait", "0"]
     else:  # nothing but the vehicle knows when it landed: each companion waits for its own
         link = ["--connect", real.link, "--system-id", str(real.system_id),
-                "--land-wait", str(o.land_wait)]  # fmt: skip
+                "--land-wait", str(o.land_wait), "--flight-log-wait", str(o.flight_log_wait)]  # fmt: skip
     source = real.sensor_source if real is not None and real.sensor_source else o.sensor_source
     # a fleet file's link may be shared with a ground station; the emulator's and SITL's are not
     dedicated = (real is None or o.sitl is not None) and o.gcs is None
@@ -412,7 +411,7 @@ def _end_hung(
     vehicles: and the download of the autopilot's log): a process that never exits would hold
     the whole fleet (its outcome shows the kill)."""
     real = o.sitl is not None or o.vehicles_file is not None
-    grace = _EXIT_GRACE_S + (FLIGHT_LOG_WAIT_S if real else 0.0)
+    grace = _EXIT_GRACE_S + (o.flight_log_wait if real else 0.0)
     for i, p in alive.items():
         if views[i].phase != Phase.DONE.value:
             continue

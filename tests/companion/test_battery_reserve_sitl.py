@@ -67,7 +67,7 @@ def _fly(
         companion = subprocess.Popen(
             [sys.executable, "-m", "companion.cli", "run", "--profile", str(path),
              "--vehicle", str(inst.index), "--connect", inst.companion_url, "--log-dir", str(out),
-             "--seed", str(SEED), "--land-wait", "600"],
+             "--seed", str(SEED), "--land-wait", "600", "--flight-log-wait", "0"],
             stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
             env=dict(os.environ, PYTHONUNBUFFERED="1"),
         )  # fmt: skip

@@ -93,7 +93,7 @@ def _run(out: Path, profile: Path, inst: sitl.SitlInstance, seed: int) -> subpro
         return subprocess.Popen(
             [sys.executable, "-m", "companion.cli", "run", "--profile", str(profile),
              "--vehicle", str(inst.index), "--connect", inst.companion_url, "--log-dir", str(out),
-             "--seed", str(seed), "--land-wait", "400"],
+             "--seed", str(seed), "--land-wait", "400", "--flight-log-wait", "0"],
             stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
             env=dict(os.environ, PYTHONUNBUFFERED="1"),
         )  # fmt: skip
@@ -205,7 +205,7 @@ def test_field_profile_flies_in_its_frame_inside_the_fence_on_stock_arducopter(
         wait_until(
             landed_after_rtl, 600.0, "confirmed, RTL, landed, disarmed", context=context(out)
         )
-        assert flights[-1].wait(timeout=400) == 0, context(out)()  # the autopilot log first
+        assert flights[-1].wait(timeout=400) == 0, context(out)()
         records = read_records(out / f"mission-{inst.index}.jsonl")
 
         def first(event: str, **fields: object) -> dict[str, Any]:

@@ -59,7 +59,7 @@ def test_arducopter_through_a_lying_link(
         companion = subprocess.Popen(
             [sys.executable, "-m", "companion.cli", "run", "--profile", str(profile),
              "--vehicle", str(index), "--connect", f"udpin:0.0.0.0:{port}", "--log-dir",
-             str(tmp_path), "--duration", "60", "--land-wait", "300", "--max-speedup",
+             str(tmp_path), "--duration", "60", "--land-wait", "300", "--flight-log-wait", "0", "--max-speedup",
              str(SPEEDUP), "--no-map"],
             stdout=out, stderr=subprocess.STDOUT, env=dict(os.environ, PYTHONUNBUFFERED="1"),
         )  # fmt: skip

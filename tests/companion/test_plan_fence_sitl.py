@@ -85,7 +85,7 @@ def test_a_profile_imported_from_a_qgc_plan_flies_inside_the_plans_fence_on_ardu
 
     try:
         wait_until(landed_after_rtl, 600.0, "confirmed, RTL, landed, disarmed", context=context)
-        assert flight.wait(timeout=400) == 0, context()  # the autopilot log first
+        assert flight.wait(timeout=400) == 0, context()
         records = read_records(out / f"mission-{inst.index}.jsonl")
 
         def first(event: str, **fields: object) -> dict[str, Any]:

@@ -62,7 +62,7 @@ def _run(out: Path, profile: Path, inst: sitl.SitlInstance, *extra: str) -> subp
         return subprocess.Popen(
             [sys.executable, "-m", "companion.cli", "run", "--profile", str(profile),
              "--vehicle", str(inst.index), "--connect", inst.companion_url, "--log-dir", str(out),
-             "--land-wait", "300", *extra],
+             "--land-wait", "300", "--flight-log-wait", "0", *extra],
             stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
             env=dict(os.environ, PYTHONUNBUFFERED="1"),
         )  # fmt: skip
@@ -109,7 +109,7 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
             "virtual: confirmed, RTL, landed, disarmed",
             context=context(virtual),
         )
-        assert flights[-1].wait(timeout=400) == 0, context(virtual)()  # the autopilot log first
+        assert flights[-1].wait(timeout=400) == 0, context(virtual)()
         records = events(virtual)
         (confirmation,) = [r for r in records if r["event"] == "confirmation"]
         assert (confirmation["north"], confirmation["east"]) == (220.0, 160.0)
@@ -158,7 +158,7 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
         wait_until(
             landed_after_rtl, 300.0, "mqtt: confirmed, RTL, landed, disarmed", context=context(mqtt)
         )
-        assert flights[-1].wait(timeout=400) == 0, context(mqtt)()  # the autopilot log first
+        assert flights[-1].wait(timeout=400) == 0, context(mqtt)()
         records = events(mqtt)
         (confirmation,) = [r for r in records if r["event"] == "confirmation"]
         assert (confirmation["north"], confirmation["east"]) == (400.0, 450.0)

@@ -75,7 +75,7 @@ def test_a_search_over_arducopters_serial_port_flies_and_lands(
             [sys.executable, "-m", "companion.cli", "run", "--profile", str(profile),
              "--vehicle", str(index), "--connect", f"serial:{device}:{baud}",
              "--backend", backend, "--log-dir", str(out), "--duration", "60",
-             "--land-wait", "600", "--end-action", "land", "--no-map"],
+             "--land-wait", "600", "--flight-log-wait", "0", "--end-action", "land", "--no-map"],
             capture_output=True, text=True, timeout=600, check=False,
             env=dict(os.environ, PYTHONUNBUFFERED="1"),
         )  # fmt: skip

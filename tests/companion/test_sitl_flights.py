@@ -91,7 +91,7 @@ class Companion:
             self.process = subprocess.Popen(
                 [sys.executable, "-m", "companion.cli", "run", "--profile", str(profile),
                  "--vehicle", str(vehicle), "--connect", url, "--backend", backend,
-                 "--log-dir", str(out), "--duration", str(duration), "--land-wait", "600", *extra],
+                 "--log-dir", str(out), "--duration", str(duration), "--land-wait", "600", "--flight-log-wait", "0", *extra],
                 stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
                 env=dict(os.environ, PYTHONUNBUFFERED="1"),
             )  # fmt: skip

@@ -56,7 +56,7 @@ def test_a_fleet_file_flies_the_listed_sitl_vehicles_under_their_own_system_ids(
     observers = {i: Observer(inst.observer_url, inst.sysid) for i, inst in instances.items()}
     fleet = start_fleet("--profile", str(profile), "--vehicles-file", str(fleet_file),
                         "--link-timeout", "120", "--seed", str(SEED), "--out", str(out),
-                        "--duration", "90", "--land-wait", "600", "--quiet",
+                        "--duration", "90", "--land-wait", "600", "--flight-log-wait", "0", "--quiet",
                         output=tmp_path / "fleet.out")  # fmt: skip
     try:
         code = fleet.wait(timeout=1200)

@@ -69,7 +69,7 @@ def test_a_mixed_sitl_team_searches_inside_the_fence_in_its_layers_and_lands(
     profile = team_profile(tmp_path, vehicles=4, seed=SEED, duration=120.0)
     out = tmp_path / "run"
     fleet = start_fleet("--profile", str(profile), "--sitl", "mixed", "--sitl-speedup",
-                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600",
+                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600", "--flight-log-wait", "0",
                         "--duration", "120", "--quiet", output=tmp_path / "fleet.out")  # fmt: skip
     observers: dict[int, Observer] = {}
     try:
@@ -122,7 +122,7 @@ def test_ctrl_c_mid_search_brings_every_vehicle_home_and_exits_130(
     profile = team_profile(tmp_path, vehicles=2, seed=SEED, duration=600.0)
     out = tmp_path / "run"
     fleet = start_fleet("--profile", str(profile), "--sitl", "mixed", "--sitl-speedup",
-                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600",
+                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600", "--flight-log-wait", "0",
                         "--quiet", output=tmp_path / "fleet.out")  # fmt: skip
     observers: dict[int, Observer] = {}
     try:
@@ -158,7 +158,7 @@ def test_a_killed_autopilot_is_named_and_the_other_three_complete_their_search(
     profile = team_profile(tmp_path, vehicles=4, seed=SEED, duration=120.0)
     out = tmp_path / "run"
     fleet = start_fleet("--profile", str(profile), "--sitl", "mixed", "--sitl-speedup",
-                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600",
+                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600", "--flight-log-wait", "0",
                         "--duration", "120", "--quiet", output=tmp_path / "fleet.out")  # fmt: skip
     observers: dict[int, Observer] = {}
     victim = 1  # a PX4 instance: its command line names its working directory
@@ -203,7 +203,7 @@ def test_an_mqtt_abort_to_all_brings_every_vehicle_home_as_a_normal_end(
     prefix = f"mdm/sitl-{os.getpid()}"
     out = tmp_path / "run"
     fleet = start_fleet("--profile", str(profile), "--sitl", "mixed", "--sitl-speedup",
-                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600",
+                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600", "--flight-log-wait", "0",
                         "--mqtt", f"127.0.0.1:{mqtt_broker}", "--mqtt-prefix", prefix, "--quiet",
                         "--web", "127.0.0.1:0", output=tmp_path / "fleet.out")  # fmt: skip
     observers: dict[int, Observer] = {}

@@ -77,7 +77,7 @@ def test_a_profile_without_site_on_arducopter_sitl_maps_where_the_vehicle_flew(
             [sys.executable, "-m", "companion.cli", "run", "--profile", "paper-fixed",
              "--vehicle", "0", "--system-id", str(inst.sysid), "--connect", inst.companion_url,
              "--duration", "20", "--sensor-source", "virtual", "--log-dir", str(out),
-             "--land-wait", "300"],
+             "--land-wait", "300", "--flight-log-wait", "0"],
             stdout=f, stderr=subprocess.STDOUT, timeout=900, check=False,
             env=dict(os.environ, PYTHONUNBUFFERED="1"),
         ).returncode  # fmt: skip

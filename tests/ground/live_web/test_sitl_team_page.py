@@ -50,7 +50,7 @@ def test_a_mixed_sitl_team_on_the_page_shows_each_autopilots_modes_and_flies_its
     profile = team_profile(tmp_path, vehicles=2, seed=SEED, duration=600.0)
     out, output = tmp_path / "run", tmp_path / "fleet.out"
     fleet = start_fleet("--profile", str(profile), "--sitl", "mixed", "--sitl-speedup",
-                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600",
+                        str(SPEEDUP), "--seed", str(SEED), "--out", str(out), "--land-wait", "600", "--flight-log-wait", "0",
                         "--quiet", "--web", "127.0.0.1:0", output=output)  # fmt: skip
     observers: dict[int, Observer] = {}
     try:
