@@ -19,10 +19,11 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from companion.errors import InputError
-from companion.fence_from_profile import own_frame_reach, site_geometry
+from companion.fence_from_profile import guidance_fence, own_frame_reach, site_geometry
 from companion.link.base import VehicleLink
 from companion.mission import MissionConfig, VehicleMission
-from companion.mission.core_for import LAWNMOWER_KINDS, is_swarm, lawnmower_refusal
+from companion.mission.core_for import LAWNMOWER_KINDS, is_swarm
+from companion.mission.lawnmower_core import LawnmowerCore
 from companion.mission.start_point import start_point
 from companion.mission.swarm_core import SwarmCore, live_swarm_refusal
 from companion.sensors.factory import DetectorFeed, make_sensor_source
@@ -67,8 +68,6 @@ def check_flight(config: MissionConfig, mqtt: MqttSpec | None, source: SensorSou
     vehicles = config.profile.fleet.vehicles
     if not 0 <= config.vehicle < vehicles:
         raise InputError(f"vehicle {config.vehicle}: profile has {vehicles} vehicles")
-    if config.profile.policy.kind in LAWNMOWER_KINDS:
-        raise InputError(lawnmower_refusal(config.profile.name, config.profile.policy.kind))
     if mqtt is None and is_swarm(config):
         raise InputError(
             f"profile {config.profile.name!r}: policy.kind {config.profile.policy.kind!r} "
@@ -78,6 +77,15 @@ def check_flight(config: MissionConfig, mqtt: MqttSpec | None, source: SensorSou
     refusal = live_swarm_refusal(config.profile) if is_swarm(config) else None
     if refusal is not None:
         raise InputError(refusal)
+    if config.profile.policy.kind in LAWNMOWER_KINDS:
+        try:  # the strip inside the guidance fence, before any socket is opened
+            LawnmowerCore(
+                config.profile, config.seed, config.vehicle, guidance_fence(config.profile)
+            )
+        except ValueError as exc:
+            raise InputError(
+                f"profile {config.profile.name!r}, vehicle {config.vehicle}: {exc}"
+            ) from None
     if source == "mqtt" and mqtt is None:
         raise InputError(
             "sensor source 'mqtt' reads detections from a broker; configure one "

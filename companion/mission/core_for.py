@@ -1,12 +1,14 @@
-"""The decision core a profile's policy kind flies: SearchCore (mdm, sss) or SwarmCore (pso,
-spso, arpso), behind the interface VehicleMission calls."""
+"""The decision core a profile's policy kind flies: SearchCore (mdm, sss), SwarmCore (pso,
+spso, arpso) or LawnmowerCore (lm1, lm2), behind the interface VehicleMission calls."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from typing import Protocol
 
+from companion.geofence import Geofence
 from companion.mission.config import MissionConfig
+from companion.mission.lawnmower_core import LawnmowerCore
 from companion.mission.search_core import Decision, SearchCore
 from companion.mission.swarm_core import SwarmCore, SwarmExchange
 from mdm_core.search.pso import VARIANTS, FloatArray
@@ -45,15 +47,7 @@ class MissionCore(Protocol):
 
 
 LAWNMOWER_KINDS = ("lm1", "lm2")
-"""The lawnmower baselines: flown by the Monte-Carlo engine only (not yet by the companion)."""
-
-
-def lawnmower_refusal(profile: str, kind: str) -> str:
-    """Why a lawnmower profile is refused in the air."""
-    return (
-        f"profile {profile!r}: policy.kind {kind!r} (the lawnmower baseline) runs in the "
-        "Monte-Carlo engine only (mdm-montecarlo run/plan); the companion does not fly it yet"
-    )
+"""The partitioned lawnmower baselines (LawnmowerCore)."""
 
 
 def is_swarm(config: MissionConfig) -> bool:
@@ -61,12 +55,16 @@ def is_swarm(config: MissionConfig) -> bool:
 
 
 def core_for(
-    config: MissionConfig, signal: Callable[[], float], peers: SwarmExchange | None
+    config: MissionConfig,
+    signal: Callable[[], float],
+    peers: SwarmExchange | None,
+    fence: Geofence,
 ) -> MissionCore:
     """The core of ``config``'s policy kind; ``signal``: the active sensor's latest SENS_SIG,
-    ``peers``: the swarm exchange (required by the swarm kinds)."""
+    ``peers``: the swarm exchange (required by the swarm kinds), ``fence``: the guidance fence
+    (the lawnmower's lanes are cut to it)."""
     if config.profile.policy.kind in LAWNMOWER_KINDS:
-        raise ValueError(lawnmower_refusal(config.profile.name, config.profile.policy.kind))
+        return LawnmowerCore(config.profile, config.seed, config.vehicle, fence)
     if not is_swarm(config):
         return SearchCore(config.profile, config.seed, config.vehicle)
     if peers is None:

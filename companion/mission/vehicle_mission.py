@@ -28,6 +28,7 @@ from companion.mission.control import (
 from companion.mission.core_for import core_for
 from companion.mission.event_intake import EventIntake
 from companion.mission.fence_watch import FenceWatch
+from companion.mission.lawnmower_core import LawnmowerCore
 from companion.mission.lifecycle import Event, Mission, step
 from companion.mission.lifecycle_events import (
     Do,
@@ -97,10 +98,10 @@ class VehicleMission:
         self.waits = VehicleWaits(self.seen.clock, self._ended)
         self.sensors = sensors or MavlinkSensorSource(link, len(profile.sensors))
         self.sensors.report = self.emit
-        self.core = core_for(config, lambda: self.sensors.signal, peers)
-        if isinstance(self.core, SwarmCore):
-            self.core.emit = self.emit  # swarm_follow events in the mission log
         self.fence = fence or Geofence.rectangle(profile.area.north, profile.area.east)
+        self.core = core_for(config, lambda: self.sensors.signal, peers, self.fence)
+        if isinstance(self.core, SwarmCore | LawnmowerCore):
+            self.core.emit = self.emit  # swarm_follow, lawnmower_* events in the mission log
         self.guide = GuidanceConfig(
             speed=profile.fleet.speed,
             altitude=config.altitude,

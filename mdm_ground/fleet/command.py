@@ -7,7 +7,6 @@ import json
 import time
 from pathlib import Path
 
-from companion.mission.core_for import LAWNMOWER_KINDS, lawnmower_refusal
 from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
 from mdm_core.search.pso import VARIANTS
 from mdm_ground.fleet.gcs import parse_gcs
@@ -32,8 +31,6 @@ def fleet_command(args: argparse.Namespace) -> int:
             f"profile {profile.name!r}: policy.kind {profile.policy.kind!r} shares the swarm's "
             "bests over MQTT; configure a broker (--mqtt HOST[:PORT] or the profile's mqtt:)"
         )
-    if profile.policy.kind in LAWNMOWER_KINDS:
-        raise ValueError(lawnmower_refusal(profile.name, profile.policy.kind))
     web = _web_argv(args)
     if args.gcs is not None:
         parse_gcs(args.gcs)

@@ -19,9 +19,9 @@ import math
 import numpy as np
 
 from mdm_core.search.lawnmower import Plan
+from mdm_core.search.lawnmower_profile import search_hold, search_spiral, team_plan
 from mdm_core.world import Scenario, TargetTracks
 from mdm_montecarlo.engines.engine import block_rngs
-from mdm_montecarlo.engines.lawnmower_engine import search_hold, search_spiral, team_plan
 from mdm_montecarlo.kernels.compiled_tracks import compiled_tracks
 from mdm_profiles import MissionProfile
 
