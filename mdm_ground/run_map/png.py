@@ -25,7 +25,8 @@ def _label(metres: float) -> str:
 
 
 def draw_png(profile: MissionProfile, tracks: list[VehicleTrack], path: Path, title: str) -> None:
-    """Draw the fence, search area, targets, paths, detections and confirmations to ``path``."""
+    """Draw the fence, search area, targets, paths (a lawnmower's planned lanes dotted),
+    detections and confirmations to ``path``."""
     import matplotlib
 
     matplotlib.use("Agg")  # no display on a companion computer or in CI
@@ -71,6 +72,8 @@ def draw_png(profile: MissionProfile, tracks: list[VehicleTrack], path: Path, ti
     cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for track in tracks:
         colour = cycle[track.vehicle % len(cycle)]
+        for a, b in zip(track.lanes[::2], track.lanes[1::2], strict=False):
+            ax.plot([a[1], b[1]], [a[0], b[0]], ":", color=colour, lw=0.9)
         if track.path:
             east = [s.east for s in track.path]
             north = [s.north for s in track.path]
@@ -80,6 +83,8 @@ def draw_png(profile: MissionProfile, tracks: list[VehicleTrack], path: Path, ti
             ax.plot(s.east, s.north, "^", color=colour, ms=7, mec="black", mew=0.5)
         for s in track.confirmations:
             ax.plot(s.east, s.north, "*", color="gold", ms=18, mec="black", mew=1.0)
+    if any(track.lanes for track in tracks):
+        ax.plot([], [], ":", color="0.3", lw=0.9, label="planned lanes (lawnmower)")
     ax.plot([], [], "s", color="0.3", label="path start")
     ax.plot([], [], "^", color="0.3", mec="black", mew=0.5, label="detection (level up)")
     ax.plot([], [], "*", color="gold", ms=14, mec="black", label="confirmation")

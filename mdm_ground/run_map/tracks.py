@@ -29,6 +29,9 @@ class VehicleTrack:
     """Where the vehicle was when a detection raised its level, and the new level."""
     confirmations: list[Sample] = field(default_factory=list)
     """Where each confirmed target was reported."""
+    lanes: list[tuple[float, float]] = field(default_factory=list)
+    """A lawnmower vehicle's planned lanes (the ``lawnmower_lanes`` record: lane k from point
+    2k to 2k + 1, north/east, inside the guidance fence); empty for other methods."""
     end_reason: str | None = None
     origin: tuple[float, float] | None = None
     """(lat, lon) where the vehicle's own frame starts, for a vehicle flown in that frame (a
@@ -51,6 +54,11 @@ def read_track(path: Path, vehicle: int) -> VehicleTrack:
         if record.get("event") == "frame" and record.get("source") == "own":
             try:
                 track.origin = (float(record["lat"]), float(record["lon"]))
+            except (KeyError, TypeError, ValueError):
+                continue
+        elif record.get("event") == "lawnmower_lanes":
+            try:
+                track.lanes = [(float(n), float(e)) for n, e in record["lanes"]]
             except (KeyError, TypeError, ValueError):
                 continue
         elif record.get("event") == "tick":
