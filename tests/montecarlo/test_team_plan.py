@@ -96,3 +96,21 @@ def test_plan_writes_table_csv_and_plot(tmp_path: Path, capsys: pytest.CaptureFi
     assert "LM1: smallest team with P >= 0.9: 6 vehicles" in text
     assert (out / "plan.png").stat().st_size > 10_000
     assert len((out / "plan.csv").read_text().splitlines()) == 5
+
+
+def test_plan_on_dask_gives_the_local_plan(tmp_path: Path) -> None:
+    """`--scheduler` (Dask, as `run`): a local cluster of two worker processes writes the
+    plan.csv one local process writes, number for number."""
+    from distributed import LocalCluster
+
+    argv = ["plan", "--profile", "field-duebendorf", "--teams", "2,4", "--endurance", "15",
+            "--methods", "LM2,MDM", "--runs", "40", "--no-progress"]  # fmt: skip
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:  # type: ignore[no-untyped-call]
+        dask = main([*argv, "--scheduler", cluster.scheduler_address, "--out", str(tmp_path / "d")])
+    assert dask == 0
+    assert main([*argv, "--workers", "1", "--out", str(tmp_path / "one")]) == 0
+    table = (tmp_path / "one" / "plan.csv").read_text()
+    assert (tmp_path / "d" / "plan.csv").read_text() == table
+    assert len(table.splitlines()) == 5
