@@ -72,8 +72,8 @@ def draw_png(profile: MissionProfile, tracks: list[VehicleTrack], path: Path, ti
     cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for track in tracks:
         colour = cycle[track.vehicle % len(cycle)]
-        for a, b in zip(track.lanes[::2], track.lanes[1::2], strict=False):
-            ax.plot([a[1], b[1]], [a[0], b[0]], ":", color=colour, lw=0.9)
+        for lane_a, lane_b in zip(track.lanes[::2], track.lanes[1::2], strict=False):
+            ax.plot([lane_a[1], lane_b[1]], [lane_a[0], lane_b[0]], ":", color=colour, lw=0.9)
         if track.path:
             east = [s.east for s in track.path]
             north = [s.north for s in track.path]
