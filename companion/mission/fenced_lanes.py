@@ -10,6 +10,8 @@ fence is convex (a site fence must be: mdm_core.world.fence_planes).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -34,7 +36,12 @@ def fenced_lanes(sweep: FloatArray, fence: Geofence) -> FloatArray:
             "no lane of this vehicle's cell lies inside the guidance fence (the site's fence "
             "less site.fence_inset): the cell is outside the fence"
         )
-    return np.array(kept)
+    out = np.array(kept)
+    if math.dist(out[1], sweep[0]) < math.dist(out[0], sweep[0]):
+        # An odd number of lanes dropped before the first kept one: every kept lane turned
+        # round, so the sweep still begins at the plan's corner (the alternation is kept).
+        out = out.reshape(-1, 2, 2)[:, ::-1].reshape(-1, 2)
+    return out
 
 
 def _clip(a: FloatArray, b: FloatArray, polygon: FloatArray) -> tuple[FloatArray, ...] | None:

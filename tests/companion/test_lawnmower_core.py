@@ -172,3 +172,6 @@ def test_a_cell_outside_the_fence_is_refused() -> None:
     inside = fenced_lanes(sweep + np.array([60.0, -20.0]), fence)
     np.testing.assert_allclose(inside, [[60, 0], [60, 80], [70, 80], [70, 0]])
     assert math.isclose(float(np.hypot(*(inside[1] - inside[0]))), 80.0)
+    # the first lane dropped: the next ones turned round, the sweep still starts at the corner
+    three = np.vstack([sweep, [[20.0, 0.0], [20.0, 100.0]]]) + np.array([40.0, 0.0])
+    np.testing.assert_allclose(fenced_lanes(three, fence), [[50, 0], [50, 100], [60, 100], [60, 0]])
