@@ -47,9 +47,12 @@ PX4_DRAIN_S = 60.0
 PX4_MIN_PCT = 8.0
 """... down to SIM_BAT_MIN_PCT: under BAT_CRIT_THR (10 %, Return), above BAT_EMERGEN_THR
 (5 %, Land)."""
-TO_RTL_WALL_S = 15.0
-"""Bound on the time from the cause to RTL: each failsafe the safety net sets acts within a
-few seconds (the companion-loss time written is 5 wall s)."""
+REACT_S = 10.0
+"""Vehicle s an autopilot may take beyond its own timer to switch to RTL: PX4 holds 5 s
+before a failsafe's action (COM_FAIL_ACT_T, stock, kept), ArduCopter waits BATT_LOW_TIMER
+(10 s) of low battery, and the observer hears positions and modes at 10 vehicle Hz."""
+LOSS_TIMER = {"arducopter": "FS_GCS_TIMEOUT", "px4": "COM_OF_LOSS_T"}
+"""The companion-loss time the safety net writes (vehicle s)."""
 
 
 @dataclass
@@ -126,7 +129,8 @@ def _flight(
     battery_min: float | None = None,
 ) -> Iterator[Flight]:
     home = f"{HOME},0" if ap.kind == "arducopter" else HOME
-    pack = {"battery_mah": ARDUCOPTER_PACK_MAH} if battery_min is not None else {}
+    small = battery_min is not None and ap.kind == "arducopter"
+    pack = {"battery_mah": ARDUCOPTER_PACK_MAH} if small else {}
     inst = sitl_start(ap.kind, speedup=ap.speedup, home=home, **pack)
     if battery_min is not None and ap.kind == "px4":
         folder = sitl.sitl_dir("px4")
@@ -175,6 +179,7 @@ def test_a_lost_link_with_the_companion_alive_turns_the_vehicle_home(
     (COM_OF_LOSS_T, COM_OBL_RC_ACT) return the vehicle."""
     with _flight(ap, sitl_start, tmp_path) as f:
         f.await_search()
+        loss_s = f.obs.read_param(LOSS_TIMER[ap.kind])
         f.relay.silent = True
         cut, cut_boot = time.monotonic(), f.obs.snapshot().boot_s
         at, at_boot = f.rtl(60.0)
@@ -187,7 +192,7 @@ def test_a_lost_link_with_the_companion_alive_turns_the_vehicle_home(
         f"{_texts(t, 'failsafe', 'offboard')}"
     )
     assert alive, "the companion ended before the RTL: not a lost link alone"
-    assert 0.0 < at - cut < TO_RTL_WALL_S
+    assert 0.0 < at_boot - cut_boot <= loss_s + REACT_S, (loss_s, at_boot - cut_boot)
 
 
 @pytest.mark.timeout(300)
@@ -230,7 +235,9 @@ def test_a_crossed_fence_turns_the_vehicle_home(
         f"{_texts(t, 'fence', 'failsafe')}"
     )
     assert not _texts(t, "gcs failsafe", "offboard"), t.texts  # the fence, not a lost link
-    assert -1.0 < at - crossed < TO_RTL_WALL_S
+    # ArduCopter switches within the position sample that first lies outside (its RTL is heard
+    # before that sample: -0.1 vehicle s measured)
+    assert -1.0 < at_boot - crossed_boot <= REACT_S
 
 
 @pytest.mark.timeout(300)
@@ -262,4 +269,4 @@ def test_a_low_battery_turns_the_vehicle_home(
         f"texts {_texts(t, 'battery', 'failsafe')}"
     )
     assert not _texts(t, "gcs failsafe", "offboard"), t.texts
-    assert 0.0 <= at - crossed < TO_RTL_WALL_S
+    assert 0.0 <= at_boot - crossed_boot <= REACT_S
