@@ -28,11 +28,13 @@ MEASURED_S: dict[str, float] = {
     "tests/sim_vehicle_stub/test_svs_differential.py": 119.0,
     "tests/sim_vehicle_stub/test_svs_mission_differential.py": 150.0,
     "tests/sim_vehicle_stub/test_svs_plan_differential.py": 240.0,
+    "tests/companion/test_autopilot_failsafes_sitl.py": 250.0,
     "tests/companion/test_lying_link_sitl.py": 58.0,
     "tests/companion/test_plan_fence_sitl.py": 53.0,
     "tests/companion/test_field_mission_sitl.py": 47.0,
     "tests/mavlink_conformance/test_conformance_sitl.py": 42.0,
     "tests/ground/test_run_map_own_origin.py": 35.0,
+    "tests/companion/test_safety_net_check_sitl.py": 25.0,
 }
 """Wall seconds per SITL module in the last measured run (README "Tests")."""
 
