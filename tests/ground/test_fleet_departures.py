@@ -6,7 +6,6 @@ first confirmation and the departure."""
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -15,29 +14,32 @@ import pytest
 from mdm_core.world import Scenario
 from mdm_ground.fleet.runner import FleetOptions, run_fleet
 from mdm_profiles import load_profile
-from tests.profile_files import write_profile_with
+from tests.profile_files import sensors, write_profile_with
 
 pytestmark = pytest.mark.usefixtures("fleet_processes")
 
-SEED = 3
+SEED = 4
 TICK = 0.1
-"""The emulator's sensor tick: a departure is seen at the first tick after it."""
+"""The emulator's sensor tick: the run's last departure is known if the run lasted a tick
+past it."""
 
 
 def _profile(folder: Path) -> Path:
-    """Three vehicles on a 3 km square; the targets drift 7.5 m/s per axis to the north-east,
-    so each leaves within the run (T1 about 130 s after boot, T2 about 330 s)."""
+    """Three vehicles on a 3 km square, the paper's walk free to leave it (2 m/s per axis to the
+    north-east): T1 from the middle leaves 750 s after boot, T2 near the corner 73 s after boot;
+    with this seed a vehicle starts by T2 and confirms it as its search begins."""
     return write_profile_with(
         folder / "gone.yaml",
         "fleet-gone",
         fleet={"vehicles": 3},
+        sensors=sensors(1000.0, 300.0),
         targets=[
-            {"north": 2000.0, "east": 2000.0},
-            {"north": 500.0, "east": 500.0},
+            {"north": 1500.0, "east": 1500.0},
+            {"north": 2850.0, "east": 2700.0},
             {"north": 600.0, "east": 2400.0, "false_target": True},
         ],
-        target_motion={"speed": 10.0, "low": 0.5, "high": 1.0, "boundary": "free"},
-        mission={"duration": 400.0, "ts_cap": 5000.0, "ts_rule": "confirmed_or_gone"},
+        target_motion={"boundary": "free"},
+        mission={"duration": 800.0, "ts_cap": 5000.0, "ts_rule": "confirmed_or_gone"},
     )
 
 
@@ -46,7 +48,7 @@ def test_the_fleet_scores_departures_as_the_engine_solves_them(tmp_path: Path) -
     path = _profile(tmp_path)
     out = tmp_path / "run"
     result = run_fleet(
-        FleetOptions(profile=str(path), out=out, duration=400.0, seed=SEED, wall_limit=200)
+        FleetOptions(profile=str(path), out=out, duration=800.0, seed=SEED, wall_limit=200)
     )
     assert result.complete, result.ends
     profile = load_profile(str(path))
@@ -70,7 +72,7 @@ def test_the_fleet_scores_departures_as_the_engine_solves_them(tmp_path: Path) -
         if real[k] and result.departures[k] - result.search_start < result.first_confirmation[k]
     )
     assert (result.ts_gone, result.ts_confirmed) == (gone, 2 - gone)
-    assert math.isfinite(result.ts)
+    assert result.first_confirmation[1] < result.departures[1] - result.search_start
     written = json.loads((out / "results.json").read_text())
     assert written["departures"] == result.departures
     assert (written["ts_rule"], written["ts_gone"]) == ("confirmed_or_gone", gone)
