@@ -7,6 +7,9 @@ import json
 import time
 from pathlib import Path
 
+from companion.fence_from_profile import guidance_fence
+from companion.mission.core_for import LAWNMOWER_KINDS
+from companion.mission.lawnmower_core import LawnmowerCore
 from companion.telemetry.mqtt.cli_args import mqtt_argv, mqtt_spec
 from mdm_core.search.pso import VARIANTS
 from mdm_ground.fleet.gcs import parse_gcs
@@ -31,6 +34,13 @@ def fleet_command(args: argparse.Namespace) -> int:
             f"profile {profile.name!r}: policy.kind {profile.policy.kind!r} shares the swarm's "
             "bests over MQTT; configure a broker (--mqtt HOST[:PORT] or the profile's mqtt:)"
         )
+    if profile.policy.kind in LAWNMOWER_KINDS:  # every strip inside the fence, not N refusals
+        fence = guidance_fence(profile)
+        for i in range(profile.fleet.vehicles if args.vehicles is None else args.vehicles):
+            try:
+                LawnmowerCore(profile, args.seed, i, fence)
+            except ValueError as exc:
+                raise ValueError(f"profile {profile.name!r}, vehicle {i}: {exc}") from None
     web = _web_argv(args)
     if args.gcs is not None:
         parse_gcs(args.gcs)

@@ -1,5 +1,6 @@
 """A lawnmower vehicle whose cell has no lane inside the guidance fence is refused before
-anything starts (exit 2, naming the vehicle), not flown along the fence's edge."""
+anything starts (exit 2, naming the vehicle), not flown along the fence's edge: by `companion
+run` for its vehicle, by `companion fleet` for the whole team."""
 
 from __future__ import annotations
 
@@ -18,8 +19,9 @@ from mdm_profiles.schema import GeoPoint
 SEED = 0
 
 
+@pytest.mark.parametrize("command", ["run", "fleet"])
 def test_a_cell_outside_the_fence_is_refused(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     base = with_method(builtin_profile("field-duebendorf"), "LM1")
     frame = profile_frame(base)
@@ -36,7 +38,18 @@ def test_a_cell_outside_the_fence_is_refused(
     write_profile(profile, path)
     argv = ["run", "--profile", str(path), "--vehicle", str(north), "--seed", str(SEED),
             "--connect", "udpin:127.0.0.1:1", "--log-dir", str(tmp_path / "log")]  # fmt: skip
+    if command == "fleet":  # the whole team checked before a process starts
+        argv = [
+            "fleet",
+            "--profile",
+            str(path),
+            "--seed",
+            str(SEED),
+            "--out",
+            str(tmp_path / "log"),
+        ]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert f"vehicle {north}: no lane of this vehicle's cell lies inside the guidance" in err
     assert not (tmp_path / "log" / f"mission-{north}.jsonl").exists()
+    assert not (tmp_path / "log" / "run.json").exists()
