@@ -14,6 +14,7 @@ import pytest
 
 from companion.telemetry import MissionLog, events
 from mdm_core.world import Scenario
+from mdm_ground.fleet.progress import VehicleView, progress_line
 from mdm_ground.fleet.scoring import EMULATOR_EVENTS, FleetResult, score
 from mdm_ground.fleet.summary import summary_lines
 from mdm_profiles import MissionProfile
@@ -164,3 +165,11 @@ def test_a_virtual_sensor_run_takes_the_departures_of_its_own_world(tmp_path: Pa
     assert np.isfinite(solved[1])
     assert result.departures[1] < 600.0
     assert result.ts_gone == 1 + bool(np.isfinite(solved[0]))
+
+
+def test_the_progress_line_counts_the_targets_gone_where_t_s_counts_them() -> None:
+    views = [VehicleView(time=120.0, level=1, phase="search"), VehicleView(time=119.5)]
+    assert (
+        progress_line(views, 1, 2, gone=1) == "sim t=  120.0 s  confirmed 1/2  gone 1  levels [2C]"
+    )
+    assert progress_line(views, 1, 2) == "sim t=  120.0 s  confirmed 1/2  levels [2C]"
