@@ -33,6 +33,7 @@ MEASURED_S: dict[str, float] = {
     "tests/sim_vehicle_stub/test_svs_differential.py": 123.0,
     "tests/companion/test_wind_gps_sitl.py": 123.0,
     "tests/companion/test_sensor_sources_sitl.py": 111.0,
+    "tests/companion/test_lawnmower_sitl.py": 82.0,
     "tests/companion/test_lying_link_sitl.py": 66.0,
     "tests/companion/test_plan_fence_sitl.py": 62.0,
     "tests/sim_vehicle_stub/test_svs_mission_plugin_differential.py": 61.0,
