@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mdm_core.world import Scenario, TargetTracks, contacts
+from sim_vehicle_stub.departures import Departures
 from sim_vehicle_stub.events import EventLog
 from sim_vehicle_stub.readout_kernel import readout
 
@@ -40,6 +41,7 @@ class SensorWorld:
         self.scenario = scenario
         self.tracks = tracks
         self.events = events
+        self.departures = Departures(scenario.targets, tracks, events)
         m = scenario.targets.count
         self.n_sensors = len(scenario.sensors)
         self._appeared = np.zeros(m, dtype=bool)
@@ -79,6 +81,7 @@ class SensorWorld:
         spec = self.scenario.targets
         if t >= self._next_appearance:
             self._appear(t)
+        self.departures.tick(t)
         on = np.flatnonzero(active >= 0)
         if len(on) == 0:
             return {}

@@ -54,7 +54,10 @@ class LyingRelay:
     chance of each transport fault per vehicle datagram; ``max_speed``: the profile's speed
     (a velocity setpoint faster than it is bad). ``silent``: forward nothing either way (the
     link dies); ``all_bad``: every LOCAL_POSITION_NED of the vehicle goes out with NaN
-    positions (the estimator failed).
+    positions (the estimator failed). ``vehicle``: (host, port) of a TCP vehicle to connect
+    to (ArduCopter SITL's SERIAL0), or the UDP port to take for a vehicle that sends there
+    (PX4 SITL's offboard link, 14540+i), or None: a free UDP port (``vehicle_port``, where
+    the emulator's vehicle is told to send).
     """
 
     def __init__(
@@ -62,7 +65,7 @@ class LyingRelay:
         companion_port: int,
         *,
         sysid: int = 1,
-        vehicle_tcp: tuple[str, int] | None = None,
+        vehicle: tuple[str, int] | int | None = None,
         kinds: tuple[str, ...] = KINDS,
         rate_hz: float = 10.0,
         fault_chance: float = 0.0,
@@ -78,6 +81,9 @@ class LyingRelay:
         self.stats = RelayStats()
         self.silent = False
         self.all_bad = False
+        self.companion_types: frozenset[str] | None = None
+        """Only the companion's messages of these types reach the vehicle (None: all): e.g.
+        its HEARTBEAT alone, so its setpoints and commands stop while it seems alive."""
         self.alt_offset = 0.0
         """Metres added to the altitude (-z) of every LOCAL_POSITION_NED of the vehicle: a
         vehicle that reads as off its altitude layer."""
@@ -85,12 +91,12 @@ class LyingRelay:
         self._sel = selectors.DefaultSelector()
         self._to_companion = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self._to_companion.bind(("127.0.0.1", 0))
-        self._vehicle_tcp = vehicle_tcp
+        self._vehicle_tcp = vehicle if isinstance(vehicle, tuple) else None
         self._from_vehicle: socket.socket | None = None
         self.vehicle_port = 0
-        if vehicle_tcp is None:
+        if self._vehicle_tcp is None:
             udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-            udp.bind(("127.0.0.1", 0))
+            udp.bind(("127.0.0.1", vehicle if isinstance(vehicle, int) else 0))
             self._from_vehicle = udp
             self.vehicle_port = udp.getsockname()[1]
         self._vehicle_addr: tuple[str, int] | None = None
@@ -234,11 +240,17 @@ class LyingRelay:
     def _companion_data(self) -> None:
         data, _ = self._to_companion.recvfrom(65536)
         self._companion_heard = True
-        for msg in self._parse_out.parse_buffer(data) or ():
+        msgs = self._parse_out.parse_buffer(data) or []
+        for msg in msgs:
             if msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED":
                 self._check(msg)
         if self.silent:
             return
+        if self.companion_types is not None:
+            wanted = [m for m in msgs if m.get_type() in self.companion_types]
+            data = b"".join(bytes(m.get_msgbuf()) for m in wanted)
+            if not data:
+                return
         sock = self._from_vehicle
         assert sock is not None
         if self._vehicle_tcp is not None:

@@ -176,9 +176,11 @@ class TargetTracks:
     def departures(self, until: float) -> FloatArray:
         """(runs, m): when each target's path first leaves the area, inf if not by ``until``
         (and for fixed targets). Solved exactly on the linear segments: per segment and axis,
-        the time the line reaches the wall it heads for, the earliest within its segment."""
+        the time the line reaches the wall it heads for, the earliest within its segment.
+        Only a free walk leaves: the other boundaries keep every path inside (a clamped target
+        that reaches a wall stays on it, and is not gone)."""
         out = np.full((self.n_runs, self.spec.count), np.inf)
-        if self.walk is None:
+        if self.walk is None or self.walk.boundary != "free":
             return out
         last = int(np.floor(until / self.grid_dt + NODE_EPS))
         size = self.area.size

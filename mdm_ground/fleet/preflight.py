@@ -55,12 +55,6 @@ def check_arguments(o: FleetOptions, profile: MissionProfile) -> int:
         check_ceiling(profile, n)
     except CeilingError as exc:
         raise FleetInputError(f"--vehicles {n}: {exc}") from exc
-    if profile.mission.ts_rule != "confirmed" and profile.target_motion is not None:
-        raise FleetInputError(
-            f"profile {profile.name!r}: mission.ts_rule {profile.mission.ts_rule} is scored by "
-            "the Monte-Carlo engine only; a fleet run scores T_S by confirmations (ts_rule "
-            "confirmed)"
-        )
     if not o.duration > 0:
         raise FleetInputError(f"--duration {o.duration:g}: must be > 0 (search time, sim s)")
     if not o.speedup >= 0:

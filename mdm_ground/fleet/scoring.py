@@ -12,6 +12,7 @@ from companion.telemetry import events
 from companion.telemetry.mission_log import read_log, read_records
 from mdm_core.metrics import confirmed_within, team_times, time_to_all
 from mdm_core.world import Scenario
+from mdm_ground.fleet.departures import emulator_departures, team_search_start, ts_count
 from mdm_ground.fleet.flight_checks import FlightCheck
 from mdm_ground.fleet.outcome import ProcessEnd
 from mdm_profiles import MissionProfile
@@ -43,7 +44,8 @@ class FleetResult:
     tnc: int
     """Distinct real targets confirmed within ``duration`` (T_nc)."""
     ts: float
-    """Time to confirm every real target (capped at the profile's ts_cap)."""
+    """Time to confirm every real target (with ``ts_rule`` confirmed_or_gone: to confirm or
+    see gone, each at the earlier), capped at the profile's ts_cap."""
     ts_capped: bool
     real_targets: int
     sim_time: float
@@ -54,6 +56,18 @@ class FleetResult:
     first_confirmation: list[float]
     """Per target, the team's first confirmation time (inf: never)."""
     false_confirmations: int
+    ts_rule: str = "confirmed"
+    """The profile's mission.ts_rule: what T_S counts (fleet/departures.py)."""
+    departures: list[float] = field(default_factory=list)
+    """Per target, when it left the area on the mission clock (the emulator's, on which its
+    path runs: ``TargetTracks.departures``), inf: not while the run lasted."""
+    search_start: float | None = None
+    """The team's search start on the mission clock (the earliest vehicle's), from which
+    T_S counts a departure."""
+    ts_confirmed: int = 0
+    """Real targets T_S counted at their first confirmation."""
+    ts_gone: int = 0
+    """Real targets T_S counted at their departure (confirmed_or_gone: it left unconfirmed)."""
     confirmations: list[Confirmation] = field(default_factory=list)
     end_reasons: dict[int, str] = field(default_factory=dict)
     """Each vehicle's end reason from its mission log (absent: it never ended)."""
@@ -72,10 +86,22 @@ class FleetResult:
 
     def as_json(self) -> dict[str, Any]:
         out = asdict(self)
-        out["first_confirmation"] = [
-            None if not np.isfinite(t) else t for t in self.first_confirmation
-        ]
+        for key in ("first_confirmation", "departures"):
+            out[key] = [None if not np.isfinite(t) else t for t in getattr(self, key)]
         return out
+
+
+@dataclass
+class _Logged:
+    """What the logs of a run hold, before the metrics."""
+
+    per_vehicle: np.ndarray
+    """(1, vehicles, targets) each vehicle's first real confirmation, s after its search
+    start (inf: none)."""
+    found: list[Confirmation]
+    reasons: dict[int, str]
+    departures: np.ndarray
+    """(targets,) each target's departure, mission clock s (inf: none while the run lasted)."""
 
 
 EMULATOR_EVENTS = "emulator-events.jsonl"
@@ -92,10 +118,10 @@ class _Truth:
     position: np.ndarray
 
 
-def _ground_truth(path: Path, sensor: str) -> dict[int, list[_Truth]]:
+def _ground_truth(records: list[dict[str, Any]], sensor: str) -> dict[int, list[_Truth]]:
     """Per vehicle, the emulator's entered_range events of the confirmation sensor."""
     out: dict[int, list[_Truth]] = {}
-    for rec in read_records(path):
+    for rec in records:
         if rec.get("event") == "entered_range" and rec.get("sensor") == sensor:
             where = np.array([rec["north"], rec["east"]], dtype=float)
             out.setdefault(int(rec["vehicle"]), []).append(
@@ -156,7 +182,9 @@ def score(
     target's position when the emulator saw it come in range (emulator-events.jsonl in
     ``log_dir``, needed for moving targets), else of the profile's position. ``virtual_seed``:
     the companions read virtual sensors with that seed (the emulator's stayed off), so the
-    targets are where that virtual world had them at the confirmation's time.
+    targets are where that virtual world had them at the confirmation's time. Departures
+    (``target_gone`` in the emulator's log, or the virtual world's own paths) count in T_S
+    under ``mission.ts_rule: confirmed_or_gone`` (fleet/departures.py).
     """
     targets = np.array([[t.north, t.east] for t in profile.targets])
     real = np.array([not t.false_target for t in profile.targets])
@@ -170,7 +198,12 @@ def score(
             f"{emulator_log}: moving targets are scored against the emulator's event log, "
             "which is missing"
         )
-    truth = _ground_truth(emulator_log, profile.sensors[-1].name) if emulator_log.exists() else None
+    truth = None
+    departures = np.full(len(targets), np.inf)
+    if emulator_log.exists():
+        records = read_records(emulator_log)
+        truth = _ground_truth(records, profile.sensors[-1].name)
+        departures = emulator_departures(records, len(targets), emulator_log)
     drift = 0.0 if motion is None else motion.speed * max(abs(motion.low), abs(motion.high))
     per_vehicle = np.full((1, vehicles, len(targets)), np.inf)
     found: list[Confirmation] = []
@@ -186,7 +219,7 @@ def score(
             found.append(Confirmation(i, t, float(where[0]), float(where[1]), k, gap, ok))
             if ok:
                 per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
-    return _result(profile, log_dir, vehicles, duration, per_vehicle, real, found, reasons)
+    return _result(profile, log_dir, duration, _Logged(per_vehicle, found, reasons, departures))
 
 
 def safety_nets(log_dir: Path, vehicles: int) -> dict[int, dict[str, Any]]:
@@ -217,18 +250,16 @@ def flown_times(log_dir: Path, vehicles: int) -> tuple[float, float]:
 
 
 def _result(
-    profile: MissionProfile,
-    log_dir: Path,
-    vehicles: int,
-    duration: float,
-    per_vehicle: np.ndarray,
-    real: np.ndarray,
-    found: list[Confirmation],
-    reasons: dict[int, str],
+    profile: MissionProfile, log_dir: Path, duration: float, logged: _Logged
 ) -> FleetResult:
-    times = team_times(per_vehicle)
+    real = np.array([not t.false_target for t in profile.targets])
+    vehicles = logged.per_vehicle.shape[1]
+    times = team_times(logged.per_vehicle)
     tnc = int(confirmed_within(times, duration)[0])
-    ts, capped = time_to_all(times, real, profile.mission.ts_cap)
+    rule = profile.mission.ts_rule
+    start = team_search_start(log_dir, vehicles)
+    counted = ts_count(times[0], logged.departures, start, real, rule)
+    ts, capped = time_to_all(times, real, profile.mission.ts_cap, counted.gone[None, :])
     sim_time, search_time = flown_times(log_dir, vehicles)
     return FleetResult(
         profile=profile.name,
@@ -241,9 +272,14 @@ def _result(
         sim_time=sim_time,
         search_time=search_time,
         first_confirmation=[float(x) for x in times[0]],
-        false_confirmations=sum(not c.real for c in found),
-        confirmations=found,
-        end_reasons=reasons,
+        false_confirmations=sum(not c.real for c in logged.found),
+        ts_rule=rule,
+        departures=[float(x) for x in logged.departures],
+        search_start=start,
+        ts_confirmed=counted.confirmed,
+        ts_gone=counted.departed,
+        confirmations=logged.found,
+        end_reasons=logged.reasons,
         safety_net=safety_nets(log_dir, vehicles),
     )
 
@@ -273,4 +309,6 @@ def _score_virtual(
             )
             if ok:
                 per_vehicle[0, i, k] = min(per_vehicle[0, i, k], t)
-    return _result(profile, log_dir, vehicles, duration, per_vehicle, real, found, reasons)
+    # the virtual world's own departures, up to the last time the run logged
+    departures = tracks.departures(flown_times(log_dir, vehicles)[0])[0]
+    return _result(profile, log_dir, duration, _Logged(per_vehicle, found, reasons, departures))

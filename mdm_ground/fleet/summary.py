@@ -25,14 +25,29 @@ def exit_status(result: FleetResult) -> int:
 
 
 def _ts_words(r: FleetResult) -> str:
+    gone = r.ts_rule == "confirmed_or_gone"
     if not r.ts_capped:
-        return f"{r.ts:.1f} s"
+        split = f" ({r.ts_confirmed} confirmed, {r.ts_gone} gone)" if gone else ""
+        return f"{r.ts:.1f} s{split}"
     ever = sum(1 for t in r.first_confirmation if math.isfinite(t))
+    done = f"{r.ts_confirmed} confirmed and {r.ts_gone} gone" if gone else f"{ever} confirmed"
     return (
-        f"not reached: {ever} of {r.real_targets} real targets confirmed in "
+        f"not reached: {done} of {r.real_targets} real targets in "
         f"{r.search_time:.1f} s of search (results.json counts it as the profile's ts_cap, "
         f"{r.ts:.0f} s, as the Monte-Carlo tables do)"
     )
+
+
+def _departure_lines(r: FleetResult) -> list[str]:
+    """One line per target that left the area, on the mission clock and after the search
+    start (what confirmed_or_gone counts)."""
+    lines = []
+    for k, left in enumerate(r.departures):
+        if not math.isfinite(left):
+            continue
+        after = "" if r.search_start is None else f", {left - r.search_start:.1f} s into the search"
+        lines.append(f"    target T{k + 1} left the area at mission time {left:.1f} s{after}")
+    return lines
 
 
 def _table(ends: list[ProcessEnd]) -> list[str]:
@@ -65,7 +80,9 @@ def summary_lines(r: FleetResult, out: Path, wall: float) -> list[str]:
         f"{r.profile}: {r.vehicles} vehicles; {searched}; mission clock {r.sim_time:.1f} s "
         f"(take-off included); {wall:.1f} s wall",
         f"  targets confirmed within {r.duration:g} s (T_nc): {r.tnc} of {r.real_targets} real",
-        f"  time to all targets (T_S): {_ts_words(r)}",
+        f"  time to all targets (T_S{', confirmed or gone' if r.ts_rule == 'confirmed_or_gone' else ''}): "
+        f"{_ts_words(r)}",
+        *_departure_lines(r),
         f"  false confirmations: {r.false_confirmations}",
     ]
     for c in r.confirmations:

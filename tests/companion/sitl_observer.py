@@ -23,6 +23,11 @@ _STREAMS = (
     mavlink2.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
     mavlink2.MAVLINK_MSG_ID_SYS_STATUS,  # the battery: ArduCopter's SERIAL1 sends it only if asked
 )
+_VELOCITY_MASK = 3527
+"""SET_POSITION_TARGET_LOCAL_NED type_mask: velocity only (ArduCopter and PX4 take it)."""
+_PUSH_PERIOD_S = 0.05
+"""Wall s between two setpoints of :meth:`Observer.push` (PX4's offboard link wants one at
+least every COM_OF_LOSS_T vehicle s)."""
 
 
 @dataclass
@@ -48,6 +53,8 @@ class Trace:
     """(lat, lon, relative altitude, custom mode) of every position while airborne."""
     stamps: list[float] = field(default_factory=list)
     """The observer's monotonic wall time of each ``track`` entry (to line up several vehicles)."""
+    boots: list[float] = field(default_factory=list)
+    """The vehicle's own clock (``boot_s``) of each ``track`` entry."""
     boot_s: float = 0.0
     """The vehicle's own clock (time since boot of its latest position), s: runs at the SITL's
     speed-up as far as the host lets it, not at the nominal one."""
@@ -57,6 +64,10 @@ class Trace:
     """``battery`` when each of ``modes`` was first seen."""
     params: dict[str, float] = field(default_factory=dict)
     """Every PARAM_VALUE on this link (the echoes of :meth:`Observer.set_param`)."""
+    mode_stamps: list[float] = field(default_factory=list)
+    """The observer's monotonic wall time when each of ``modes`` was first seen."""
+    mode_boots: list[float] = field(default_factory=list)
+    """The vehicle's clock (``boot_s``) when each of ``modes`` was first seen."""
 
 
 class Observer:
@@ -75,6 +86,8 @@ class Observer:
         """MAV_AUTOPILOT of the vehicle's HEARTBEAT (PX4 sends integer parameters bytewise)."""
         self._params: queue.Queue[Any] = queue.Queue()
         """PARAM_VALUE messages of the vehicle, for :meth:`read_param`."""
+        self._push: tuple[float, float, float] | None = None
+        """The velocity (north, east, down; m/s) :meth:`push` streams, None: no setpoints."""
         self._conn = mavutil.mavlink_connection(url, source_system=250, source_component=190)
         self._thread = threading.Thread(target=self._run, name="observer", daemon=True)
         self._thread.start()
@@ -96,10 +109,16 @@ class Observer:
             )
 
     def _run(self) -> None:
-        asked = beat = 0.0
+        asked = beat = pushed = 0.0
         while not self._stop.is_set():
             now = time.monotonic()
             with self._send_lock:
+                if self._push is not None and now - pushed >= _PUSH_PERIOD_S:
+                    self._conn.mav.set_position_target_local_ned_send(
+                        0, self.sysid, 1, mavlink2.MAV_FRAME_LOCAL_NED, _VELOCITY_MASK,
+                        0, 0, 0, *self._push, 0, 0, 0, 0, 0,
+                    )  # fmt: skip
+                    pushed = now
                 if now - beat > 1.0:  # a ground station, as the autopilot routes it
                     self._conn.mav.heartbeat_send(
                         mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0
@@ -108,7 +127,8 @@ class Observer:
                 if now - asked > 5.0:  # again after a reboot or a lost request
                     self._ask_streams()
                     asked = now
-            msg = self._conn.recv_match(blocking=True, timeout=0.2)
+            wait = 0.2 if self._push is None else _PUSH_PERIOD_S / 2
+            msg = self._conn.recv_match(blocking=True, timeout=wait)
             if msg is None or msg.get_srcSystem() != self.sysid or msg.get_srcComponent() != 1:
                 continue
             if msg.get_type() in ("MISSION_COUNT", "MISSION_ITEM_INT"):
@@ -129,6 +149,8 @@ class Observer:
                 t.mode = msg.custom_mode  # type: ignore[attr-defined]
                 t.modes.append(t.mode)
                 t.mode_battery.append(t.battery)
+                t.mode_stamps.append(time.monotonic())
+                t.mode_boots.append(t.boot_s)
         elif kind == "GLOBAL_POSITION_INT":
             t.boot_s = msg.time_boot_ms / 1000.0  # type: ignore[attr-defined]
             t.alt = msg.relative_alt / 1000.0  # type: ignore[attr-defined]
@@ -138,6 +160,7 @@ class Observer:
                 t.distance += _metres(t.last_position, here)
                 t.track.append((*here, t.alt, t.mode))
                 t.stamps.append(time.monotonic())
+                t.boots.append(t.boot_s)
             t.last_position = here
             t.max_speed = max(t.max_speed, math.hypot(msg.vx, msg.vy) / 100.0)  # type: ignore[attr-defined]
         elif kind == "PARAM_VALUE":
@@ -173,6 +196,12 @@ class Observer:
         full = [*params, *[0.0] * (7 - len(params))]
         with self._send_lock:
             self._conn.mav.command_long_send(self.sysid, 1, command, 0, *full)
+
+    def push(self, velocity: tuple[float, float, float] | None) -> None:
+        """Fly the vehicle from this link, as a second ground station could: a velocity
+        setpoint (north, east, down; m/s, SET_POSITION_TARGET_LOCAL_NED) streamed every
+        ``_PUSH_PERIOD_S`` wall s until ``push(None)``."""
+        self._push = velocity
 
     def set_param(self, name: str, value: float) -> None:
         """PARAM_SET (REAL32), as a ground station sends it (the echo not awaited): the SITL's
@@ -254,10 +283,13 @@ class Observer:
                 t.last_position,
                 list(t.track),
                 list(t.stamps),
+                list(t.boots),
                 t.boot_s,
                 t.battery,
                 list(t.mode_battery),
                 dict(t.params),
+                list(t.mode_stamps),
+                list(t.mode_boots),
             )
 
     def hold(

@@ -1,6 +1,7 @@
 """The battery reserve that knows the way home, on stock ArduCopter SITL with a small pack: a
 field search (Duebendorf, booted in the fence's north-east corner, far from most of the area)
-that no target ends, flown twice on fresh boots of the same vehicle with the same seed. With
+that no target ends, flown twice at once by two fresh instances booted at the same point, as the
+same vehicle of the profile with the same seed (the second under its own system id). With
 ``site.battery_reserve`` the companion turns the vehicle home while the pack still holds the
 flight home plus the reserve, and it lands with at least the reserve left; with the fixed
 ``battery_min`` alone it turns at 20 % whatever the distance. Judged on the autopilot's second
@@ -13,6 +14,7 @@ import signal
 import subprocess
 import sys
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -53,21 +55,18 @@ def _profile(vehicles: int, reserve: float | None) -> dict[str, Any]:
     return p
 
 
-def _fly(
-    arducopter: Callable[..., sitl.SitlInstance], out: Path, reserve: float | None
-) -> tuple[int, int, str]:
-    """One flight on a fresh boot: the battery when RTL began and once landed and disarmed
+def _fly(inst: sitl.SitlInstance, out: Path, reserve: float | None) -> tuple[int, int, str]:
+    """Vehicle 0's flight on ``inst``: the battery when RTL began and once landed and disarmed
     (the autopilot's SYS_STATUS on its second link), and the companion's last lines."""
-    inst = arducopter(speedup=SPEEDUP, home=HOME, battery_mah=PACK_MAH)
     out.mkdir(parents=True)
     path = out / "profile.yaml"
-    path.write_text(yaml.safe_dump(_profile(inst.index + 1, reserve), sort_keys=False))
+    path.write_text(yaml.safe_dump(_profile(1, reserve), sort_keys=False))
     obs = Observer(inst.observer_url, inst.sysid)
     with (out / "companion.out").open("ab") as f:
         companion = subprocess.Popen(
             [sys.executable, "-m", "companion.cli", "run", "--profile", str(path),
-             "--vehicle", str(inst.index), "--connect", inst.companion_url, "--log-dir", str(out),
-             "--seed", str(SEED), "--land-wait", "600", "--flight-log-wait", "0"],
+             "--vehicle", "0", "--system-id", str(inst.sysid), "--connect", inst.companion_url,
+             "--log-dir", str(out), "--seed", str(SEED), "--land-wait", "600", "--flight-log-wait", "0"],
             stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
             env=dict(os.environ, PYTHONUNBUFFERED="1"),
         )  # fmt: skip
@@ -97,13 +96,19 @@ def _fly(
         inst.stop()
 
 
-@pytest.mark.timeout(2400)  # two flights on fresh boots, each up to 900 wall s
+@pytest.mark.timeout(1500)  # two flights side by side, each up to 900 wall s
 def test_the_reserve_rule_turns_home_in_time_and_lands_with_the_reserve(
     arducopter: Callable[..., sitl.SitlInstance], tmp_path: Path
 ) -> None:
-    turned, landed, said = _fly(arducopter, tmp_path / "reserve", RESERVE)
+    # started one after the other (each takes the next free instance index), flown at once
+    first = arducopter(speedup=SPEEDUP, home=HOME, battery_mah=PACK_MAH)
+    second = arducopter(speedup=SPEEDUP, home=HOME, battery_mah=PACK_MAH)
+    with ThreadPoolExecutor(2) as pool:
+        reserve = pool.submit(_fly, first, tmp_path / "reserve", RESERVE)
+        fixed = pool.submit(_fly, second, tmp_path / "fixed", None)
+        turned, landed, said = reserve.result()
+        fixed_turned, fixed_landed, fixed_said = fixed.result()
     assert "home needs" in said, said[-3000:]
-    fixed_turned, fixed_landed, fixed_said = _fly(arducopter, tmp_path / "fixed", None)
     print(
         f"\nbattery, reserve rule ({RESERVE:g} % + the way home): RTL at {turned} %, landed "
         f"with {landed} %; fixed rule ({BATTERY_MIN:g} %): RTL at {fixed_turned} %, landed "

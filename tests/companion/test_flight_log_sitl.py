@@ -23,6 +23,9 @@ from tests.profile_files import levels, sensors, write_profile_with
 from tests.waiting import wait_until
 
 ON_GROUND = 1  # MAV_LANDED_STATE_ON_GROUND
+LOG_WAIT_S = 60
+"""Wall s of download: ArduCopter's whole .bin, the first few hundred kB of PX4's .ulg (PX4 sends
+about 13 kB/s here, docs/companion.md); what came is compared with the autopilot's own file."""
 KINDS = {
     # kind: speed-up, the log's suffix and magic, where the autopilot writes its logs
     "arducopter": (5.0, ".bin", b"\xa3\x95", "*.BIN"),
@@ -52,7 +55,7 @@ def test_the_autopilot_log_is_kept_in_the_run_directory(
         companion = subprocess.Popen(
             [sys.executable, "-m", "companion.cli", "run", "--profile", str(profile),
              "--vehicle", str(inst.index), "--connect", inst.companion_url, "--log-dir", str(out),
-             "--land-wait", "600", "--no-map"],
+             "--land-wait", "600", "--flight-log-wait", str(LOG_WAIT_S), "--no-map"],
             stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
             env=dict(os.environ, PYTHONUNBUFFERED="1"),
         )  # fmt: skip

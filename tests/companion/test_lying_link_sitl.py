@@ -47,7 +47,7 @@ def test_arducopter_through_a_lying_link(
     relay = LyingRelay(
         port,
         sysid=inst.sysid,
-        vehicle_tcp=("127.0.0.1", tcp),
+        vehicle=("127.0.0.1", tcp),
         kinds=KINDS,
         rate_hz=5.0,
         fault_chance=0.05,

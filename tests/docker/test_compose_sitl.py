@@ -77,6 +77,7 @@ def stack(
     settings = {
         "MDM_PROFILES": str(profiles),
         "MDM_PROFILE": f"/opt/mdm/mission_profiles/{PROFILE}.yaml",
+        "MDM_FLIGHT_LOG_WAIT": "0",  # not about the log (PX4 sends it at about 13 kB/s)
     }
     for n, inst in enumerate(instances):
         settings |= {f"MDM_VEHICLE_{n}": str(inst.index), f"MDM_CONNECT_{n}": inst.companion_url}

@@ -57,23 +57,6 @@ def test_more_vehicles_than_mavlink_has_system_ids_is_refused(
     assert "--vehicles 300: must be 1..254 (MAVLink system ids stop at 254)" in err
 
 
-def test_a_ts_rule_the_fleet_does_not_score_is_refused(
-    capsys: pytest.CaptureFixture[str], tmp_path: Path
-) -> None:
-    """T_S counting departed targets is the engine's alone: a fleet run refuses it before
-    start rather than report a T_S by another rule."""
-    source = Path(__file__).resolve().parents[2] / "mission_profiles" / "paper-dynamic.yaml"
-    text = source.read_text().replace(
-        "  ts_cap: 40000.0", "  ts_cap: 40000.0\n  ts_rule: confirmed_or_gone"
-    )
-    profile = tmp_path / "gone.yaml"
-    profile.write_text(text)
-    out = tmp_path / "run"
-    err = _refused(capsys, "--profile", str(profile), "--out", str(out))
-    assert "mission.ts_rule confirmed_or_gone is scored by the Monte-Carlo engine only" in err
-    assert not out.exists()
-
-
 def test_an_out_that_cannot_be_written_is_refused(
     capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:

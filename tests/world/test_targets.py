@@ -178,11 +178,12 @@ def test_departure_is_the_first_time_the_path_leaves_the_area() -> None:
     assert np.isinf(short[gone > gone.min()]).all()
 
 
-def test_bounded_and_fixed_targets_never_depart() -> None:
+@pytest.mark.parametrize("boundary", ["reflect", "clamp", "bounce"])
+def test_bounded_and_fixed_targets_never_depart(boundary: WalkBoundary) -> None:
+    """A clamped target reaches the wall within 10 s here and stays on it: it is not gone."""
     area = Area(100.0, 100.0)
-    bounce = TargetTracks(
-        spec((90.0, 90.0)), area, 5, np.random.default_rng(5), RandomWalk(boundary="bounce"), 10.0
-    )
+    walk = RandomWalk(boundary=boundary)
+    bounded = TargetTracks(spec((90.0, 90.0)), area, 5, np.random.default_rng(5), walk, 10.0)
     fixed = TargetTracks(spec((90.0, 90.0)), area, 5, np.random.default_rng(5))
-    assert np.isinf(bounce.departures(2000.0)).all()
+    assert np.isinf(bounded.departures(2000.0)).all()
     assert np.isinf(fixed.departures(2000.0)).all()
