@@ -25,7 +25,8 @@ PARTS = ("engines", "swarms", "emulator")
 
 
 def warm() -> None:
-    """Run every part in its own process, side by side; a failure is printed, not raised."""
+    """Run every part in its own process, side by side; a failure (or a part still running
+    after 600 s, then ended) is printed, not raised."""
     procs = {
         part: subprocess.Popen(
             [sys.executable, "-m", "tests.kernel_warmup", part],
@@ -37,7 +38,11 @@ def warm() -> None:
         for part in PARTS
     }
     for part, proc in procs.items():
-        out, _ = proc.communicate(timeout=600)
+        try:
+            out, _ = proc.communicate(timeout=600)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            out, _ = proc.communicate()
         if proc.returncode != 0:
             print(f"\nkernel warm-up {part!r} failed ({proc.returncode}):\n{out[-2000:]}")
 
