@@ -59,6 +59,7 @@ class MessageHandler:
             "RC_CHANNELS_OVERRIDE": self._rc_override,
             "REQUEST_DATA_STREAM": self._data_stream,
             "FILE_TRANSFER_PROTOCOL": self._ftp,
+            "LOG_REQUEST_LIST": self._log_list,
             "TIMESYNC": self._timesync,
         }
 
@@ -199,6 +200,11 @@ class MessageHandler:
                 )
             ]
         )
+
+    def _log_list(self, node: VehicleNode, msg: Any) -> None:
+        """The emulator keeps no autopilot log: one LOG_ENTRY of zeros (num_logs 0), as
+        ArduPilot and PX4 answer when they hold none."""
+        node.send([d.MAVLink_log_entry_message(0, 0, 0, 0, 0)])
 
     def _timesync(self, node: VehicleNode, msg: Any) -> None:
         if msg.tc1 == 0:

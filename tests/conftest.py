@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from mdm_ground.fleet.sitl_team import INSTANCE_BASE_ENV
-from tests import parallel, sitl
+from tests import kernel_warmup, parallel, sitl
 from tests.markers import MARKERS, markers_for
 from tests.mqtt_harness import clear_retained_of_this_run
 from tests.services import missing
@@ -23,6 +23,14 @@ pytest_plugins = ["tests.service_fixtures"]
 def pytest_configure(config: pytest.Config) -> None:
     for name, description in MARKERS.items():
         config.addinivalue_line("markers", f"{name}: {description}")
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """With pytest-xdist's workers (``-n N``): the compiled kernels cached once, before the
+    workers start, instead of compiled by each of them at once (tests/kernel_warmup.py)."""
+    config = session.config
+    if config.getoption("numprocesses", None) and not hasattr(config, "workerinput"):
+        kernel_warmup.warm()
 
 
 @pytest.hookimpl(wrapper=True)  # before every other plugin: -m deselects by them, xdist groups

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from mavsdk.asyncio.plugins.log_files import LogFilesAsync
-from mavsdk.plugins.log_files import LogFilesError
+from mavsdk.plugins.log_files import LogFilesError, LogFilesResult
 
 from companion.link.log_transfer import FlightLog, suffix
 
@@ -21,8 +21,12 @@ async def download_newest(system: Any, stem: Path, limit: float) -> FlightLog:
     try:
         try:
             entries = await asyncio.wait_for(files.get_entries(), min(limit, 20.0))
-        except (LogFilesError, TimeoutError) as exc:
-            return FlightLog(None, note=f"MAVSDK's log list: {exc or 'no answer'}")
+        except LogFilesError as exc:
+            if exc.result == LogFilesResult.NO_LOGFILES:
+                return FlightLog(None, note="the vehicle holds no log")
+            return FlightLog(None, note=f"MAVSDK's log list: {exc}")
+        except TimeoutError:
+            return FlightLog(None, note="MAVSDK's log list: no answer")
         if not entries:
             return FlightLog(None, note="the vehicle holds no log")
         entry = max(entries, key=lambda e: e.id)

@@ -41,11 +41,11 @@ def test_a_script_flies_a_mission_to_its_end(tmp_path: Path) -> None:
         "return",
         "done",
     ]
-    # The emulator keeps no autopilot log: the companion asked for one, after the landing, and
-    # says why there is none.
+    # The emulator keeps no autopilot log and says so (LOG_ENTRY, num_logs 0): the companion
+    # asked for one, after the landing, and says why there is none.
     (kept,) = [r for r in read_records(tmp_path / "mission-0.jsonl") if r["event"] == "flight_log"]
     assert kept["path"] is None
-    assert kept["note"] == "the vehicle did not answer LOG_REQUEST_LIST in 3 s"
+    assert kept["note"] == "the vehicle holds no log"
 
 
 def test_leaving_the_block_early_ends_with_the_end_action_and_waits(tmp_path: Path) -> None:

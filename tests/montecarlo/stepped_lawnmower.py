@@ -20,7 +20,7 @@ import numpy as np
 
 from mdm_core.search.lawnmower import Plan
 from mdm_core.search.lawnmower_profile import search_hold, search_spiral, team_plan
-from mdm_core.world import Scenario, TargetTracks
+from mdm_core.world import Scenario
 from mdm_montecarlo.engines.engine import block_rngs
 from mdm_montecarlo.kernels.compiled_tracks import compiled_tracks
 from mdm_profiles import MissionProfile
@@ -36,26 +36,41 @@ def stepped_lawnmower(
     cap = max(profile.mission.ts_cap, profile.mission.duration)
     tracks = compiled_tracks(scenario, n_runs, rng_targets, cap)
     start = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
+    times = _step_ends(dt, cap)
     team = np.full((n_runs, scenario.targets.count), np.inf)
     for r in range(n_runs):
         plan = team_plan(profile, start[r])
+        # Every step end's target positions at once, shared by the run's vehicles: the same
+        # numbers as one call per step (elementwise arithmetic), without a call per step.
+        where = tracks.positions(np.full(len(times), r), times)
         for i in range(n_vehicles):
-            first = _fly_one(profile, scenario, tracks, r, start[r, i], plan, i, dt, cap)
+            first = _fly_one(profile, scenario, times, where, start[r, i], plan, i, dt)
             team[r] = np.minimum(team[r], first)
     return team
+
+
+def _step_ends(dt: float, cap: float) -> np.ndarray:
+    """The times at which the steps end, summed step by step as the vehicles' clock is."""
+    ends: list[float] = []
+    t = 0.0
+    while t < cap - 1e-9:
+        t += dt
+        ends.append(t)
+    return np.array(ends)
 
 
 def _fly_one(
     profile: MissionProfile,
     scenario: Scenario,
-    tracks: TargetTracks,
-    run: int,
+    times: np.ndarray,
+    where_at: np.ndarray,
     start: np.ndarray,
     plan: Plan,
     vehicle: int,
     dt: float,
-    cap: float,
 ) -> np.ndarray:
+    """One vehicle's first-confirmation times (targets,); ``where_at[j]``: the targets'
+    positions (m, 2) at step end ``times[j]``."""
     two = profile.policy.kind == "lm2"
     sweep = plan.waypoints[vehicle]
     spiral = search_spiral(profile)
@@ -74,7 +89,6 @@ def _fly_one(
     mode, k, step, s = "sweep", 0, 1, 0
     centre = heading = back = np.zeros(2)
     sought = -1
-    t = 0.0
 
     def goal() -> np.ndarray:
         if mode == "sweep":
@@ -86,7 +100,7 @@ def _fly_one(
         point = centre + np.array([ox * hx - oy * hy, ox * hy + oy * hx])
         return np.asarray(np.clip(point, 0.0, size))
 
-    while t < cap - 1e-9:
+    for j, t in enumerate(times.tolist()):
         budget = speed * dt
         direction = np.zeros(2)
         while budget > 0:
@@ -110,11 +124,9 @@ def _fly_one(
             else:
                 s += 1
                 if s == len(spiral):
-                    hold_until[sought] = t + dt + hold if hold >= 0 else np.inf
+                    hold_until[sought] = t + hold if hold >= 0 else np.inf
                     mode = "return"
-        t += dt
-        where = tracks.positions(np.array([run]), np.array([t]))[0]
-        near = np.hypot(*(where - pos).T)
+        near = np.hypot(*(where_at[j] - pos).T)
         present = appear <= t
         if not two or mode == "search":
             hit = real & present & np.isinf(first) & (near < r_confirm)
