@@ -51,6 +51,11 @@ class ArduCopter(Autopilot):
         "FENCE_ENABLE", "FENCE_TYPE", 4, 2, "FENCE_ACTION"
     )
     # The GCS it watches: MAV_GCS_SYSID in 4.7 (the SITL of ../shared/sitl), SYSID_MYGCS before.
+    # mode_rtl.cpp: RTL_SPEED cm/s, 0: WPNAV_SPEED
+    return_speed_params: ClassVar[tuple[tuple[str, float], ...]] = (
+        ("RTL_SPEED", 100.0),
+        ("WPNAV_SPEED", 100.0),
+    )
     safety_reads: ClassVar[tuple[str, ...]] = ("BATT_CAPACITY", "MAV_GCS_SYSID")
     safety_fallbacks: ClassVar[dict[str, str]] = {"MAV_GCS_SYSID": "SYSID_MYGCS"}
 

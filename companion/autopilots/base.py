@@ -65,6 +65,9 @@ class Autopilot(ABC):
     """The parameter that caps horizontal speed and its units per m/s, where there is one."""
     fence_params: ClassVar[FenceParams | None] = None
     """How the vehicle's own polygon fence is switched on, where the companion does it."""
+    return_speed_params: ClassVar[tuple[tuple[str, float], ...]] = ()
+    """Where the autopilot's own return (RTL) takes its horizontal speed: parameters and their
+    units per m/s, the first that is set and non-zero wins (the battery reserve's way home)."""
     safety_reads: ClassVar[tuple[str, ...]] = ()
     """Parameters read before :meth:`safety_params` (the values it depends on)."""
     safety_fallbacks: ClassVar[dict[str, str]] = {}

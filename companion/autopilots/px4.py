@@ -42,6 +42,8 @@ class PX4(Autopilot):
     takeoff_by_command: ClassVar[bool] = False
     guided_needs_stream: ClassVar[bool] = True
     speed_param: ClassVar[tuple[str, float] | None] = ("MPC_XY_VEL_MAX", 1.0)
+    # navigator/rtl: the return flies at the mission cruise speed (stock 5 m/s)
+    return_speed_params: ClassVar[tuple[tuple[str, float], ...]] = (("MPC_XY_CRUISE", 1.0),)
     # PX4's geofence (navigator/geofence.cpp) applies whatever polygon it holds, with no enable
     # parameter: GF_ACTION (stock 2, HOLD) is what a breach does, also before arming
     # ("outside geofence" refuses the arming).

@@ -5,7 +5,7 @@ land with the profile's reserve (``site.battery_reserve``). docs/companion.md, "
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from mdm_profiles.schema import SiteSpec
 
@@ -21,6 +21,13 @@ class ReserveRule:
     """m/s toward home; 0: the end action lands where it is (LAND)."""
     descent: float
     """m/s down to the ground."""
+
+    def at_most(self, speed: float | None) -> ReserveRule:
+        """The rule with the way home flown no faster than ``speed`` m/s (the autopilot's own
+        return speed, where it was read)."""
+        if speed is None or speed <= 0 or self.horizontal <= speed:
+            return self
+        return replace(self, horizontal=speed)
 
     def seconds_home(self, distance: float, altitude: float) -> float:
         """Vehicle seconds from ``distance`` m out (horizontal) and ``altitude`` m up to the

@@ -190,6 +190,7 @@ class EventIntake:
         needs at the drain measured so far (from where the vehicle was first seen on the
         ground; the descent alone where that is not known)."""
         m, seen, rule = self.m, self.m.seen, self.m.config.battery_reserve
+        rule = rule.at_most(seen.return_speed) if rule is not None else None
         pos, home = seen.position, None
         if rule is not None and pos is not None and -pos.down > 1.0 and remaining >= 0:
             rate = seen.drain.note(seen.clock.now, remaining)

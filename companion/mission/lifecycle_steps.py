@@ -38,6 +38,7 @@ from companion.mission.lifecycle_events import (
 )
 from companion.mission.mission_exit import MissionExit
 from companion.mission.phase import Phase
+from companion.mission.return_speed import learn_return_speed
 from companion.mission.safety_net import install_safety_net
 from companion.telemetry import events
 
@@ -130,6 +131,7 @@ class LifecycleSteps:
             if not self._safety_net_done:
                 if not await install_safety_net(m):
                     return Prepared(ok=False, takeoff=False)
+                await learn_return_speed(m)
                 self._safety_net_done = True
             result = await self.link.arm()
             if not result:

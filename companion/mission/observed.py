@@ -41,6 +41,8 @@ class Observed:
         self.flew = False
         """The vehicle was seen more than 1 m up in this run."""
         self.drain = DrainMeter()
+        self.return_speed: float | None = None
+        """m/s the autopilot's own return flies (read before arming; None: not known)."""
         """The battery's drain in this flight (the reserve rule's measure)."""
 
     def note_received(self, vehicle_time: float) -> None:

@@ -58,3 +58,15 @@ def test_a_site_profile_gives_the_rule_and_a_paper_profile_none() -> None:
     assert reserve_rule(off, field.fleet.speed, "rtl") is None
     paper = load_profile("paper-fixed")
     assert reserve_rule(paper.site, paper.fleet.speed, "rtl") is None
+
+
+def test_the_way_home_is_counted_no_faster_than_the_autopilot_returns() -> None:
+    rule = ReserveRule(reserve=10.0, horizontal=10.0, descent=1.5)
+    slow = rule.at_most(5.0)
+    assert slow.horizontal == 5.0
+    assert slow.seconds_home(1000.0, 30.0) == pytest.approx(2 * 100.0 + 20.0)
+    assert rule.at_most(12.0) is rule
+    assert rule.at_most(None) is rule
+    assert rule.at_most(0.0) is rule
+    land = ReserveRule(reserve=10.0, horizontal=0.0, descent=1.5)
+    assert land.at_most(5.0) is land  # LAND comes down where it is
