@@ -61,11 +61,15 @@ def read_progress(log_dir: Path, vehicles: int) -> list[VehicleView]:
     return views
 
 
-def progress_line(views: list[VehicleView], team_found: int, real: int) -> str:
-    """One line: sim time, targets confirmed by the team, each vehicle's level or phase letter."""
+def progress_line(
+    views: list[VehicleView], team_found: int, real: int, gone: int | None = None
+) -> str:
+    """One line: sim time, targets confirmed by the team (and, where T_S counts departures,
+    the real targets gone unconfirmed), each vehicle's level or phase letter."""
     t = max((v.time for v in views), default=0.0)
     letters = "".join(v.letter() for v in views)
-    return f"sim t={t:7.1f} s  confirmed {team_found}/{real}  levels [{letters}]"
+    left = "" if gone is None else f"  gone {gone}"
+    return f"sim t={t:7.1f} s  confirmed {team_found}/{real}{left}  levels [{letters}]"
 
 
 def airborne(log_dir: Path) -> list[int]:

@@ -436,10 +436,11 @@ def _progress(
 ) -> str:
     for i, p in companions.items():
         views[i].failed = p.poll() not in (None, 0)
-    found = score(
+    scored = score(
         profile, o.out, plan.vehicles, o.duration, virtual_seed=_virtual_seed(o, profile)
-    ).tnc
-    return progress_line(views, found, real)
+    )
+    gone = scored.ts_gone if scored.ts_rule == "confirmed_or_gone" else None
+    return progress_line(views, scored.tnc, real, gone)
 
 
 def _virtual_seed(o: FleetOptions, profile: MissionProfile) -> int | None:

@@ -9,9 +9,12 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from companion.telemetry import MissionLog, events
+from mdm_core.world import Scenario
+from mdm_ground.fleet.progress import VehicleView, progress_line
 from mdm_ground.fleet.scoring import EMULATOR_EVENTS, FleetResult, score
 from mdm_ground.fleet.summary import summary_lines
 from mdm_profiles import MissionProfile
@@ -147,3 +150,26 @@ def test_a_departure_of_no_profile_target_is_refused_naming_the_file(tmp_path: P
     _run(tmp_path, [_gone(7, 150.0)])
     with pytest.raises(ValueError, match=r"emulator-events\.jsonl: target_gone of target 7"):
         _score(tmp_path, "confirmed_or_gone")
+
+
+def test_a_virtual_sensor_run_takes_the_departures_of_its_own_world(tmp_path: Path) -> None:
+    """No emulator log: the virtual world's tracks (same seed) give the departures, up to the
+    last mission time the run logged (600 s here: T2, the nearest to a wall, is gone by then)."""
+    profile = _profile("confirmed_or_gone")
+    _mission(tmp_path / "mission-0.jsonl", 10.0, [(600.0, 0.0, 0.0)])
+    _mission(tmp_path / "mission-1.jsonl", 14.0, [])
+    result = score(profile, tmp_path, vehicles=2, duration=1000.0, virtual_seed=9)
+    _, tracks = Scenario.from_profile(profile).live_run(9, 2, profile.fleet.start)
+    solved = tracks.departures(600.0)[0]
+    assert result.departures == solved.tolist()
+    assert np.isfinite(solved[1])
+    assert result.departures[1] < 600.0
+    assert result.ts_gone == 1 + bool(np.isfinite(solved[0]))
+
+
+def test_the_progress_line_counts_the_targets_gone_where_t_s_counts_them() -> None:
+    views = [VehicleView(time=120.0, level=1, phase="search"), VehicleView(time=119.5)]
+    assert (
+        progress_line(views, 1, 2, gone=1) == "sim t=  120.0 s  confirmed 1/2  gone 1  levels [2C]"
+    )
+    assert progress_line(views, 1, 2) == "sim t=  120.0 s  confirmed 1/2  levels [2C]"
