@@ -12,6 +12,7 @@ class ParamType(IntEnum):
     """MAV_PARAM_TYPE values used by the personas."""
 
     INT8 = 2
+    INT16 = 4
     INT32 = 6
     REAL32 = 9
 

@@ -111,6 +111,9 @@ class ArduCopterPersona(Persona):
             ParamSpec("FS_OPTIONS", 16, i32, 0, 1023, "listed only"),
             ParamSpec("WP_YAW_BEHAVIOR", 2, i8, 0, 3, "listed only"),
             ParamSpec("RTL_ALT_FINAL", 0, i32, 0, 1000, "listed only, cm"),
+            # mode_rtl.cpp's return speed (0: WPNAV_SPEED), read by the companion's battery
+            # reserve; the persona's RTL flies at its speed limit whatever it holds.
+            ParamSpec("RTL_SPEED", 0, ParamType.INT16, 0, 2000, "listed only, cm/s"),
             ParamSpec("BATT_CAPACITY", 5200, i32, 0, 1e6, "mAh"),
             ParamSpec("BATT_LOW_MAH", 800, i32, 0, 1e6, "mAh left that trigger the failsafe"),
             ParamSpec("BATT_FS_LOW_ACT", 2, i8, 0, 5, "0 none, 1 land, 2 RTL"),
