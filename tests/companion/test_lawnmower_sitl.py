@@ -31,6 +31,9 @@ from tests.waiting import wait_until
 
 SPEEDUP = 5
 SEED = 3
+VEHICLE = 5
+"""The profile's vehicle flown (of VEHICLE + 1): its cell, lanes and start point are those the test
+was measured with, on whichever SITL instance is free."""
 GUIDED, RTL = 4, 6  # ArduCopter custom modes
 ON_GROUND = 1  # MAV_LANDED_STATE_ON_GROUND
 TOLERANCE_M = 40.0
@@ -71,12 +74,12 @@ def _past_the_end(lanes: np.ndarray, area: tuple[float, float]) -> tuple[float, 
 def test_a_lawnmower_vehicle_flies_its_strip_inside_the_fence_and_lands_on_arducopter(
     arducopter: Callable[..., sitl.SitlInstance], tmp_path: Path
 ) -> None:
-    index = sitl.free_index("arducopter")
-    field = _strip_profile(tmp_path, vehicles=index + 1)  # --vehicle is the SITL's index
+    # the profile's vehicle VEHICLE of VEHICLE + 1, whatever instance flies it (its system id)
+    field = _strip_profile(tmp_path, vehicles=VEHICLE + 1)
     probe = tmp_path / "probe.yaml"
     probe.write_text(yaml.safe_dump(field, sort_keys=False))
     profile = load_profile(str(probe))
-    lanes = planned_lanes(profile, SEED, index)
+    lanes = planned_lanes(profile, SEED, VEHICLE)
     area = (profile.area.north, profile.area.east)
     target = _past_the_end(lanes, area)
     field["targets"] = [{"north": target[0], "east": target[1]}]
@@ -84,10 +87,10 @@ def test_a_lawnmower_vehicle_flies_its_strip_inside_the_fence_and_lands_on_arduc
     path.write_text(yaml.safe_dump(field, sort_keys=False))
     profile = load_profile(str(path))
     frame = profile_frame(profile)
-    start = start_point(profile, SEED, index, guidance_fence(profile))
+    start = start_point(profile, SEED, VEHICLE, guidance_fence(profile))
     lat, lon, _ = frame.to_geodetic(*start, 0.0)
     home = f"{lat:.7f},{lon:.7f},{profile.origin.alt:g},0"
-    inst = arducopter(index=index, speedup=SPEEDUP, home=home, battery_mah=20000)
+    inst = arducopter(speedup=SPEEDUP, home=home, battery_mah=20000)
     assert profile.site is not None
     polygon = [(v.lat, v.lon) for v in profile.site.geofence]
     obs = Observer(inst.observer_url, inst.sysid)
@@ -96,7 +99,8 @@ def test_a_lawnmower_vehicle_flies_its_strip_inside_the_fence_and_lands_on_arduc
     with (out / "companion.out").open("wb") as f:
         flight = subprocess.Popen(
             [sys.executable, "-m", "companion.cli", "run", "--profile", str(path),
-             "--vehicle", str(index), "--connect", inst.companion_url, "--log-dir", str(out),
+             "--vehicle", str(VEHICLE), "--system-id", str(inst.sysid),
+             "--connect", inst.companion_url, "--log-dir", str(out),
              "--seed", str(SEED), "--land-wait", "400", "--flight-log-wait", "0"],
             stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
             env=dict(os.environ, PYTHONUNBUFFERED="1"),
@@ -121,7 +125,7 @@ def test_a_lawnmower_vehicle_flies_its_strip_inside_the_fence_and_lands_on_arduc
             flight.kill()
             flight.wait()
         obs.close()
-    records = read_records(out / f"mission-{index}.jsonl")
+    records = read_records(out / f"mission-{VEHICLE}.jsonl")
     (confirmation,) = [r for r in records if r["event"] == "confirmation"]
     assert (confirmation["north"], confirmation["east"]) == target
     assert next(r for r in records if r["event"] == "end")["reason"] == "all targets"
@@ -135,14 +139,14 @@ def test_a_lawnmower_vehicle_flies_its_strip_inside_the_fence_and_lands_on_arduc
     first = next(k for k, p in enumerate(searching) if math.dist(p, lanes[0]) < TOLERANCE_M)
     sweep = judge_sweep(searching[first:], lanes, TOLERANCE_M, share=0.7)
     print(
-        f"\nlawnmower on ArduCopter SITL: vehicle {index} of {index + 1}, "
-        f"{sweep.line(index)}; {len(airborne)} airborne GPS samples, {len(outside)} outside "
+        f"\nlawnmower on ArduCopter SITL: vehicle {VEHICLE} of {VEHICLE + 1}, "
+        f"{sweep.line(VEHICLE)}; {len(airborne)} airborne GPS samples, {len(outside)} outside "
         f"the fence, {trace.distance:.0f} m flown, confirmed {target} at t={confirmation['t']} "
         f"s, modes {trace.modes}, landed_state {trace.landed_state}, armed {trace.armed}; "
-        f"map {out / f'map-{index}.png'}"
+        f"map {out / f'map-{VEHICLE}.png'}"
     )
     assert len(airborne) >= 100
     assert outside == [], f"{len(outside)} of {len(airborne)} samples outside: {outside[:5]}"
-    assert sweep.on_sweep >= 0.97, sweep.line(index)
-    assert sweep.flown == sweep.lanes, sweep.line(index)
-    assert (out / f"map-{index}.png").stat().st_size > 10_000
+    assert sweep.on_sweep >= 0.97, sweep.line(VEHICLE)
+    assert sweep.flown == sweep.lanes, sweep.line(VEHICLE)
+    assert (out / f"map-{VEHICLE}.png").stat().st_size > 10_000
