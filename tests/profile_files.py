@@ -8,7 +8,7 @@ import copy
 from pathlib import Path
 from typing import Any
 
-from mdm_profiles import MissionProfile, write_profile
+from mdm_profiles import MissionProfile, load_profile, write_profile
 
 
 def sensors(detection: float, confirmation: float) -> list[dict[str, Any]]:
@@ -63,3 +63,21 @@ def write_profile_with(path: Path, name: str, **changes: Any) -> Path:
     """:func:`profile_with` written to ``path``; returns ``path``."""
     write_profile(profile_with(name, **changes), path)
     return path
+
+
+def blind_field_search(name: str, vehicles: int, duration: float) -> dict[str, Any]:
+    """field-duebendorf as a plain dict for a long SITL search that no target ends: one
+    altitude layer for every vehicle, virtual sensors of a few metres and one real target in
+    the area's far corner, the mission ``duration`` (and T_S cap) in vehicle s."""
+    p = load_profile("field-duebendorf").model_dump(mode="json", exclude_none=True)
+    p["name"] = name
+    p["fleet"]["vehicles"] = vehicles
+    p["fleet"]["altitude_step"] = 0.0
+    p["sensor_source"] = {"kind": "virtual"}
+    p["sensors"] = [
+        {"name": "rf-detection", "radius": 3.0},
+        {"name": "camera-confirmation", "radius": 1.0},
+    ]
+    p["targets"] = [{"north": 60.0, "east": 60.0}]
+    p["mission"] = {"duration": duration, "ts_cap": duration}
+    return p

@@ -33,6 +33,7 @@ from tests.companion.sitl_observer import Observer, Trace
 from tests.companion.test_sitl_flights import AUTOPILOTS, ON_GROUND, Autopilot, Companion
 from tests.emulator_harness import free_udp_base
 from tests.lying_relay import LyingRelay
+from tests.profile_files import blind_field_search
 from tests.waiting import wait_until
 
 HOME = "47.405893,8.663214,440.0"  # inside the Duebendorf fence, its north-east corner
@@ -101,18 +102,8 @@ def _profile(path: Path, vehicles: int, *, battery_min: float | None = None) -> 
     """field-duebendorf at one 30 m layer, virtual sensors that find nothing for minutes;
     ``battery_min`` (with no reserve rule) where the companion's own battery end must stay
     out of the way of the autopilot's."""
-    p = load_profile("field-duebendorf").model_dump(mode="json", exclude_none=True)
-    p["name"] = f"failsafes-sitl-{os.getpid()}"
-    p["fleet"]["vehicles"] = vehicles
+    p = blind_field_search(f"failsafes-sitl-{os.getpid()}", vehicles, 900.0)
     p["fleet"]["altitude"] = LAYER
-    p["fleet"]["altitude_step"] = 0.0
-    p["sensor_source"] = {"kind": "virtual"}
-    p["sensors"] = [
-        {"name": "rf-detection", "radius": 3.0},
-        {"name": "camera-confirmation", "radius": 1.0},
-    ]
-    p["targets"] = [{"north": 60.0, "east": 60.0}]
-    p["mission"] = {"duration": 900.0, "ts_cap": 900.0}
     if battery_min is not None:
         p["site"]["battery_min"] = battery_min
         p["site"]["battery_reserve"] = None

@@ -21,9 +21,9 @@ from typing import Any
 import pytest
 import yaml
 
-from mdm_profiles import load_profile
 from tests import sitl
 from tests.companion.sitl_observer import Observer
+from tests.profile_files import blind_field_search
 from tests.waiting import wait_until
 
 SPEEDUP = 5
@@ -39,17 +39,7 @@ SEED = 3
 def _profile(vehicles: int, reserve: float | None) -> dict[str, Any]:
     """field-duebendorf for one long search no target ends: sensors of a few metres, the real
     target in the area's far corner, time enough for the pack to run down."""
-    p = load_profile("field-duebendorf").model_dump(mode="json", exclude_none=True)
-    p["name"] = f"battery-sitl-{os.getpid()}"
-    p["fleet"]["vehicles"] = vehicles
-    p["fleet"]["altitude_step"] = 0.0
-    p["sensor_source"] = {"kind": "virtual"}
-    p["sensors"] = [
-        {"name": "rf-detection", "radius": 3.0},
-        {"name": "camera-confirmation", "radius": 1.0},
-    ]
-    p["targets"] = [{"north": 60.0, "east": 60.0}]
-    p["mission"] = {"duration": 3000.0, "ts_cap": 3000.0}
+    p = blind_field_search(f"battery-sitl-{os.getpid()}", vehicles, 3000.0)
     p["site"]["battery_min"] = BATTERY_MIN
     p["site"]["battery_reserve"] = reserve
     return p

@@ -25,6 +25,7 @@ from companion.mission.layer_watch import LAYER_HOLD_S, LAYER_TOLERANCE_M
 from mdm_profiles import load_profile
 from tests import sitl
 from tests.companion.sitl_observer import Observer, Trace
+from tests.profile_files import blind_field_search
 from tests.waiting import wait_until
 
 SPEEDUP = 5
@@ -39,18 +40,8 @@ POSITION_HZ = 10.0  # GLOBAL_POSITION_INT as the observer asks for it (vehicle t
 
 
 def _profile(vehicles: int) -> dict[str, object]:
-    p = load_profile("field-duebendorf").model_dump(mode="json", exclude_none=True)
-    p["name"] = f"wind-sitl-{os.getpid()}"
-    p["fleet"]["vehicles"] = vehicles
+    p = blind_field_search(f"wind-sitl-{os.getpid()}", vehicles, SEARCH_S)
     p["fleet"]["altitude"] = ALTITUDE
-    p["fleet"]["altitude_step"] = 0.0
-    p["sensor_source"] = {"kind": "virtual"}
-    p["sensors"] = [
-        {"name": "rf-detection", "radius": 3.0},
-        {"name": "camera-confirmation", "radius": 1.0},
-    ]
-    p["targets"] = [{"north": 60.0, "east": 60.0}]
-    p["mission"] = {"duration": SEARCH_S, "ts_cap": SEARCH_S}
     return p
 
 
