@@ -82,13 +82,14 @@ def _set_wrong(emu: Emulator, persona: str) -> None:
     v.apply_params()
 
 
-def _arm_and_stop(profile: MissionProfile, base: int, log_dir: Path) -> str:
-    """Fly vehicle 0 until it is armed (or the mission ended), then stop it; the end reason."""
+def _arm_and_stop(profile: MissionProfile, base: int, log_dir: Path, **options: Any) -> str:
+    """Fly vehicle 0 until it is armed (or the mission ended), then stop it; the end reason.
+    ``options``: more of the mission's configuration (companion.fly's keywords)."""
 
     async def main() -> str:
         link = PymavlinkLink(url=f"udpin:127.0.0.1:{base}", target_system=1)
         async with fly(
-            profile, 0, link, log_dir=log_dir, land_wait=0.0, sensor_source="virtual"
+            profile, 0, link, log_dir=log_dir, land_wait=0.0, sensor_source="virtual", **options
         ) as flight:
             await wait_until_async(
                 lambda: (flight.mission.seen.heartbeat, flight.mission.end_reason),
