@@ -9,12 +9,17 @@ The plan has no randomness, so results are the same for any number of workers.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mdm_core.search.lawnmower_profile import search_hold, search_spiral, team_plan
+from mdm_core.world import Scenario, TargetTracks
 from mdm_montecarlo.engines.configuration import Configuration
 from mdm_montecarlo.engines.engine import BlockResult, block_rngs, departures
 from mdm_montecarlo.kernels.compiled_tracks import shared_tracks
 from mdm_montecarlo.kernels.lawnmower_kernel import fly_lawnmower
+from mdm_profiles import MissionProfile
+
+FloatArray = NDArray[np.float64]
 
 
 def run_lawnmower_block(
@@ -28,8 +33,18 @@ def run_lawnmower_block(
     cap = max(profile.mission.ts_cap, profile.mission.duration)
     tracks = shared_tracks(scenario, n_runs, rng_targets, cap)
     start = scenario.start_positions(n_runs, n_vehicles, profile.fleet.start, rng_start)
-    plans = [team_plan(profile, start[r]) for r in range(n_runs)]
-    waypoints = np.concatenate([p.waypoints for p in plans])
+    first, legs, simulated = fly_planned(profile, scenario, tracks, start, cap)
+    gone = departures(profile, tracks, cap)
+    return BlockResult(block, first.reshape(n_runs, n_vehicles, -1), legs, simulated, gone=gone)
+
+
+def fly_planned(
+    profile: MissionProfile, scenario: Scenario, tracks: TargetTracks, start: FloatArray, cap: float
+) -> tuple[FloatArray, int, float]:
+    """Every run's team plan flown compiled: ``start`` (runs, vehicles, 2) -> the first
+    confirmations (runs x vehicles, targets), the legs flown and the time simulated."""
+    n_runs, n_vehicles = start.shape[:2]
+    waypoints = np.concatenate([team_plan(profile, start[r]).waypoints for r in range(n_runs)])
     seg_start, seg_velocity = tracks.segments(cap)
     targets = scenario.targets
     n = n_runs * n_vehicles
@@ -56,5 +71,4 @@ def run_lawnmower_block(
         tracks.max_speed,
         first,
     )
-    gone = departures(profile, tracks, cap)
-    return BlockResult(block, first.reshape(n_runs, n_vehicles, -1), legs, simulated, gone=gone)
+    return first, legs, simulated

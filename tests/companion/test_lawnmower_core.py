@@ -15,9 +15,9 @@ from companion.fence_from_profile import guidance_fence
 from companion.geofence import Geofence
 from companion.mission.fenced_lanes import fenced_lanes
 from companion.mission.lawnmower_core import LawnmowerCore
-from mdm_core.search.lawnmower_profile import search_hold, search_spiral, team_plan
+from mdm_core.search.lawnmower_profile import team_plan
 from mdm_core.world.scenario import Scenario
-from mdm_montecarlo.kernels.lawnmower_kernel import fly_lawnmower
+from mdm_montecarlo.engines.lawnmower_engine import fly_planned
 from mdm_montecarlo.study.variants import with_method
 from mdm_profiles import MissionProfile, builtin_profile
 from mdm_profiles.overrides import apply_overrides
@@ -89,33 +89,9 @@ def _fly_core(core: LawnmowerCore, profile: MissionProfile, start: np.ndarray) -
 def _engine(profile: MissionProfile, starts: np.ndarray) -> np.ndarray:
     """The compiled engine's first confirmations (vehicles, targets) for these start points."""
     scenario = Scenario.from_profile(profile)
-    n = len(starts)
     cap = max(profile.mission.ts_cap, profile.mission.duration)
     tracks = scenario.tracks(1, np.random.default_rng(0))
-    seg_start, seg_velocity = tracks.segments(cap)
-    first = np.full((n, scenario.targets.count), np.inf)
-    fly_lawnmower(
-        profile.policy.kind == "lm2",
-        team_plan(profile, starts).waypoints,
-        starts.copy(),
-        n,
-        profile.fleet.speed,
-        profile.mission.duration,
-        cap,
-        np.asarray(scenario.area.size, dtype=float),
-        search_spiral(profile),
-        search_hold(profile),
-        scenario.sensors[0].radius,
-        scenario.confirmation.radius,
-        scenario.targets.appear_times,
-        ~scenario.targets.false_mask,
-        seg_start,
-        seg_velocity,
-        tracks.grid_dt,
-        tracks.moving,
-        tracks.max_speed,
-        first,
-    )
+    first, _, _ = fly_planned(profile, scenario, tracks, starts[np.newaxis], cap)
     return first
 
 
