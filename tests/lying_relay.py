@@ -125,6 +125,15 @@ class LyingRelay:
         self._thread.start()
         return self
 
+    def connected(self) -> bool:
+        """:meth:`start`, False while the vehicle's TCP port refuses it (a SITL still booting):
+        for ``wait_until(relay.connected, ...)``."""
+        try:
+            self.start()
+        except OSError:
+            return False
+        return True
+
     def stop(self) -> None:
         self._stop.set()
         if self._thread.is_alive():

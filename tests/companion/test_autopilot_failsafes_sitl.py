@@ -132,7 +132,7 @@ def _flight(
     if ap.kind == "arducopter":
         tcp = int(inst.companion_url.rsplit(":", 1)[1])
         relay = LyingRelay(port, sysid=inst.sysid, vehicle=("127.0.0.1", tcp), kinds=())
-        wait_until(lambda: _connects(relay), 60, "the relay connected to ArduCopter's TCP port")
+        wait_until(relay.connected, 60, "the relay connected to ArduCopter's TCP port")
     else:  # PX4 sends its offboard link to 14540 + index: the relay takes that port
         relay = LyingRelay(port, sysid=inst.sysid, vehicle=14540 + inst.index, kinds=())
         relay.start()
@@ -146,14 +146,6 @@ def _flight(
         comp.kill()
         obs.close()
         relay.stop()
-
-
-def _connects(relay: LyingRelay) -> bool:
-    try:
-        relay.start()
-    except OSError:
-        return False
-    return True
 
 
 def _texts(t: Trace, *words: str) -> list[str]:

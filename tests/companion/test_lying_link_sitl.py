@@ -53,7 +53,7 @@ def test_arducopter_through_a_lying_link(
         fault_chance=0.05,
         max_speed=SPEED,
     )
-    wait_until(lambda: _connects(relay), 60, "the relay connected to ArduCopter's TCP port")
+    wait_until(relay.connected, 60, "the relay connected to ArduCopter's TCP port")
     log = tmp_path / "companion.log"
     with log.open("ab") as out:
         companion = subprocess.Popen(
@@ -90,11 +90,3 @@ def test_arducopter_through_a_lying_link(
         f"setpoints checked {stats.setpoints}, bad {len(stats.bad_setpoints)}, dropped "
         f"{dropped}, exit {exits}"
     )
-
-
-def _connects(relay: LyingRelay) -> bool:
-    try:
-        relay.start()
-    except OSError:
-        return False
-    return True
