@@ -63,6 +63,8 @@ class LifecycleSteps:
         self._transit_t0 = 0.0
         self._safety_net_done = False
         """The safety net went into the vehicle (before the first arm of this process)."""
+        self._return_speed_read = False
+        """The autopilot's return speed was read (return_speed.py; once per process)."""
         self._steps: dict[Do, Callable[[], Awaitable[Outcome | None]]] = {
             Do.CONNECT: self._connect, Do.INSTALL_FENCE: self._install_fence,
             Do.LOCATE: self._locate, Do.AWAIT_CONTROL: self._await_control,
@@ -99,6 +101,9 @@ class LifecycleSteps:
     async def _locate(self) -> Located:
         m = self.m
         await m.waits.until(lambda: m.seen.heartbeat is not None and m.seen.position is not None)
+        if not self._return_speed_read:  # on the ground, or a vehicle taken over in flight
+            await learn_return_speed(m)
+            self._return_speed_read = True
         return Located(self._airborne_guided())
 
     async def _await_control(self) -> ControlBack:
@@ -131,7 +136,6 @@ class LifecycleSteps:
             if not self._safety_net_done:
                 if not await install_safety_net(m):
                     return Prepared(ok=False, takeoff=False)
-                await learn_return_speed(m)
                 self._safety_net_done = True
             result = await self.link.arm()
             if not result:

@@ -1,7 +1,8 @@
-"""The speed of the autopilot's own return, read before the first arm: the battery reserve
-counts the way home at the slower of it and the profile's return speed (PX4 returns at
-MPC_XY_CRUISE, stock 5 m/s, whatever the profile says; a rule counting 10 m/s left a PX4 SITL
-vehicle 1 % at touch-down). docs/companion.md, "Battery"."""
+"""The speed of the autopilot's own return, read once the vehicle is located (on the ground
+before the first arm, or taken over in flight): the battery reserve counts the way home at
+the slower of it and the profile's return speed (PX4 returns at MPC_XY_CRUISE, stock 5 m/s,
+whatever the profile says; a rule counting 10 m/s left a PX4 SITL vehicle 1 % at touch-down).
+docs/companion.md, "Battery"."""
 
 from __future__ import annotations
 
