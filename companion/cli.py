@@ -146,7 +146,9 @@ def main(argv: list[str] | None = None) -> int:
         except ValueError as exc:
             print(f"companion service: {exc}", file=sys.stderr)
             return 2
-    tools = ground_tools.load()
+    # `run` parses with its own parser alone: loading the ground tools (the entry point and
+    # mdm_ground's parsers) would cost each companion's start-up for nothing
+    tools = "" if argv[:1] == ["run"] else ground_tools.load()
     args = build_parser(tools).parse_args(argv)
     logging.basicConfig(
         level=logging.DEBUG if getattr(args, "verbose", False) else logging.INFO,
