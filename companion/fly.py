@@ -86,6 +86,13 @@ def check_flight(config: MissionConfig, mqtt: MqttSpec | None, source: SensorSou
             raise InputError(
                 f"profile {config.profile.name!r}, vehicle {config.vehicle}: {exc}"
             ) from None
+    if config.profile.policy.redetection != "ignore":
+        raise InputError(
+            f"profile {config.profile.name!r}: policy.redetection "
+            f"{config.profile.policy.redetection!r} reads the detection sensor on the last "
+            "level, and the companion switches on one sensor per level; it is a Monte-Carlo "
+            "study option (mdm-montecarlo run/reproduce), set it to 'ignore' to fly"
+        )
     if source == "mqtt" and mqtt is None:
         raise InputError(
             "sensor source 'mqtt' reads detections from a broker; configure one "
@@ -109,8 +116,8 @@ async def fly(
 
     Raises:
         InputError: the flight cannot run as asked (a vehicle the profile does not have, a
-            swarm policy or an MQTT sensor source without a broker, swarm settings the live
-            companion does not fly); raised before any socket or file is opened.
+            swarm policy or an MQTT sensor source without a broker, swarm settings or a
+            study-only policy.redetection the live companion does not fly); raised before any socket or file is opened.
         LogFormatError: the vehicle's mission log (read to resume) was written by another
             version.
         TypeError: ``options`` holds a name that is not a MissionConfig field.
