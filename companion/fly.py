@@ -25,6 +25,7 @@ from companion.mission import MissionConfig, VehicleMission
 from companion.mission.core_for import LAWNMOWER_KINDS, is_swarm
 from companion.mission.lawnmower_core import LawnmowerCore
 from companion.mission.start_point import start_point
+from companion.mission.study_only import study_only_refusal
 from companion.mission.swarm_core import SwarmCore, live_swarm_refusal
 from companion.sensors.factory import DetectorFeed, make_sensor_source
 from companion.telemetry import EventSink, MissionLog, read_log
@@ -86,13 +87,9 @@ def check_flight(config: MissionConfig, mqtt: MqttSpec | None, source: SensorSou
             raise InputError(
                 f"profile {config.profile.name!r}, vehicle {config.vehicle}: {exc}"
             ) from None
-    if config.profile.policy.redetection != "ignore":
-        raise InputError(
-            f"profile {config.profile.name!r}: policy.redetection "
-            f"{config.profile.policy.redetection!r} reads the detection sensor on the last "
-            "level, and the companion switches on one sensor per level; it is a Monte-Carlo "
-            "study option (mdm-montecarlo run/reproduce), set it to 'ignore' to fly"
-        )
+    refusal = study_only_refusal(config.profile)
+    if refusal is not None:
+        raise InputError(refusal)
     if source == "mqtt" and mqtt is None:
         raise InputError(
             "sensor source 'mqtt' reads detections from a broker; configure one "
