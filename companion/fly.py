@@ -25,6 +25,7 @@ from companion.mission import MissionConfig, VehicleMission
 from companion.mission.core_for import LAWNMOWER_KINDS, is_swarm
 from companion.mission.lawnmower_core import LawnmowerCore
 from companion.mission.start_point import start_point
+from companion.mission.study_only import study_only_refusal
 from companion.mission.swarm_core import SwarmCore, live_swarm_refusal
 from companion.sensors.factory import DetectorFeed, make_sensor_source
 from companion.telemetry import EventSink, MissionLog, read_log
@@ -86,6 +87,9 @@ def check_flight(config: MissionConfig, mqtt: MqttSpec | None, source: SensorSou
             raise InputError(
                 f"profile {config.profile.name!r}, vehicle {config.vehicle}: {exc}"
             ) from None
+    refusal = study_only_refusal(config.profile)
+    if refusal is not None:
+        raise InputError(refusal)
     if source == "mqtt" and mqtt is None:
         raise InputError(
             "sensor source 'mqtt' reads detections from a broker; configure one "
@@ -109,8 +113,8 @@ async def fly(
 
     Raises:
         InputError: the flight cannot run as asked (a vehicle the profile does not have, a
-            swarm policy or an MQTT sensor source without a broker, swarm settings the live
-            companion does not fly); raised before any socket or file is opened.
+            swarm policy or an MQTT sensor source without a broker, swarm settings or a
+            study-only policy.redetection the live companion does not fly); raised before any socket or file is opened.
         LogFormatError: the vehicle's mission log (read to resume) was written by another
             version.
         TypeError: ``options`` holds a name that is not a MissionConfig field.

@@ -147,6 +147,14 @@ class PolicySpec(_Strict):
         "target's position then (a detection sensor that locates; docs/model.md, 'What motion "
         "costs MDM').",
     )
+    redetection: Literal["ignore", "recentre", "renew"] = Field(
+        default="ignore",
+        description="The detection sensor read on the last level too, when the vehicle "
+        "reaches a waypoint or its index runs out: ignore = the last level listens to the "
+        "confirmation sensor alone; recentre = a detection there moves the anchor as anchor_at "
+        "says; renew = recentre and the level's decaying index starts again (engine only; "
+        "docs/model.md, 'What motion costs MDM').",
+    )
     memory_radius: float = Field(default=400.0, ge=0)
     detection_memory: Literal["disc", "exact", "none"] = Field(
         default="disc",

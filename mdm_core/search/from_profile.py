@@ -62,6 +62,7 @@ def policy_config(profile: MissionProfile) -> PolicyConfig:
         waypoint_origin=spec.waypoint_origin,
         confine_to_detection=spec.confine_to_detection,
         anchor_at=spec.anchor_at,
+        redetection=spec.redetection,
         memory_radius=spec.memory_radius,
         detection_memory=spec.detection_memory,
         fallback_blind_time=spec.fallback_blind_time,

@@ -13,6 +13,7 @@ StepLaw = Literal["fixed", "levy"]
 OutOfArea = Literal["reflect", "clip", "redraw"]
 WaypointOrigin = Literal["position", "anchor"]
 AnchorAt = Literal["vehicle", "target"]
+Redetection = Literal["ignore", "recentre", "renew"]
 DetectionMemory = Literal["disc", "exact", "none"]
 IndexStart = Literal["printed", "max"]
 
@@ -117,6 +118,11 @@ class PolicyConfig:
     anchor_at: AnchorAt = "vehicle"
     """A detection's anchor: the vehicle's position, or the detected target's (the first in
     target order where several are detected at once)."""
+    redetection: Redetection = "ignore"
+    """The detection sensor read on the last level as well, at the steps where the vehicle
+    reaches its waypoint or its index runs out (Observation.detections): ignore; recentre (a
+    detection moves the anchor as anchor_at says); renew (recentre, and the level's clock
+    starts again). Detections there are checked against memory as detection_memory says."""
     memory_radius: float = 400.0
     """A contact within this distance of a target I confirmed is that target again (metres)."""
     detection_memory: DetectionMemory = "disc"

@@ -89,7 +89,10 @@ class Observation:
     contacts: BoolArray
     """Targets the active sensor reports (n, m)."""
     contact_positions: FloatArray
-    """Position estimates of those targets (n, m, 2)."""
+    """Position estimates of those targets (n, m, 2); with ``detections``, of theirs too."""
+    detections: BoolArray | None = None
+    """(n, m) targets the detection sensor reports on the last level (policy.redetection);
+    None: it is not read there."""
 
 
 @dataclass
@@ -263,7 +266,10 @@ class SearchPolicy:
         next_level = np.where(confirmed, 0, next_level)
         # Same sum as deadline(): a step at exactly deadline() must fall back (no rounding gap).
         deadline = state.entered[lanes] + self._lifetimes[level]
-        expired = (next_level == level) & (level > 0) & (obs.time >= deadline)
+        decides = obs.reached | (obs.time >= deadline)
+        again, again_at = self.redetections(state, lanes, obs, ~has & decides)
+        renewed = again if self.config.redetection == "renew" else np.zeros_like(again)
+        expired = (next_level == level) & (level > 0) & (obs.time >= deadline) & ~renewed
         next_level = np.where(expired, 0, next_level)
 
         changed = next_level != level
@@ -273,13 +279,14 @@ class SearchPolicy:
             blind[expired] = obs.time[expired] + self.config.fallback_blind_time
         state.blind_until[lanes] = blind
         state.level[lanes] = next_level
-        state.entered[lanes] = np.where(changed, obs.time, state.entered[lanes])
+        state.entered[lanes] = np.where(changed | renewed, obs.time, state.entered[lanes])
         anchor = state.anchor[lanes]
         if self.config.anchor_at == "target":
             first = np.argmax(new, axis=1)  # the first detected target of each lane
             anchor[detected] = obs.contact_positions[detected, first[detected]]
         else:
             anchor[detected] = obs.position[detected]
+        anchor[again] = again_at[again]
         state.anchor[lanes] = anchor
 
         redraw = changed | obs.reached
@@ -287,6 +294,37 @@ class SearchPolicy:
         if chosen.size:
             state.waypoint[chosen] = self._next_waypoints(state, chosen, obs.position[redraw], rng)
         return StepOutcome(detected, confirmed, new_confirmations, expired, redraw)
+
+    def redetections(
+        self, state: PolicyState, lanes: IntArray, obs: Observation, deciding: BoolArray
+    ) -> tuple[BoolArray, FloatArray]:
+        """policy.redetection: which ``deciding`` lanes on the last level read a detection
+        there (checked against memory as detection_memory says), and where it anchors them
+        (the vehicle, or with anchor_at 'target' the first such target). Nothing where the
+        policy ignores the detection sensor on the last level."""
+        n = len(lanes)
+        anchors = np.zeros((n, 2))
+        if self.config.redetection == "ignore" or obs.detections is None or self.n_levels < 2:
+            return np.zeros(n, dtype=bool), anchors
+        last = self.n_levels - 1
+        rows = np.flatnonzero(deciding & (state.level[lanes] == last))
+        seen = obs.detections[rows].copy()
+        where = obs.contact_positions[rows]
+        memory = self.config.detection_memory
+        if memory == "exact":
+            seen &= ~self.known(state, lanes[rows], where)
+        elif memory == "disc":
+            near = self.memory_distance2(state, lanes[rows], obs.position[rows, None, :])[:, 0]
+            seen[near < self._radii[last - 1] ** 2] = False
+        found = seen.any(axis=1)
+        again = np.zeros(n, dtype=bool)
+        again[rows[found]] = True
+        if self.config.anchor_at == "target":
+            first = np.argmax(seen, axis=1)
+            anchors[rows[found]] = where[found, first[found]]
+        else:
+            anchors[rows[found]] = obs.position[rows[found]]
+        return again, anchors
 
     def step_changes(
         self,

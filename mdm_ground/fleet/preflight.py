@@ -8,6 +8,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from companion.mission.study_only import study_only_refusal
 from companion.telemetry.events import LogFormatError
 from companion.telemetry.mission_log import read_log
 from mdm_ground.errors import GroundError
@@ -55,6 +56,9 @@ def check_arguments(o: FleetOptions, profile: MissionProfile) -> int:
         check_ceiling(profile, n)
     except CeilingError as exc:
         raise FleetInputError(f"--vehicles {n}: {exc}") from exc
+    refusal = study_only_refusal(profile)
+    if refusal is not None:
+        raise FleetInputError(refusal)
     if not o.duration > 0:
         raise FleetInputError(f"--duration {o.duration:g}: must be > 0 (search time, sim s)")
     if not o.speedup >= 0:

@@ -10,7 +10,8 @@ fixed step ``dt``:
 3. the waypoint counts as reached within ``fleet.acceptance_radius``;
 4. sensors: ``mdm_core.world.contacts`` with the active sensor of each lane
    (``policy.sensor_radius``, ``policy.uses_confirmation_sensor``) against the targets that
-   have appeared (``appear_times <= t``), at the targets' positions at t;
+   have appeared (``appear_times <= t``), at the targets' positions at t; with
+   ``policy.redetection``, the detection sensor's contacts as well;
 5. the same ``SearchPolicy`` is stepped for every lane, every step.
 
 Nothing of the policy, world or dynamics is reimplemented here; only the clock differs from the
@@ -88,6 +89,13 @@ def run_reference_block(
     first = np.full((n, m), np.inf)
     accept2 = fleet.acceptance_radius**2
 
+    # policy.redetection: the detection sensor read on the last level too
+    redetect = (
+        np.full(n, policy.config.levels[-2].sensor_radius)
+        if policy.config.redetection != "ignore" and policy.n_levels > 1
+        else None
+    )
+    detecting = np.zeros(n, dtype=bool)  # not the confirmation sensor: false targets seen
     steps = math.ceil(end / dt - 1e-9)
     for k in range(1, steps + 1):
         t = min(k * dt, end)  # k * dt, not a running sum: no drift over 10^4 steps
@@ -107,6 +115,11 @@ def run_reference_block(
             present,
             targets.false_mask,
         )
+        detections = (
+            contacts(redetect, detecting, position, target_pos, present, targets.false_mask)[0]
+            if redetect is not None
+            else None
+        )
         if step_every_lane:
             idx = lanes
         else:
@@ -119,6 +132,7 @@ def run_reference_block(
             reached=reached[idx],
             contacts=seen[idx],
             contact_positions=target_pos[idx],
+            detections=None if detections is None else detections[idx],
         )
         outcome = policy.step(state, idx, obs, rng_policy)
         confirmed = outcome.new_confirmations & real[None, :]

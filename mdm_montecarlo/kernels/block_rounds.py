@@ -79,6 +79,7 @@ def fly_rounds(
     reached_buf = np.empty(total, dtype=np.bool_)
     contacts_buf = np.empty((total, m), dtype=np.bool_)
     where_buf = np.empty((total, m, 2))
+    detections_buf = np.zeros((total, m), dtype=np.bool_)
     flags_buf = np.empty((total, 4), dtype=np.bool_)
     now_buf = np.empty(total)
     at_buf = np.empty((total, 2))
@@ -116,7 +117,9 @@ def fly_rounds(
             remembered, state, stepped, seen_paths, rules.memory_radius, sensed_buf[:n]
         )
         visible = paths.grown  # the next rounds see this call's paths
-        events = Events(sensed, entry, reached_buf[:n], contacts_buf[:n], where_buf[:n])
+        events = Events(
+            sensed, entry, reached_buf[:n], contacts_buf[:n], where_buf[:n], detections_buf[:n]
+        )
         advance(state, flight, stepped, leg, paths, block, rules, events)
         now = now_buf[:n]
         at = at_buf[:n]
@@ -127,7 +130,7 @@ def fly_rounds(
         # The step turns the contacts into the new confirmations in place.
         new = events.contacts
         flags = flags_buf[:n]
-        seen = Seen(now, at, events.reached, events.contacts, events.where)
+        seen = Seen(now, at, events.reached, events.contacts, events.where, events.detections)
         step_lanes(state, lanes, seen, rules, rng, new, flags)
         confirmed = flags[:, CONFIRMED]
         memory = remember_confirmed(

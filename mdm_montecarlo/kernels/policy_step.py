@@ -32,6 +32,8 @@ IntArray = NDArray[np.intp]
 
 DISC, EXACT, NONE = 0, 1, 2
 _MEMORY = {"disc": DISC, "exact": EXACT, "none": NONE}
+IGNORE, RECENTRE, RENEW = 0, 1, 2
+_REDETECTION = {"ignore": IGNORE, "recentre": RECENTRE, "renew": RENEW}
 # Columns of the flags the kernel returns per lane.
 DETECTED, CONFIRMED, EXPIRED, REDRAW = range(4)
 
@@ -52,6 +54,8 @@ class PolicyRules(NamedTuple):
     draws: Draws
     on_target: bool
     """anchor_at == "target": a detection anchors on the detected target's position."""
+    redetect: int
+    """policy.redetection: IGNORE, RECENTRE or RENEW."""
 
 
 class LaneState(NamedTuple):
@@ -88,6 +92,8 @@ class Seen(NamedTuple):
     reached: BoolArray
     contacts: BoolArray
     contact_positions: FloatArray
+    detections: BoolArray
+    """(n, m) the detection sensor on the last level (read only with a redetection rule)."""
 
 
 @compiled
@@ -143,6 +149,27 @@ def remember_confirmed(
 
 
 @compiled
+def redetected(state: LaneState, lane: int, i: int, observed: Seen, rules: PolicyRules) -> int:
+    """SearchPolicy.redetections of one lane, row ``i`` of ``observed``: the first target its
+    detection sensor reports on the last level that memory does not rule out, or -1."""
+    memory, count = state.memory, state.memory_count[lane]
+    position, detections, where = observed.position, observed.detections, observed.contact_positions
+    radius = rules.radii[rules.radii.shape[0] - 2]
+    here = position[i]
+    if rules.memory_rule == DISC and nearest2(memory, count, lane, here[0], here[1]) < radius**2:
+        return -1
+    known2 = rules.memory_radius**2
+    for j in range(detections.shape[1]):
+        if not detections[i, j]:
+            continue
+        if rules.memory_rule != EXACT:
+            return j
+        if not nearest2(memory, count, lane, where[i, j, 0], where[i, j, 1]) <= known2:
+            return j
+    return -1
+
+
+@compiled
 def step_lanes(
     state: LaneState,
     lanes: IntArray,
@@ -159,8 +186,10 @@ def step_lanes(
     REDRAW. ``new`` may be ``contacts`` itself: a lane's row of contacts is read only before
     its row of ``new`` is written."""
     level, entered, blind_until, anchor, waypoint, memory, memory_count = state
-    time, position, reached, contacts, contact_positions = observed
-    lifetimes, radii, memory_radius, detection_memory, blind_time, draws, on_target = rules
+    time, position, reached, contacts, contact_positions = observed[:5]
+    lifetimes, radii, memory_radius, detection_memory, blind_time, draws, on_target, redetect = (
+        rules
+    )
     n, m = contacts.shape
     last = radii.shape[0] - 1
     known2 = memory_radius**2
@@ -202,7 +231,11 @@ def step_lanes(
         if confirmed:
             next_level = 0
         deadline = entered[lane] + lifetimes[lvl]
-        expired = next_level == lvl and lvl > 0 and time[i] >= deadline
+        again = -1  # the target the detection sensor reports again on the last level
+        if redetect != IGNORE and lvl == last and not has and (reached[i] or time[i] >= deadline):
+            again = redetected(state, lane, i, observed, rules)
+        renewed = again >= 0 and redetect == RENEW
+        expired = next_level == lvl and lvl > 0 and time[i] >= deadline and not renewed
         if expired:
             next_level = 0
         changed = next_level != lvl
@@ -213,7 +246,7 @@ def step_lanes(
             blind = time[i] + blind_time
         blind_until[lane] = blind
         level[lane] = next_level
-        if changed:
+        if changed or renewed:
             entered[lane] = time[i]
         if detected and on_target:
             first = 0
@@ -224,6 +257,10 @@ def step_lanes(
         elif detected:
             anchor[lane, 0] = position[i, 0]
             anchor[lane, 1] = position[i, 1]
+        if again >= 0:
+            spot = contact_positions[i, again] if on_target else position[i]
+            anchor[lane, 0] = spot[0]
+            anchor[lane, 1] = spot[1]
         flags[i, DETECTED] = detected
         flags[i, CONFIRMED] = confirmed
         flags[i, EXPIRED] = expired
@@ -274,6 +311,7 @@ class CompiledPolicy(CompiledWaypoints):
                 float(config.fallback_blind_time),
                 self.draws,
                 config.anchor_at == "target",
+                _REDETECTION[config.redetection],
             )
         )
 
@@ -295,7 +333,10 @@ class CompiledPolicy(CompiledWaypoints):
         n, m = obs.contacts.shape
         new_confirmations = np.empty((n, m), dtype=bool)
         flags = np.empty((n, 4), dtype=bool)
-        observed = Seen(obs.time, obs.position, obs.reached, obs.contacts, obs.contact_positions)
+        detections = np.zeros((n, m), dtype=bool) if obs.detections is None else obs.detections
+        observed = Seen(
+            obs.time, obs.position, obs.reached, obs.contacts, obs.contact_positions, detections
+        )
         step_lanes(lane_state(state), lanes, observed, self._rules, rng, new_confirmations, flags)
         confirmed = flags[:, CONFIRMED]
         state.memory = remember_confirmed(

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from mdm_core.jit import compiled
 from mdm_core.world.targets import NODE_EPS
 from mdm_montecarlo.kernels.entry_kernel import entry_row
-from mdm_montecarlo.kernels.policy_step import DISC, LaneState, PolicyRules, nearest2
+from mdm_montecarlo.kernels.policy_step import DISC, IGNORE, LaneState, PolicyRules, nearest2
 from mdm_montecarlo.kernels.round_state import Block, Events, Flight, Legs, Paths, Stepped
 
 FloatArray = NDArray[np.float64]
@@ -113,9 +113,10 @@ def advance(
     speed, false_mask, appear = block.speed, block.false_mask, block.appear
     seg_start, seg_velocity, grid_dt = paths.seg_start, paths.seg_velocity, paths.grid_dt
     target_speed, moving = paths.grown, paths.moving
-    eligible, entry, reached, contacts, where = events
+    eligible, entry, reached, contacts, where = events[:5]
     n, m = eligible.shape
     last = radii.shape[0] - 1
+    redetect = rules.redetect != IGNORE and last > 0
     for i in range(n):
         lane = lanes[i]
         lvl = level[lane]
@@ -169,6 +170,8 @@ def advance(
             position[lane, 0] = start_x + vx * step
             position[lane, 1] = start_y + vy * step
         time[lane] = new_t
+        if redetect and lvl == last:  # read by the step where it decides (policy_step)
+            detect(i, lane, row, radii[last - 1], flight, block, paths, events)
         if not hit:
             for j in range(m):
                 contacts[i, j] = False
@@ -180,6 +183,37 @@ def advance(
             if contacts[i, j]:
                 where[i, j, 0] = seg_velocity[row, k, j, 0] * offset + seg_start[row, k, j, 0]
                 where[i, j, 1] = seg_velocity[row, k, j, 1] * offset + seg_start[row, k, j, 1]
+
+
+@compiled
+def detect(
+    i: int,
+    lane: int,
+    row: int,
+    radius: float,
+    flight: Flight,
+    block: Block,
+    paths: Paths,
+    events: Events,
+) -> None:
+    """Row ``i`` of ``events.detections``: the appeared targets (false ones too) strictly
+    within the detection ``radius`` of last-level ``lane`` where and when it now is (its
+    targets' paths: ``row``), their positions written to ``events.where``."""
+    seg_start, seg_velocity, grid_dt = paths.seg_start, paths.seg_velocity, paths.grid_dt
+    detections, where = events.detections, events.where
+    t = flight.time[lane]
+    k = math.floor(t / grid_dt + NODE_EPS) if paths.moving else 0
+    offset = t - k * grid_dt if paths.moving else 0.0
+    r2 = radius * radius
+    for j in range(detections.shape[1]):
+        x = seg_velocity[row, k, j, 0] * offset + seg_start[row, k, j, 0]
+        y = seg_velocity[row, k, j, 1] * offset + seg_start[row, k, j, 1]
+        north = flight.position[lane, 0] - x
+        east = flight.position[lane, 1] - y
+        detections[i, j] = block.appear[j] <= t and north * north + east * east < r2
+        if detections[i, j]:
+            where[i, j, 0] = x
+            where[i, j, 1] = y
 
 
 @compiled

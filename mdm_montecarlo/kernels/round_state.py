@@ -99,4 +99,7 @@ class Events(NamedTuple):
     contacts: BoolArray
     """(n, m) out: the targets sensed at the event."""
     where: FloatArray
-    """(n, m, 2) out: the contacted targets' positions."""
+    """(n, m, 2) out: the contacted (and detected) targets' positions."""
+    detections: BoolArray
+    """(n, m) out: with a redetection rule, what the detection sensor reports on the last
+    level at the event (else not written)."""

@@ -37,18 +37,24 @@ SCALING_FLEETS = (6, 12, 24)
 SECTION3B_METHODS = ("US", "MDM:LS+BS")
 """Single-sensor and MDM search of one UAV, for P_CS and P_CM."""
 _FORGET = ("policy.swarm.after_confirmation=forget", "policy.swarm.read_confirmed=false")
+_POPUP_FROM_0 = tuple(f"targets.{k}.appear={200 * k}" for k in range(10))
+_LEAVE = ("target_motion.boundary=free", "mission.ts_rule=confirmed_or_gone")
+_RENEW = "policy.redetection=renew"
 VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     "eq10": (
         "eq. (10) literal",
         ("policy.waypoint_origin=position",),
     ),
-    "popup_from_0": (
-        "t_i = 200 (i - 1)",
-        tuple(f"targets.{k}.appear={200 * k}" for k in range(10)),
+    "popup_from_0": ("t_i = 200 (i - 1)", _POPUP_FROM_0),
+    "targets_leave": ("targets leave, T_S confirmed or gone", _LEAVE),
+    "renew": ("level 2 renewed by detections", (_RENEW,)),
+    "popup_from_0_renew": (
+        "t_i = 200 (i - 1), level 2 renewed by detections",
+        (*_POPUP_FROM_0, _RENEW),
     ),
-    "targets_leave": (
-        "targets leave, T_S confirmed or gone",
-        ("target_motion.boundary=free", "mission.ts_rule=confirmed_or_gone"),
+    "targets_leave_renew": (
+        "targets leave, T_S confirmed or gone, level 2 renewed by detections",
+        (*_LEAVE, _RENEW),
     ),
     "swarm_forgets": ("memory forgets confirmed targets", _FORGET),
     "lawnmower": ("lawnmower baseline, not in the paper: no paper value", ()),
@@ -71,7 +77,9 @@ previous waypoint, P_{q+1} = P_q + delta_2 D (the default steps from the point o
 docs/model.md, "Level-2 waypoints: the default is not eq. (10)"). 'popup_from_0': the pop-up
 targets appear from t = 0 (docs/model.md, "Pop-up times"). 'targets_leave': the walk leaves
 the area and T_S counts a target at its confirmation or its departure (docs/model.md,
-"Targets that leave the area"). The swarm readings of
+"Targets that leave the area"). 'renew', 'popup_from_0_renew' and 'targets_leave_renew': the
+default, 'popup_from_0' and 'targets_leave' with policy.redetection = renew (docs/model.md, "Level 2
+renewed by detections"), flown for MDM only (a single-sensor search has no level 2). The swarm readings of
 docs/model.md, "Social-cognitive baselines": 'swarm_forgets' drops the bests of confirmed
 targets and does not read them; 'swarm_waypoint_detection' also reads MDM's 2 km detection
 sensor; 'swarm_detection' is "swarm given MDM's detection sensor" (one iteration every 5 s,
@@ -83,6 +91,9 @@ LEAVE_VARIANT_TABLES = ("simtable1", "simtablef1", "Dsimtable6", "simtable3", "s
 POPUP_VARIANT_TABLES = ("simtable1", "simtablef1", "simtable3", "simtable5")
 """Tables whose pop-up rows (US, BS, LS and MDM) each have a 'popup_from_0' row after them."""
 ALL_METHODS = ("US", "BS", "LS", "MDM")
+RENEW_VARIANTS = {"fixed": "renew", "popup": "popup_from_0_renew", "dynamic": "targets_leave_renew"}
+"""The renewed MDM row each scenario's MDM rows have after them (after the popup_from_0 and
+targets_leave rows where those are flown): the choices of the 'closest' reading."""
 LAWNMOWER_TABLES = ("simtable1", "simtablef1")
 """Tables that get LM1 and LM2 rows after each scenario's MDM row."""
 
@@ -127,6 +138,16 @@ def _case_of(row: PaperRow) -> Case:
     return Case(row.scenario, method, row.delta1_pct_L or 20.0, row.n_uav, row.n_false)
 
 
+def _renewed_here(row: PaperRow) -> bool:
+    """Whether the MDM row has a renewed row: fixed everywhere; pop-up and dynamic in the tables
+    whose rows also fly popup_from_0 and targets_leave (the reading's other choices)."""
+    if row.scenario == "popup":
+        return row.table in POPUP_VARIANT_TABLES
+    if row.scenario == "dynamic":
+        return row.table in LEAVE_VARIANT_TABLES
+    return row.scenario == "fixed"
+
+
 def study_rows(tables: tuple[str, ...] = TABLES) -> list[Row]:
     """Rows of the requested tables, in the paper's order."""
     unknown = set(tables) - set(TABLES)
@@ -143,6 +164,8 @@ def study_rows(tables: tuple[str, ...] = TABLES) -> list[Row]:
             rows.append(Row(r.table, replace(_case_of(r), variant="popup_from_0"), r))
         if r.table in LEAVE_VARIANT_TABLES and r.scenario == "dynamic" and r.method in ALL_METHODS:
             rows.append(Row(r.table, replace(_case_of(r), variant="targets_leave"), r))
+        if r.method == "MDM" and _renewed_here(r):
+            rows.append(Row(r.table, replace(_case_of(r), variant=RENEW_VARIANTS[r.scenario]), r))
         if r.table in LAWNMOWER_TABLES and r.method == "MDM":
             rows += [
                 Row(r.table, replace(_case_of(r), method=m, variant="lawnmower"), None)

@@ -43,16 +43,18 @@ def _base_key(m: MeasuredRow) -> tuple[object, ...]:
 
 
 def reading_rows(measured: list[MeasuredRow], name: str) -> list[MeasuredRow]:
-    """The rows a reading flies: each default row, or its variant row of the reading's choice
-    for its scenario where the report has one."""
-    choice = {k: VARIANTS[v][0] for k, v in reading_named(name).choices.items()}
+    """The rows a reading flies: each default row, or its variant row of the reading's first
+    choice for its scenario that the report has (Reading.choices)."""
+    choices = {k: [VARIANTS[v][0] for v in keys] for k, keys in reading_named(name).choices.items()}
     by_key = {(_base_key(m), m.variant): m for m in measured}
     out = []
     for m in measured:
         if m.variant:
             continue
-        wanted = choice.get(m.scenario, "")
-        out.append(by_key.get((_base_key(m), wanted), m))
+        flown = [
+            by_key[k] for w in choices.get(m.scenario, []) if (k := (_base_key(m), w)) in by_key
+        ]
+        out.append(flown[0] if flown else m)
     return out
 
 

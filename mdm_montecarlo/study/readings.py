@@ -22,18 +22,21 @@ HELP = "help"
 class Reading:
     name: str
     about: str
-    choices: Mapping[str, str]
-    """Scenario -> the VARIANTS key its rows fly; a scenario not named flies the defaults."""
+    choices: Mapping[str, tuple[str, ...]]
+    """Scenario -> the VARIANTS keys its rows fly, first choice first: a row not flown with the
+    first (the renewed rows are MDM's alone: a single-sensor search has no level 2, so the
+    choice is the next one for it) takes the next; none flown, or a scenario not named, the
+    defaults."""
 
     def label(self) -> str:
         """The choices as text: 'popup: t_i = 200 (i - 1), dynamic: ...', or 'the defaults'."""
-        parts = [f"{s}: {VARIANTS[v][0]}" for s, v in self.choices.items()]
+        parts = [f"{s}: {VARIANTS[keys[0]][0]}" for s, keys in self.choices.items()]
         return ", ".join(parts) or "the defaults"
 
     def overrides(self, scenario: str) -> tuple[str, ...]:
-        """The profile overrides of the reading's choice for ``scenario``."""
-        key = self.choices.get(scenario, "")
-        return VARIANTS[key][1] if key else ()
+        """The profile overrides of the reading's first choice for ``scenario``."""
+        keys = self.choices.get(scenario, ())
+        return VARIANTS[keys[0]][1] if keys else ()
 
 
 READINGS = {
@@ -44,7 +47,11 @@ READINGS = {
             "closest",
             "the documented choices that bring most rows inside tolerance without contradicting "
             "each other (docs/model.md, 'One reading of the paper')",
-            {"popup": "popup_from_0", "dynamic": "targets_leave"},
+            {
+                "fixed": ("renew",),
+                "popup": ("popup_from_0_renew", "popup_from_0"),
+                "dynamic": ("targets_leave_renew", "targets_leave"),
+            },
         ),
     )
 }
@@ -67,8 +74,8 @@ def readings_help() -> str:
     lines = ["Readings of the paper (--reading NAME):"]
     for r in READINGS.values():
         lines += [f"  {r.name}: {r.about}", f"    choices: {r.label()}"]
-        for scenario, key in r.choices.items():
-            lines.append(f"    {scenario} overrides: {' '.join(VARIANTS[key][1])}")
+        for scenario, keys in r.choices.items():
+            lines.append(f"    {scenario} overrides: {' '.join(VARIANTS[keys[0]][1])}")
     return "\n".join(lines)
 
 
@@ -132,6 +139,10 @@ def reading_cases(results: Mapping[Case, T], name: str) -> dict[Case, T]:
     for case, value in results.items():
         if case.variant:
             continue
-        key = reading.choices.get(case.scenario, "")
-        out[case] = results.get(replace(case, variant=key), value) if key else value
+        flown = [
+            replace(case, variant=k)
+            for k in reading.choices.get(case.scenario, ())
+            if replace(case, variant=k) in results
+        ]
+        out[case] = results[flown[0]] if flown else value
     return out

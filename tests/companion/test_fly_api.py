@@ -13,6 +13,7 @@ from companion.link.pymavlink_link import PymavlinkLink
 from companion.mission.phase import Phase
 from companion.telemetry import events
 from companion.telemetry.mission_log import read_log, read_records
+from mdm_profiles.overrides import apply_overrides
 from tests.emulator_harness import PROFILE, free_udp_base, make_config, running_emulator
 from tests.waiting import wait_until_async
 
@@ -84,3 +85,18 @@ def test_a_flight_that_cannot_run_is_refused_before_anything_starts(tmp_path: Pa
     with pytest.raises(ValueError, match="vehicle 98: profile has 12 vehicles"):
         asyncio.run(main())
     assert not (tmp_path / "mission-98.jsonl").exists()
+
+
+def test_a_study_only_redetection_rule_is_refused_naming_the_key(tmp_path: Path) -> None:
+    """policy.redetection reads the detection sensor on the last level, which a live vehicle
+    has switched off there: the companion refuses it before anything starts."""
+    renewing = apply_overrides(PROFILE, ["policy.redetection=renew"])
+
+    async def main() -> None:
+        link = PymavlinkLink(url="udpin:127.0.0.1:9", target_system=1)
+        async with fly(renewing, 0, link, log_dir=tmp_path):
+            pass
+
+    with pytest.raises(ValueError, match=r"policy\.redetection 'renew' .* set it to 'ignore'"):
+        asyncio.run(main())
+    assert not (tmp_path / "mission-0.jsonl").exists()

@@ -5,6 +5,7 @@ flag (by system id)."""
 from __future__ import annotations
 
 import os
+import socket
 import threading
 from dataclasses import dataclass, field
 
@@ -33,6 +34,9 @@ class GcsRecorder:
 
     def __init__(self, port: int) -> None:
         self.conn = mavutil.mavlink_connection(f"udpin:127.0.0.1:{port}")
+        # A loaded host can leave this thread seconds behind a sped-up fleet: room to queue
+        # them rather than drop them.
+        self.conn.port.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
         self.seen: dict[int, Seen] = {}
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -40,8 +44,10 @@ class GcsRecorder:
         self._thread.start()
 
     def _run(self) -> None:
-        while not self._stop.is_set():
+        while True:
             msg = self.conn.recv_match(type=["HEARTBEAT", "GLOBAL_POSITION_INT"], timeout=0.5)
+            if msg is None and self._stop.is_set():
+                return  # asked to stop, and everything queued has been read
             if msg is None or msg.get_srcComponent() != 1:
                 continue
             with self._lock:
@@ -56,9 +62,10 @@ class GcsRecorder:
                     )
 
     def close(self) -> dict[int, Seen]:
-        """Stop listening; what was seen, by system id."""
+        """Stop listening once what the socket has queued is read (the last datagrams of a
+        landing may still wait there when the fleet exits); what was seen, by system id."""
         self._stop.set()
-        self._thread.join(5.0)
+        self._thread.join(60.0)
         self.conn.close()
         with self._lock:
             return dict(self.seen)

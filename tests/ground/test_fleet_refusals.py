@@ -14,6 +14,9 @@ import pytest
 from companion.cli import main
 from mdm_ground.fleet.ports import free_port_block
 from mdm_ground.fleet.preflight import RUN_FILE
+from mdm_profiles import builtin_profile
+from mdm_profiles.loader import write_profile
+from mdm_profiles.overrides import apply_overrides
 from tests.fleet_cli import small_profile
 
 
@@ -134,3 +137,17 @@ def test_resuming_a_run_whose_log_another_version_wrote_is_refused_naming_the_li
         capsys, "--out", str(run), "--resume", "--vehicles", "1", "--seed", "1", "--duration", "300"
     )
     assert f"--resume: {log}:1: 'end' record has field 'why', which End does not know" in err
+
+
+def test_a_study_only_policy_is_refused_before_any_companion_starts(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """policy.redetection other than 'ignore' is the engine's alone: the fleet says so once,
+    rather than starting an emulator and twelve companions that each exit 2."""
+    renewing = apply_overrides(builtin_profile("paper-fixed"), ["policy.redetection=renew"])
+    path = tmp_path / "renew.yaml"
+    write_profile(renewing, path)
+    out = tmp_path / "run"
+    err = _refused(capsys, "--profile", str(path), "--out", str(out))
+    assert "policy.redetection 'renew' reads the detection sensor on the last level" in err
+    assert not out.exists()

@@ -44,14 +44,14 @@ def test_reproduce_applies_set_to_every_row_and_writes_the_report(
     levy = [*args, "--out", str(tmp_path / "levy"), "--set", "policy.levels.0.step_law=levy"]
     assert main(levy) == 0
     changed = _json_rows(capsys)
-    assert len(plain) == len(changed) == 9
+    assert len(plain) == len(changed) == 18  # nine MDM rows, each with its renewed row
     # Levy step lengths draw other waypoints: the same seed gives other missions.
     assert [r["tnc_mean"] for r in plain] != [r["tnc_mean"] for r in changed]
     report = (tmp_path / "levy" / "report.md").read_text()
     assert "Overrides: policy.levels.0.step_law=levy." in report
     assert "Overrides" not in (tmp_path / "plain" / "report.md").read_text()
     with (tmp_path / "levy" / "results.csv").open() as f:
-        assert len(list(csv.DictReader(f))) == 9
+        assert len(list(csv.DictReader(f))) == 18
     assert list((tmp_path / "levy").glob("*.png"))
 
 

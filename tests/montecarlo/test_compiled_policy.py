@@ -10,7 +10,7 @@ import pytest
 
 from mdm_core.search import Observation, SearchPolicy
 from mdm_core.search.from_profile import policy_config
-from mdm_core.search.levels import PolicyConfig
+from mdm_core.search.levels import AnchorAt, PolicyConfig, Redetection
 from mdm_core.search.policy import PolicyState
 from mdm_core.search.swarm_iteration import explore
 from mdm_montecarlo.kernels.policy_step import CompiledPolicy
@@ -18,11 +18,13 @@ from mdm_profiles import builtin_profile
 
 LANES = 2000
 TARGETS = 10
+REDETECTIONS: tuple[Redetection, ...] = ("recentre", "renew")
+ANCHORS: tuple[AnchorAt, ...] = ("vehicle", "target")
 
 
 def _variants() -> list[PolicyConfig]:
     """Every built-in paper policy's shape, with each out-of-area rule, waypoint origin, anchor
-    (vehicle or target), memory rule, the Levy step law and a blind period."""
+    (vehicle or target), memory rule, redetection rule, the Levy step law and a blind period."""
     base = [policy_config(builtin_profile(name)) for name in ("paper-fixed", "paper-popup")]
     out = []
     for config in base:
@@ -41,6 +43,13 @@ def _variants() -> list[PolicyConfig]:
                     config, detection_memory=memory, fallback_blind_time=30.0, levels=levy_step
                 )
             )
+            for rule in REDETECTIONS:
+                for anchor in ANCHORS:
+                    out.append(
+                        dataclasses.replace(
+                            config, detection_memory=memory, redetection=rule, anchor_at=anchor
+                        )
+                    )
         out.append(
             dataclasses.replace(config, confine_to_detection=False, levels=config.levels[:1])
         )
@@ -84,7 +93,7 @@ def test_steps_equal_the_numpy_policy(config: PolicyConfig) -> None:
     mine = _copy(state)
     size = np.array(config.area)
     draws_numpy, draws_compiled = np.random.default_rng(3), np.random.default_rng(3)
-    changed = 0
+    changed = recentred = 0
     for step in range(6):
         lanes = rng.permutation(LANES)[: LANES // 2]
         contacts = rng.random((lanes.size, TARGETS)) < 0.05
@@ -100,6 +109,7 @@ def test_steps_equal_the_numpy_policy(config: PolicyConfig) -> None:
             reached=rng.random(lanes.size) < 0.3,
             contacts=contacts,
             contact_positions=positions,
+            detections=rng.random((lanes.size, TARGETS)) < 0.1,
         )
         # Some steps exactly at a lane's deadline or at the end of its blind period.
         at_deadline, at_blind = lanes[:100], lanes[100:200]
@@ -108,7 +118,10 @@ def test_steps_equal_the_numpy_policy(config: PolicyConfig) -> None:
         )
         obs.time[100:200] = state.blind_until[at_blind]
         obs.time[~np.isfinite(obs.time)] = 100.0 * step
+        anchors = state.anchor[lanes].copy()
         want = numpy_policy.step(state, lanes, obs, draws_numpy)
+        moved = (state.anchor[lanes] != anchors).any(axis=1) & ~want.detected
+        recentred += int(moved.sum())
         got = compiled.step(mine, lanes, obs, draws_compiled)
         for name in ("detected", "confirmed", "new_confirmations", "fell_back", "new_waypoint"):
             np.testing.assert_array_equal(getattr(got, name), getattr(want, name), name)
@@ -116,8 +129,10 @@ def test_steps_equal_the_numpy_policy(config: PolicyConfig) -> None:
         changed += int(want.detected.sum() + want.confirmed.sum() + want.fell_back.sum())
     # The same place in the random stream afterwards.
     assert draws_numpy.random() == draws_compiled.random()
-    # The states really moved: detections, confirmations and fall-backs happened.
+    # The states really moved: detections, confirmations and fall-backs happened; a
+    # redetection rule moved anchors on the last level, and only such a rule did.
     assert changed > 100
+    assert (recentred > 50) == (config.redetection != "ignore"), recentred
 
 
 def test_start_waypoints_equal_the_numpy_policy() -> None:

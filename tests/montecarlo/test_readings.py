@@ -31,8 +31,8 @@ def test_reading_help_lists_every_reading_and_its_overrides(
     out = capsys.readouterr().out
     for name, reading in READINGS.items():
         assert f"  {name}: " in out
-        for key in reading.choices.values():
-            assert " ".join(VARIANTS[key][1]) in out
+        for keys in reading.choices.values():
+            assert " ".join(VARIANTS[keys[0]][1]) in out
 
 
 @pytest.mark.parametrize("command", COMMANDS, ids=lambda c: c[0])
@@ -63,6 +63,7 @@ def test_run_with_the_closest_reading_flies_its_dynamic_choice(
     those two overrides by hand, and another T_S than the default reading's."""
     closest = _row(["--reading", "closest"], tmp_path, capsys)
     by_hand = ["--set", "target_motion.boundary=free", "--set", "mission.ts_rule=confirmed_or_gone"]
+    by_hand += ["--set", "policy.redetection=renew"]
     assert closest == _row(by_hand, tmp_path, capsys)
     default = _row(["--reading", "default", "--no-progress"], tmp_path, capsys)
     assert float(closest["ts_mean_s"]) < float(default["ts_mean_s"])  # type: ignore[arg-type]
@@ -84,7 +85,7 @@ def test_sweep_records_the_readings_overrides_before_its_own(
     argv += ["--vary", "mission.duration=300", "--set", "mission.ts_cap=300", "--runs", "2"]
     assert main([*argv, "--out", str(out), "--workers", "1", "--no-progress"]) == 0
     asked = json.loads((out / "sweep.json").read_text())
-    assert asked["overrides"] == [*VARIANTS["targets_leave"][1], "mission.ts_cap=300"]
+    assert asked["overrides"] == [*VARIANTS["targets_leave_renew"][1], "mission.ts_cap=300"]
 
 
 def test_reading_cases_put_the_variant_under_the_default_key() -> None:
@@ -93,3 +94,9 @@ def test_reading_cases_put_the_variant_under_the_default_key() -> None:
     results = {dynamic: "bounce", replace(dynamic, variant="targets_leave"): "leave", fixed: "f"}
     assert reading_cases(results, "closest") == {dynamic: "leave", fixed: "f"}
     assert reading_cases(results, "default") == {dynamic: "bounce", fixed: "f"}
+    # MDM has the renewed rows too: its first choice wins where it was flown.
+    mdm = Case("dynamic", "MDM:LS+BS", 20.0, 12, 0)
+    results[mdm] = "bounce"
+    results[replace(mdm, variant="targets_leave")] = "leave"
+    results[replace(mdm, variant="targets_leave_renew")] = "leave, renewed"
+    assert reading_cases(results, "closest")[mdm] == "leave, renewed"

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from mdm_montecarlo.engines.runner import MissionResults, run_many
-from mdm_montecarlo.study.cases import Case, Row, study_rows
+from mdm_montecarlo.study.cases import RENEW_VARIANTS, Case, Row, study_rows
 from mdm_montecarlo.study.known_causes import CAUSES, slug
 from mdm_montecarlo.study.report import write_report
 from mdm_montecarlo.study.section3b import SearchGeometry, confirmed_share, p_cm, p_cm_given, p_cs
@@ -88,7 +88,8 @@ def test_summary_comes_first_and_outside_rows_link_their_cause(small_report: str
 def test_eq10_row_sits_beside_the_default(small_report: str) -> None:
     table = small_report.split("## simtable1")[1]
     lines = [ln for ln in table.splitlines() if ln.startswith("| simtable1 | fixed | MDM")]
-    assert [("eq. (10) literal" in ln) for ln in lines] == [False, True]
+    assert [("eq. (10) literal" in ln) for ln in lines] == [False, True, False]
+    assert "level 2 renewed by detections" in lines[2]  # the renewed row after both
 
 
 def test_popup_rows_from_t0_follow_the_default_rows(small_report: str) -> None:
@@ -97,7 +98,7 @@ def test_popup_rows_from_t0_follow_the_default_rows(small_report: str) -> None:
     table = small_report.split("## simtable1")[1]
     label = "t_i = 200 (i - 1)"
     expected = {"US": [False, True], "BS": [False, True], "LS": [False, True]}
-    expected["MDM"] = [False, False, True]
+    expected["MDM"] = [False, False, True, True]  # the last renewed as well
     for method, marks in expected.items():
         lines = [
             ln for ln in table.splitlines() if ln.startswith(f"| simtable1 | popup | {method}")
@@ -179,6 +180,32 @@ def test_no_improvement_percentage_against_a_baseline_that_confirmed_nothing() -
     assert "inf" not in table.lower()
 
 
+def test_every_mdm_row_has_its_renewed_row_after_its_other_readings() -> None:
+    """Each MDM row of the paper's tables is followed (after its eq. (10), t_i = 200 (i - 1) and
+    targets-leave rows) by the renewed row of its scenario, the 'closest' reading's first
+    choice, flying policy.redetection = renew; the single-sensor rows have none."""
+    rows = study_rows()
+    renewed = [k for k, r in enumerate(rows) if r.case.variant in RENEW_VARIANTS.values()]
+    assert renewed
+    for k in renewed:
+        case = rows[k].case
+        assert case.method.startswith("MDM:")
+        assert case.variant == RENEW_VARIANTS[case.scenario]
+        d = max(j for j in range(k) if not rows[j].case.variant)  # its default row
+        assert case == replace(rows[d].case, variant=case.variant)
+        between = {r.case.variant for r in rows[d + 1 : k]}
+        assert between <= {"eq10", "popup_from_0", "targets_leave"}, between
+        assert case.profile().policy.redetection == "renew"
+    fixed_mdm = [
+        r
+        for r in rows
+        if r.paper is not None and r.case.method.startswith("MDM:") and r.case.scenario == "fixed"
+    ]
+    assert sum(not r.case.variant for r in fixed_mdm) == sum(
+        r.case.variant == "renew" for r in fixed_mdm
+    )
+
+
 def test_every_dynamic_row_has_its_targets_leave_row() -> None:
     """simtable1, simtablef1, Dsimtable6, simtable3 and scaling: each dynamic row (swarms
     aside) is followed by the same case with the free walk and T_S counting departures."""
@@ -228,10 +255,12 @@ def test_the_closest_reading_heads_the_report_with_its_own_rows(
     claims = [ln for ln in closest.splitlines() if re.match(r"\| simtable1 \w+: MDM ahead", ln)]
     assert len(claims) == 3 * 3 * 2  # three scenarios, US/BS/LS, T_nc and T_S
     pop = next(ln for ln in claims if ln.startswith("| simtable1 popup: MDM ahead of US in T_nc"))
-    # the default cell compares the default rows, the closest cell the t_i = 200 (i - 1) rows
+    # the default cell compares the default rows, the closest cell the t_i = 200 (i - 1) rows,
+    # MDM's renewed as well
     mdm = [m for m in measured if m.scenario == "popup" and m.method == "MDM"]
     us = [m for m in measured if m.scenario == "popup" and m.method == "US"]
-    assert mdm[-1].variant == us[-1].variant == "t_i = 200 (i - 1)"
+    assert us[-1].variant == "t_i = 200 (i - 1)"
+    assert mdm[-1].variant == "t_i = 200 (i - 1), level 2 renewed by detections"
     assert f"{mdm[0].tnc_mean:.3f} vs {us[0].tnc_mean:.3f}" in pop.split("|")[2]
     assert f"{mdm[-1].tnc_mean:.3f} vs {us[-1].tnc_mean:.3f}" in pop.split("|")[3]
     outside = closest.split("## Outside under closest")[1].split("\n## ", maxsplit=1)[0]
