@@ -139,22 +139,39 @@ def test_virtual_then_mqtt_sensors_confirm_on_stock_arducopter(
         )
         frame = LocalFrame(*HOME)
         lat, lon, _ = frame.to_geodetic(400.0, 450.0, 0.0)
-        detection = {"time": time.time(), "sensor": "detection", "lat": lat, "lon": lon}
-        assert publish(mqtt_broker, topic, json.dumps(detection)).returncode == 0
+
+        # As a detector does, each sighting is sent once a second, freshly stamped, until the
+        # companion acts on it: a frame stamped before its switch to that sensor is not counted
+        # (MqttSensorSource.select), and the switch may come just after the log line waited on.
+        def sighting(payload: dict[str, object], done: Callable[[], bool]) -> Callable[[], bool]:
+            sent = [-1.0]
+
+            def observe() -> bool:
+                if time.monotonic() - sent[0] >= 1.0:
+                    frame = json.dumps({**payload, "time": time.time()})
+                    assert publish(mqtt_broker, topic, frame).returncode == 0
+                    sent[0] = time.monotonic()
+                return done()
+
+            return observe
+
+        detection = {"sensor": "detection", "lat": lat, "lon": lon}
         wait_until(
-            lambda: any(r["event"] == "level" and r["level"] == 1 for r in events(mqtt)),
+            sighting(
+                detection,
+                lambda: any(r["event"] == "level" and r["level"] == 1 for r in events(mqtt)),
+            ),
             20.0,
             "mqtt: level 1",
             context=context(mqtt),
         )
-        confirm = {
-            "time": time.time(),
-            "sensor": "confirmation",
-            "north": 400.0,
-            "east": 450.0,
-            "confidence": 0.9,
-        }
-        assert publish(mqtt_broker, topic, json.dumps(confirm)).returncode == 0
+        confirm = {"sensor": "confirmation", "north": 400.0, "east": 450.0, "confidence": 0.9}
+        wait_until(
+            sighting(confirm, lambda: any(r["event"] == "confirmation" for r in events(mqtt))),
+            60.0,
+            "mqtt: confirmed",
+            context=context(mqtt),
+        )
         wait_until(
             landed_after_rtl, 300.0, "mqtt: confirmed, RTL, landed, disarmed", context=context(mqtt)
         )
