@@ -9,7 +9,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TypeVar
 
-from mdm_montecarlo.study.cases import VARIANTS, Case
+from mdm_montecarlo.study.cases import RENEW_VARIANTS, VARIANTS, Case
 from mdm_profiles import MissionProfile, ProfileError
 from mdm_profiles.overrides import apply_overrides
 
@@ -48,9 +48,9 @@ READINGS = {
             "the documented choices that bring most rows inside tolerance without contradicting "
             "each other (docs/model.md, 'One reading of the paper')",
             {
-                "fixed": ("renew",),
-                "popup": ("popup_from_0_renew", "popup_from_0"),
-                "dynamic": ("targets_leave_renew", "targets_leave"),
+                "fixed": (RENEW_VARIANTS["fixed"],),
+                "popup": (RENEW_VARIANTS["popup"], "popup_from_0"),
+                "dynamic": (RENEW_VARIANTS["dynamic"], "targets_leave"),
             },
         ),
     )
